@@ -1,0 +1,17 @@
+"""Caustics through transparent meshes: a photon pass into illumination maps
+and a Whitted eye pass, on Embree. This package never imports bpy.
+
+    from caustic_addon import render, Scene, RenderSettings
+    result = render(scene, RenderSettings(photons=1_000_000))
+    result.image  # (pixy, pixx, 4) float32, linear
+"""
+
+from .errors import Cancelled, SceneError
+from .render import RenderResult, render
+from .scene import (Camera, Dielectric, Diffuse, Mesh, Object, PointLight, RenderSettings, Scene, SpotLight,
+                    SunLight)
+
+__all__ = [
+    "Camera", "Cancelled", "Dielectric", "Diffuse", "Mesh", "Object", "PointLight", "RenderResult",
+    "RenderSettings", "Scene", "SceneError", "SpotLight", "SunLight", "render",
+]

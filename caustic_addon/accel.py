@@ -1,0 +1,197 @@
+"""One Embree scene per render, shared by the photon pass and the eye pass.
+
+embreex facts this module absorbs (see shared notes): tnear is always 0, so
+callers offset secondary origins with `offset()`; Embree's Ng is unnormalised
+and its sign follows Embree's winding, so we use our own outward face normals
+instead; `run` releases the GIL, so batches are split over worker threads.
+"""
+
+from __future__ import annotations
+
+import threading
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+from embreex import rtcore_scene
+from embreex.mesh_construction import TriangleMesh
+
+from .optics import normalize
+from .scene import Object
+
+MISS = -1
+_MIN_SPLIT = 8192
+# Origins move this fraction of the scene's diagonal off a surface: well above
+# float32 hit-distance error (~1e-7 relative), well below features we resolve.
+EPSILON_FRACTION = 2e-6
+
+
+@dataclass
+class Hits:
+    """Closest hits of a batch of n rays.
+
+    t       (n,) float64 hit distance, inf on a miss
+    obj     (n,) int64 object index into Accelerator.objects, MISS on a miss
+    prim    (n,) int64 global triangle index (over all objects), MISS on a miss
+    u, v    (n,) float64 Embree barycentrics: p = (1-u-v) p0 + u p1 + v p2
+    """
+
+    t: np.ndarray
+    obj: np.ndarray
+    prim: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+
+    @property
+    def hit(self) -> np.ndarray:
+        return self.obj != MISS
+
+    def select(self, mask: np.ndarray) -> "Hits":
+        return Hits(self.t[mask], self.obj[mask], self.prim[mask], self.u[mask], self.v[mask])
+
+
+def triangle_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(unit normals (nt,3), areas (nt,)) of triangles `corners (nt,3,3)`,
+    oriented by the right-hand rule on their winding. Degenerate triangles get
+    a zero normal and zero area."""
+    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    double_area = np.linalg.norm(cross, axis=1)
+    return normalize(cross), 0.5 * double_area
+
+
+def signed_volume(corners: np.ndarray) -> float:
+    """Volume enclosed by a closed mesh, positive when its normals face out
+    (divergence theorem: sum of p0 . (p1 x p2) / 6 over triangles)."""
+    return float(np.einsum("ij,ij->i", corners[:, 0], np.cross(corners[:, 1], corners[:, 2])).sum() / 6.0)
+
+
+def open_edge_count(triangles: np.ndarray, vertices: np.ndarray) -> int:
+    """Number of edges not shared by exactly two triangles. Vertices at the
+    same position count as one, so meshes split for UVs or sharp edges still
+    read as closed."""
+    _, weld = np.unique(np.round(vertices, 9), axis=0, return_inverse=True)
+    tris = weld.reshape(-1)[triangles]
+    edges = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
+    edges = edges[edges[:, 0] != edges[:, 1]]
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return int(np.count_nonzero(counts != 2))
+
+
+class Accelerator:
+    """The scene's triangles in one Embree BVH, with per-triangle shading data.
+
+    Per global triangle index (all objects' triangles, in object order):
+      face_normal    (N,3) unit geometric normal, facing out of closed meshes
+      corner_normal  (N,3,3) unit shading normals at the corners, same side
+      owner          (N,) index of the object the triangle belongs to
+    """
+
+    def __init__(self, objects: list[Object], extent: float, threads: int = 2):
+        self.objects = objects
+        self.epsilon = EPSILON_FRACTION * extent
+        self.threads = max(1, threads)
+        self.warnings: list[str] = []
+        self.rays_cast = 0
+        self._count_lock = threading.Lock()
+        self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
+        self._embree = rtcore_scene.EmbreeScene()
+
+        face_normals, corner_normals, owners, offsets = [], [], [], [0]
+        for index, obj in enumerate(objects):
+            mesh = obj.mesh
+            TriangleMesh(self._embree, mesh.vertices.astype(np.float32), mesh.triangles.astype(np.int32))
+            corners = mesh.corners
+            normals, _ = triangle_normals(corners)
+            sign = 1.0
+            if obj.is_transparent:
+                sign = self._outward_sign(obj, corners)
+            normals *= sign
+            if mesh.corner_normals is None:
+                shading = np.repeat(normals[:, None, :], 3, axis=1)
+            else:
+                shading = mesh.corner_normals * sign
+            face_normals.append(normals)
+            corner_normals.append(shading)
+            owners.append(np.full(len(normals), index, dtype=np.int64))
+            offsets.append(offsets[-1] + len(normals))
+
+        self.face_normal = np.concatenate(face_normals) if face_normals else np.zeros((0, 3))
+        self.corner_normal = np.concatenate(corner_normals) if corner_normals else np.zeros((0, 3, 3))
+        self.owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
+        self.prim_offset = np.asarray(offsets, dtype=np.int64)
+
+    def _outward_sign(self, obj: Object, corners: np.ndarray) -> float:
+        """+1 if the mesh's winding faces out, -1 if it is inside out."""
+        if open_edge_count(obj.mesh.triangles, obj.mesh.vertices):
+            self.warnings.append(
+                f"'{obj.name}' is not a closed mesh: inside and outside are guessed per hit "
+                "from its normals, so light may leak through its holes")
+            return 1.0
+        if signed_volume(corners) < 0.0:
+            self.warnings.append(f"'{obj.name}' has inverted normals; they were flipped for tracing")
+            return -1.0
+        return 1.0
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown()
+
+    def _run(self, origins: np.ndarray, dirs: np.ndarray, **kwargs) -> list[dict]:
+        """Embree over the batch, split across threads; one result dict per part."""
+        n = len(origins)
+        with self._count_lock:
+            self.rays_cast += n
+        o32 = np.ascontiguousarray(origins, dtype=np.float32)
+        d32 = np.ascontiguousarray(dirs, dtype=np.float32)
+        dists = kwargs.pop("dists", None)
+        if self._pool is None or n < _MIN_SPLIT:
+            return [self._embree.run(o32, d32, dists=dists, **kwargs)]
+        bounds = np.linspace(0, n, self.threads + 1).astype(int)
+        parts = [(bounds[i], bounds[i + 1]) for i in range(self.threads)]
+        futures = [self._pool.submit(self._embree.run, o32[a:b], d32[a:b],
+                                     dists=None if dists is None else dists[a:b], **kwargs)
+                   for a, b in parts]
+        return [f.result() for f in futures]
+
+    def intersect(self, origins: np.ndarray, dirs: np.ndarray) -> Hits:
+        """Closest hits of rays `origins (n,3)`, `dirs (n,3)` (unit), world space."""
+        if len(origins) == 0:
+            empty = np.zeros(0)
+            return Hits(empty, empty.astype(np.int64), empty.astype(np.int64), empty, empty)
+        parts = self._run(origins, dirs, output=1)
+        geom = np.concatenate([p["geomID"] for p in parts]).astype(np.int64)
+        prim = np.concatenate([p["primID"] for p in parts]).astype(np.int64)
+        t = np.concatenate([p["tfar"] for p in parts]).astype(np.float64)
+        u = np.concatenate([p["u"] for p in parts]).astype(np.float64)
+        v = np.concatenate([p["v"] for p in parts]).astype(np.float64)
+        miss = geom < 0
+        t[miss] = np.inf
+        prim = np.where(miss, MISS, prim + self.prim_offset[np.maximum(geom, 0)])
+        return Hits(t, np.where(miss, MISS, geom), prim, u, v)
+
+    def occluded(self, origins: np.ndarray, dirs: np.ndarray, dists: np.ndarray) -> np.ndarray:
+        """(n,) bool: is anything between `origins` and `origins + dists * dirs`?"""
+        if len(origins) == 0:
+            return np.zeros(0, dtype=bool)
+        parts = self._run(origins, dirs, query="OCCLUDED",
+                          dists=np.ascontiguousarray(dists, dtype=np.float32))
+        return np.concatenate(parts) != MISS
+
+    def shading_normal(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """(n,3) unit shading normals, interpolated from the corner normals
+        with Embree's barycentrics; the face normal where they cancel out."""
+        w = 1.0 - u - v
+        c = self.corner_normal[prim]
+        n = w[:, None] * c[:, 0] + u[:, None] * c[:, 1] + v[:, None] * c[:, 2]
+        length = np.linalg.norm(n, axis=1)
+        bad = ~(length > 1e-12)
+        n[bad] = self.face_normal[prim[bad]]
+        length[bad] = 1.0
+        return n / length[:, None]
+
+    def offset(self, points: np.ndarray, normals: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+        """Ray origins (n,3) nudged off the surface along the geometric normal
+        to the side `dirs` leave toward, so the new ray cannot hit it again."""
+        side = np.sign(np.einsum("ij,ij->i", normals, dirs))
+        side[side == 0] = 1.0
+        return points + (self.epsilon * side)[:, None] * normals

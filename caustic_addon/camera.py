@@ -1,0 +1,56 @@
+"""Eye rays through pixels, with Blender's view plane.
+
+Source: Blender's `BKE_camera_params_compute_viewplane`. The sensor-fit side
+spans `viewfac` pixels (the width for HORIZONTAL, or AUTO with a landscape
+image; the height otherwise); at unit distance one pixel is
+2 tan(fov/2) / viewfac wide (ortho_scale / viewfac for ORTHO), and the lens
+shift moves the view plane by shift * viewfac pixels.
+
+Pixel (x, y) counts x from the left and y from the top of the image.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .emission import r2_sequence
+from .scene import Camera
+
+
+def _viewfac(camera: Camera) -> int:
+    horizontal = camera.sensor_fit == "HORIZONTAL" or (camera.sensor_fit == "AUTO" and camera.pixx >= camera.pixy)
+    return camera.pixx if horizontal else camera.pixy
+
+
+def pixel_offsets(spp: int, seed: int) -> np.ndarray:
+    """(spp,2) sub-pixel positions in [0,1)^2: the centre for one sample,
+    else the R2 sequence with a random rotation."""
+    if spp == 1:
+        return np.array([[0.5, 0.5]])
+    return r2_sequence(np.arange(spp), np.random.default_rng(seed).random(2))
+
+
+def eye_rays(camera: Camera, pixels: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World rays (origins (n,3), dirs (n,3) unit) through flat pixel indices
+    `pixels (n,)` (y * pixx + x) at sub-pixel `offsets (n,2)`. Origins start at
+    the clip-start plane, as Blender's do."""
+    viewfac = _viewfac(camera)
+    x = pixels % camera.pixx + offsets[:, 0]
+    y = pixels // camera.pixx + offsets[:, 1]
+    sx = x - 0.5 * camera.pixx + camera.shift_x * viewfac
+    sy = 0.5 * camera.pixy - y + camera.shift_y * viewfac
+    rot, eye = camera.matrix[:3, :3], camera.matrix[:3, 3]
+    forward = -rot[:, 2]
+    if camera.kind == "ORTHO":
+        pixsize = camera.ortho_scale / viewfac
+        local = np.stack([sx * pixsize, sy * pixsize, np.zeros_like(sx)], axis=1)
+        origins = eye + local @ rot.T + camera.clip_start * forward
+        return origins, np.broadcast_to(forward, origins.shape).copy()
+    pixsize = 2.0 * math.tan(0.5 * camera.fov) / viewfac
+    local = np.stack([sx * pixsize, sy * pixsize, -np.ones_like(sx)], axis=1)
+    dirs = local @ rot.T
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    origins = eye + dirs * (camera.clip_start / (dirs @ forward))[:, None]
+    return origins, dirs

@@ -1,0 +1,77 @@
+"""What both passes do where a ray meets a dielectric surface: orient the
+normals, then refract or reflect. Kept in one place so the photon pass and the
+eye pass cannot disagree about the physics."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .accel import Accelerator, Hits
+from .optics import dot, fresnel_dielectric, reflect, refract
+
+
+@dataclass
+class Interface:
+    """n rays at dielectric hits, oriented.
+
+    points      (n,3) world hit points
+    facing      (n,3) geometric normal on the side the ray comes from
+    shading     (n,3) shading normal on that same side
+    entering    (n,) bool: the ray goes from outside the object to inside
+    eta         (n,) eta_i / eta_t for this crossing
+    fresnel     (n,) unpolarised reflectance; 1 under total internal reflection
+    """
+
+    points: np.ndarray
+    facing: np.ndarray
+    shading: np.ndarray
+    entering: np.ndarray
+    eta: np.ndarray
+    fresnel: np.ndarray
+
+
+def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, points: np.ndarray,
+           ior_by_object: np.ndarray) -> Interface:
+    """Orient the hits' normals against `dirs (n,3)` and evaluate Fresnel.
+
+    The geometric normal decides entering or leaving: it faces out of a
+    closed mesh, so dot(d, n) < 0 means entering. The shading normal is put
+    on the same side; where interpolation tips it past the ray
+    (dot(d, n_s) >= 0), the geometric normal is used instead.
+    """
+    face = accel.face_normal[hits.prim]
+    entering = dot(dirs, face) < 0.0
+    facing = np.where(entering[:, None], face, -face)
+    shading = accel.shading_normal(hits.prim, hits.u, hits.v)
+    shading = np.where((dot(shading, facing) < 0.0)[:, None], -shading, shading)
+    tipped = dot(dirs, shading) >= 0.0
+    shading[tipped] = facing[tipped]
+    ior = ior_by_object[hits.obj]
+    eta = np.where(entering, 1.0 / ior, ior)
+    fresnel = fresnel_dielectric(-dot(dirs, shading), eta)
+    return Interface(points, facing, shading, entering, eta, fresnel)
+
+
+def scatter(surface: Interface, dirs: np.ndarray, reflect_mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """New unit directions (n,3) and which of them crossed the surface (n,) bool:
+    mirror reflection where `reflect_mask`, Snell refraction elsewhere (total
+    internal reflection reflects).
+
+    A shading normal can send a reflected ray into the surface or a refracted
+    one back out; those rays are redone about the geometric normal, which
+    cannot.
+    """
+    reflected = reflect(dirs, surface.shading)
+    refracted, tir = refract(dirs, surface.shading, surface.eta)
+    mirror = reflect_mask | tir
+    out = np.where(mirror[:, None], reflected, refracted)
+    side = dot(out, surface.facing)
+    wrong = np.where(mirror, side <= 0.0, side >= 0.0)
+    if wrong.any():
+        d, n = dirs[wrong], surface.facing[wrong]
+        redo_refract, redo_tir = refract(d, n, surface.eta[wrong])
+        mirror[wrong] |= redo_tir
+        out[wrong] = np.where(mirror[wrong][:, None], reflect(d, n), redo_refract)
+    return out / np.linalg.norm(out, axis=1, keepdims=True), ~mirror

@@ -1,0 +1,218 @@
+"""A whole render: one Embree scene, the photon pass into illumination maps,
+then the eye pass. This is the engine's entry point; the add-on and the CLI
+call `render` and nothing below it."""
+
+from __future__ import annotations
+
+import time
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from dataclasses import dataclass, field
+from functools import partial
+from typing import Callable, Optional
+
+import numpy as np
+
+from .accel import Accelerator
+from .camera import eye_rays, pixel_offsets
+from .emission import Sphere, make_emitters
+from .errors import Cancelled
+from .eye_pass import PASSES, EyePass, EyeRays
+from .illumination_map import IlluminationMap, MapEstimate, auto_cell_size, make_chart
+from .materials import Materials
+from .scene import RenderSettings, Scene
+from .transport import TransportStats, trace_photons
+from .validate import validate_scene
+
+Progress = Callable[[float, str], None]
+Cancel = Callable[[], bool]
+
+# Share of the progress bar given to the photon pass when both passes run.
+_FORWARD_SHARE = 0.6
+
+
+@dataclass
+class RenderResult:
+    """image     (pixy, pixx, 4) float32 linear RGBA, row 0 at the top
+    passes    name -> (pixy, pixx, 3) float32: 'direct' (lamps), 'caustic'
+              (illumination maps), 'ambient' (ambient term and background);
+              they sum to the image's RGB
+    maps      receiver name -> IlluminationMap
+    stats     counts and seconds per stage
+    warnings  what the user should know about this render"""
+
+    image: np.ndarray
+    passes: dict[str, np.ndarray]
+    maps: dict[str, IlluminationMap]
+    stats: dict
+    warnings: list[str] = field(default_factory=list)
+
+
+class _Monitor:
+    """Progress and cancel callbacks, checked between chunks."""
+
+    def __init__(self, progress: Optional[Progress], cancel: Optional[Cancel]):
+        self.progress, self.cancel = progress, cancel
+
+    def step(self, fraction: float, stage: str) -> None:
+        if self.cancel is not None and self.cancel():
+            raise Cancelled(f"cancelled during the {stage}")
+        if self.progress is not None:
+            self.progress(min(max(fraction, 0.0), 1.0), stage)
+
+
+def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str]) -> dict[int, IlluminationMap]:
+    """An empty illumination map for each receiver that can hold one."""
+    estimate = MapEstimate(settings.k_nearest if settings.density == "adaptive" else None)
+    limit = settings.map_resolution_limit
+    maps = {}
+    for index, obj in enumerate(scene.objects):
+        if not obj.is_receiver:
+            continue
+        chart = make_chart(obj)
+        if chart is None:
+            warnings.append(f"'{obj.name}' is curved and has no UV map: it receives no caustics")
+            continue
+        cell = auto_cell_size(chart, limit) if settings.map_scale is None else settings.map_scale / 1000.0
+        if chart.size.max() / cell > limit:
+            coarser = auto_cell_size(chart, limit)
+            warnings.append(f"'{obj.name}': a map scale of {cell * 1000:.4g} mm needs more than {limit} cells "
+                            f"across; using {coarser * 1000:.4g} mm")
+            cell = coarser
+        maps[index] = IlluminationMap(obj.name, chart, cell, estimate)
+    return maps
+
+
+def run_chunks(jobs: list[Callable[[], object]], threads: int, monitor: _Monitor, start: float, share: float,
+               stage: str) -> list:
+    """Run `jobs` with up to `threads` in flight, reporting progress from
+    `start` to `start + share` and checking for cancel as each one ends.
+    Two chunks in flight keep both cores busy: one traces in Embree (which
+    releases the GIL) while the other shades in numpy."""
+    results = []
+    with ThreadPoolExecutor(threads) as pool:
+        pending = set()
+        queue = iter(jobs)
+        try:
+            for job in queue:
+                pending.add(pool.submit(job))
+                if len(pending) < threads:
+                    continue
+                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                results += [f.result() for f in finished]
+                monitor.step(start + share * len(results) / len(jobs), stage)
+            for future in pending:
+                results.append(future.result())
+                monitor.step(start + share * len(results) / len(jobs), stage)
+        except BaseException:
+            for future in pending:
+                future.cancel()
+            raise
+    return results
+
+
+def forward_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
+                 maps: dict[int, IlluminationMap], monitor: _Monitor, share: float) -> TransportStats:
+    """Emit and trace every photon, chunk by chunk, into `maps`."""
+    targets = [Sphere.around(o.mesh.vertices) for o in scene.transparent]
+    lo, hi = scene.bounds()
+    emitters = make_emitters(scene.lights, targets, Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo))),
+                             settings.emission, settings.energy, settings.photons, settings.seed)
+
+    def job(k, emitter, start):
+        stop = min(start + settings.chunk_size, emitter.count)
+        rng = np.random.default_rng([settings.seed, k, start])
+        return trace_photons(accel, materials, maps, emitter.emit(start, stop), settings.max_depth, rng)
+
+    jobs = [partial(job, k, e, start) for k, e in enumerate(emitters) for start in range(0, e.count, settings.chunk_size)]
+    stats = TransportStats()
+    for chunk_stats in run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass"):
+        stats.add(chunk_stats)
+    stats.emitted = sum(e.count for e in emitters)
+    return stats
+
+
+def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
+             maps: dict[int, IlluminationMap], monitor: _Monitor, start: float) -> dict[str, np.ndarray]:
+    """Trace `spp` eye rays through every pixel, chunk by chunk. Returns the
+    pass buffers, each (pixels, 3)."""
+    cam = scene.camera
+    pixels = cam.pixx * cam.pixy
+    offsets = pixel_offsets(settings.spp, settings.seed)
+    samples = pixels * settings.spp
+    for imap in maps.values():
+        imap.prepare()
+
+    def job(first):
+        sample = np.arange(first, min(first + settings.chunk_size, samples))
+        pixel = sample // settings.spp
+        origins, dirs = eye_rays(cam, pixel, offsets[sample % settings.spp])
+        weight = np.full((len(sample), 3), 1.0 / settings.spp)
+        tracer = EyePass(accel, scene, materials, maps, settings.energy, settings.max_depth,
+                         pixel[0], pixel[-1] + 1)
+        tracer.trace(EyeRays(origins, dirs, weight, pixel, np.full(len(sample), -1, dtype=np.int64)))
+        return tracer
+
+    jobs = [partial(job, first) for first in range(0, samples, settings.chunk_size)]
+    buffers = {name: np.zeros((pixels, 3)) for name in PASSES}
+    for tracer in run_chunks(jobs, settings.threads, monitor, start, 1.0 - start, "eye pass"):
+        for name in PASSES:
+            buffers[name][tracer.first_pixel:tracer.end_pixel] += tracer.buffers[name]
+    return buffers
+
+
+def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Optional[Progress] = None,
+           cancel: Optional[Cancel] = None) -> RenderResult:
+    """Render `scene`. `progress(fraction, stage)` is called between chunks;
+    `cancel()` returning True stops the render with `Cancelled`. Raises
+    `SceneError` (naming the culprit) for scenes that cannot render."""
+    settings = settings or RenderSettings()
+    settings.validate()
+    warnings = validate_scene(scene)
+    monitor = _Monitor(progress, cancel)
+    seconds = {}
+
+    clock = time.perf_counter()
+    accel = Accelerator(scene.objects, scene.extent(), settings.threads)
+    try:
+        warnings += accel.warnings
+        materials = Materials.of(scene.objects)
+        seconds["bvh"] = time.perf_counter() - clock
+
+        clock = time.perf_counter()
+        maps = build_maps(scene, settings, warnings)
+        run_forward = bool(maps) and bool(scene.transparent) and settings.photons > 0
+        share = _FORWARD_SHARE if run_forward else 0.0
+        photon_stats = TransportStats()
+        if run_forward:
+            photon_stats = forward_pass(scene, settings, accel, materials, maps, monitor, share)
+        rays_forward = accel.rays_cast
+        seconds["photons"] = time.perf_counter() - clock
+
+        clock = time.perf_counter()
+        buffers = eye_pass(scene, settings, accel, materials, maps, monitor, share)
+        seconds["eye"] = time.perf_counter() - clock
+    finally:
+        accel.close()
+
+    cam = scene.camera
+    passes = {}
+    for name in PASSES:
+        buf = buffers[name]
+        bad = ~np.isfinite(buf)
+        if bad.any():
+            warnings.append(f"{int(bad.sum())} non-finite values in the {name} pass were set to 0")
+            buf[bad] = 0.0
+        passes[name] = buf.reshape(cam.pixy, cam.pixx, 3).astype(np.float32)
+    image = np.ones((cam.pixy, cam.pixx, 4), dtype=np.float32)
+    image[..., :3] = sum(passes[name] for name in PASSES)
+
+    stats = {
+        "photons_emitted": photon_stats.emitted,
+        "photons_landed": photon_stats.landed,
+        "flux_landed_w": photon_stats.flux_landed.tolist(),
+        "rays_photon_pass": rays_forward,
+        "rays_eye_pass": accel.rays_cast - rays_forward,
+        "seconds": seconds,
+        "triangles": int(len(accel.owner)),
+    }
+    return RenderResult(image, passes, {m.name: m for m in maps.values()}, stats, warnings)

@@ -1,0 +1,111 @@
+"""The forward pass: photons from the lamps through the dielectrics, onto the
+receivers' illumination maps.
+
+At a dielectric a photon reflects with the Fresnel probability F and refracts
+otherwise, keeping its flux: Russian roulette with the exact probability, so
+the estimate stays unbiased with a single path per photon. Inside a medium
+its flux falls by Beer-Lambert over each segment. A photon lands in a
+receiver's map only after at least one specular event; the eye pass computes
+direct light exactly, so nothing is counted twice.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .accel import Accelerator, MISS
+from .emission import Photons
+from .illumination_map import IlluminationMap
+from .interface import orient, scatter
+from .materials import Materials
+from .optics import beer_lambert
+
+# Below this fraction of its starting flux (max channel), a photon plays
+# Russian roulette and survives with probability flux / threshold.
+ROULETTE_FRACTION = 0.05
+
+
+@dataclass
+class TransportStats:
+    rays: int = 0
+    emitted: int = 0
+    landed: int = 0
+    flux_landed: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    def add(self, other: "TransportStats") -> None:
+        self.rays += other.rays
+        self.emitted += other.emitted
+        self.landed += other.landed
+        self.flux_landed = self.flux_landed + other.flux_landed
+
+
+def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap],
+                  photons: Photons, max_depth: int, rng: np.random.Generator) -> TransportStats:
+    """Trace one batch of photons and splat the ones that land into `maps`
+    (keyed by receiver object index). Returns what it did."""
+    stats = TransportStats(emitted=len(photons.flux))
+    origins, dirs, flux = photons.origins, photons.dirs, photons.flux.copy()
+    start_flux = flux.max(axis=1)
+    medium = np.full(len(flux), MISS, dtype=np.int64)
+    specular = np.zeros(len(flux), dtype=bool)
+
+    for _ in range(max_depth + 1):
+        if len(flux) == 0:
+            break
+        hits = accel.intersect(origins, dirs)
+        stats.rays += len(flux)
+        keep = hits.hit
+        origins, dirs, flux, start_flux, medium, specular = (
+            a[keep] for a in (origins, dirs, flux, start_flux, medium, specular))
+        hits = hits.select(keep)
+        points = origins + hits.t[:, None] * dirs
+
+        inside = medium != MISS
+        if inside.any():
+            flux[inside] *= beer_lambert(materials.absorption[medium[inside]], hits.t[inside])
+
+        land = specular & materials.receiver[hits.obj]
+        for index in np.unique(hits.obj[land]):
+            sel = land & (hits.obj == index)
+            local = hits.prim[sel] - accel.prim_offset[index]
+            maps[index].deposit(local, hits.u[sel], hits.v[sel], points[sel], flux[sel])
+            stats.landed += int(sel.sum())
+            stats.flux_landed = stats.flux_landed + flux[sel].sum(axis=0)
+
+        glass = materials.dielectric[hits.obj]
+        origins, dirs, flux, start_flux, medium, points = (
+            a[glass] for a in (origins, dirs, flux, start_flux, medium, points))
+        hits = hits.select(glass)
+        if len(flux) == 0:
+            break
+
+        surface = orient(accel, hits, dirs, points, materials.ior)
+        dirs, crossed = scatter(surface, dirs, rng.random(len(flux)) < surface.fresnel)
+        flux *= materials.color[hits.obj]
+        medium = np.where(crossed, np.where(surface.entering, hits.obj, MISS), medium)
+        specular = np.ones(len(flux), dtype=bool)
+        origins = accel.offset(points, surface.facing, dirs)
+
+        flux, alive = _roulette(flux, start_flux, rng)
+        origins, dirs, flux, start_flux, medium, specular = (
+            a[alive] for a in (origins, dirs, flux, start_flux, medium, specular))
+    return stats
+
+
+def _roulette(flux: np.ndarray, start_flux: np.ndarray, rng: np.random.Generator):
+    """Russian roulette on photons below ROULETTE_FRACTION of their starting
+    flux: survive with probability q = flux / threshold, flux /= q.
+    Returns (flux (n,3), alive (n,) bool)."""
+    threshold = ROULETTE_FRACTION * start_flux
+    peak = flux.max(axis=1)
+    low = peak < threshold
+    if not low.any():
+        return flux, np.ones(len(flux), dtype=bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = np.where(low, peak / threshold, 1.0)
+    alive = ~low | (rng.random(len(flux)) < q)
+    flux = flux / np.where(alive, np.maximum(q, 1e-300), 1.0)[:, None]
+    return flux, alive & (peak > 0.0)
+
