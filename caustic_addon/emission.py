@@ -31,6 +31,19 @@ _PLASTIC = 1.32471795724474602596
 _R2_ALPHA = np.array([1.0 / _PLASTIC, 1.0 / _PLASTIC ** 2])
 
 
+def hash_uniform(ids: np.ndarray, stream: int, seed: int) -> np.ndarray:
+    """(n,) uniform floats in [0,1) that depend only on (id, stream, seed):
+    the splitmix64 finaliser (Steele et al. 2014) of their combination. A
+    photon's random choices are then the same however the work is chunked."""
+    with np.errstate(over="ignore"):
+        x = (ids.astype(np.uint64) * np.uint64(0x9E3779B97F4A7C15)
+             + np.uint64((stream * 0x632BE59BD9B4E019 + seed * 0xD6E8FEB86659FD93) % (1 << 64)))
+        x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        x ^= x >> np.uint64(31)
+    return (x >> np.uint64(11)).astype(np.float64) * (1.0 / (1 << 53))
+
+
 def r2_sequence(index: np.ndarray, shift: np.ndarray) -> np.ndarray:
     """(n,2) points in [0,1)^2 of the R2 sequence at integer `index (n,)`,
     Cranley-Patterson rotated by `shift (2,)`."""
@@ -87,26 +100,30 @@ class Sphere:
 @dataclass
 class Photons:
     """A batch of n photons leaving a lamp: origins (n,3), dirs (n,3) unit,
-    flux (n,3) W. Photons with zero flux are already removed."""
+    flux (n,3) W, ids (n,) int64 unique per render (they seed each photon's
+    random choices). Photons with zero flux are already removed."""
 
     origins: np.ndarray
     dirs: np.ndarray
     flux: np.ndarray
+    ids: np.ndarray
 
 
 class Emitter:
-    """Makes photons [start, stop) of one lamp. `count` is how many it makes in all."""
+    """Makes photons [start, stop) of one lamp. `count` is how many it makes
+    in all; its photons' ids start at `id_base`."""
 
     count: int
     flux_toward_targets: float
+    id_base: int = 0
 
     def emit(self, start: int, stop: int) -> Photons:
         raise NotImplementedError
 
 
-def _kept(origins, dirs, flux) -> Photons:
+def _kept(origins, dirs, flux, ids) -> Photons:
     keep = flux.max(axis=1) > 0.0
-    return Photons(origins[keep], dirs[keep], flux[keep])
+    return Photons(origins[keep], dirs[keep], flux[keep], ids[keep])
 
 
 class PointSphereEmitter(Emitter):
@@ -128,7 +145,7 @@ class PointSphereEmitter(Emitter):
         cell_solid_angle = du * (np.sin(v0 + dv) - np.sin(v0))
         flux = units.intensity(self.light, self.energy, dirs) * cell_solid_angle[:, None]
         origins = np.broadcast_to(self.light.position, dirs.shape)
-        return _kept(origins, dirs, flux)
+        return _kept(origins, dirs, flux, i + self.id_base)
 
 
 class PointConeEmitter(Emitter):
@@ -164,7 +181,7 @@ class PointConeEmitter(Emitter):
         density = inside.astype(np.float64) @ self.density
         flux = units.intensity(self.light, self.energy, dirs) / density[:, None]
         origins = np.broadcast_to(self.light.position, dirs.shape)
-        return _kept(origins, dirs, flux)
+        return _kept(origins, dirs, flux, i + self.id_base)
 
 
 class SunDiscEmitter(Emitter):
@@ -200,7 +217,7 @@ class SunDiscEmitter(Emitter):
         density = inside.astype(np.float64) @ self.density
         flux = units.sun_irradiance(self.light, self.energy)[None, :] / density[:, None]
         dirs = np.broadcast_to(self.light.direction, origins.shape)
-        return _kept(origins, np.ascontiguousarray(dirs), flux)
+        return _kept(origins, np.ascontiguousarray(dirs), flux, i + self.id_base)
 
 
 def visible_targets(light: Light, targets: list[Sphere]) -> list[Sphere]:
@@ -248,4 +265,7 @@ def make_emitters(lights: list[Light], targets: list[Sphere], scene_sphere: Sphe
     if len(probes) == 0 or weights.sum() <= 0:
         return []
     shares = np.maximum(1, np.round(photons * weights / weights.sum())).astype(int)
-    return [build(light, aimed, int(n)) for (light, aimed), n in zip(candidates, shares)]
+    emitters = [build(light, aimed, int(n)) for (light, aimed), n in zip(candidates, shares)]
+    for k in range(1, len(emitters)):
+        emitters[k].id_base = emitters[k - 1].id_base + emitters[k - 1].count
+    return emitters

@@ -10,8 +10,9 @@ Map scale: the edge of one cell, in millimetres of world space. The paper
 compares 5 and 40; larger cells are smoother and blurrier.
 
 The adaptive estimate needs no map scale: at each look-up it grows a square
-window of cells until it holds k photons and divides their flux by the
-window's area (k-nearest-neighbour density estimation, Silverman 1986, on the
+window of cells until it holds k photons, up to 16 cells from the centre, and
+divides their flux by the window's area (k-nearest-neighbour density
+estimation with a bounded radius, Silverman 1986 and Jensen 2001, on the
 map's grid). Window sums come from summed-area tables, four reads per window.
 """
 
@@ -30,9 +31,11 @@ from .scene import Object
 
 # Photons held back before a splat: one bincount over the whole grid each time.
 _FLUSH_PHOTONS = 1 << 22
-# Half-widths, in cells, of the windows the adaptive estimate tries.
-_WINDOW_RADII = np.unique(np.round(np.geomspace(1, 512, 28)).astype(int))
-_WINDOW_RADII = np.concatenate([[0], _WINDOW_RADII])
+# Half-widths, in cells, of the windows the adaptive estimate tries. The
+# largest bounds the blur: where fewer than k photons land within it, the
+# estimate is its plain mean (zero far from any caustic), not a halo of flux
+# borrowed from far away.
+_WINDOW_RADII = np.arange(17)
 
 
 class Chart:
@@ -257,11 +260,13 @@ class IlluminationMap:
         # _WINDOW_RADII, since the count only grows with the radius.
         lo = np.zeros(len(xy), dtype=np.int64)
         hi = np.full(len(xy), len(_WINDOW_RADII) - 1)
-        while np.any(lo < hi):
+        active = lo < hi
+        while active.any():
             mid = (lo + hi) // 2
             enough = _box_sums(count_table, i, j, _WINDOW_RADII[mid]) >= self.estimate.k_nearest
-            hi = np.where(enough, mid, hi)
-            lo = np.where(enough, lo, mid + 1)
+            hi = np.where(active & enough, mid, hi)
+            lo = np.where(active & ~enough, mid + 1, lo)
+            active = lo < hi
         radius = _WINDOW_RADII[lo]
         flux = _box_sums(flux_table, i, j, radius)
         rows = np.minimum(i + radius + 1, h) - np.maximum(i - radius, 0)

@@ -55,7 +55,8 @@ def fresnel_dielectric(cos_i: np.ndarray, eta) -> np.ndarray:
         Rp = ((cos_i - eta cos_t) / (cos_i + eta cos_t))^2
 
     with eta = eta_i / eta_t and cos_t from Snell's law. F = 1 past the
-    critical angle (total internal reflection).
+    critical angle (total internal reflection). At exactly grazing incidence
+    both ratios are 0/0; their limit is 1, or 0 for matched indices (eta = 1).
     """
     cos_i = np.clip(np.asarray(cos_i, dtype=np.float64), 0.0, 1.0)
     eta = np.broadcast_to(np.asarray(eta, dtype=np.float64), cos_i.shape)
@@ -65,8 +66,8 @@ def fresnel_dielectric(cos_i: np.ndarray, eta) -> np.ndarray:
         rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
         rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
     f = 0.5 * (rs * rs + rp * rp)
-    f = np.where(np.isfinite(f), f, 1.0)
-    return np.where(sin2_t >= 1.0, 1.0, np.clip(f, 0.0, 1.0))
+    f = np.where(np.isfinite(f), f, np.where(eta == 1.0, 0.0, 1.0))
+    return np.where(sin2_t > 1.0, 1.0, np.clip(f, 0.0, 1.0))
 
 
 def beer_lambert(absorption: np.ndarray, distance: np.ndarray) -> np.ndarray:

@@ -118,12 +118,11 @@ def forward_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, mat
     emitters = make_emitters(scene.lights, targets, Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo))),
                              settings.emission, settings.energy, settings.photons, settings.seed)
 
-    def job(k, emitter, start):
+    def job(emitter, start):
         stop = min(start + settings.chunk_size, emitter.count)
-        rng = np.random.default_rng([settings.seed, k, start])
-        return trace_photons(accel, materials, maps, emitter.emit(start, stop), settings.max_depth, rng)
+        return trace_photons(accel, materials, maps, emitter.emit(start, stop), settings.max_depth, settings.seed)
 
-    jobs = [partial(job, k, e, start) for k, e in enumerate(emitters) for start in range(0, e.count, settings.chunk_size)]
+    jobs = [partial(job, e, start) for e in emitters for start in range(0, e.count, settings.chunk_size)]
     stats = TransportStats()
     for chunk_stats in run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass"):
         stats.add(chunk_stats)

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .accel import Accelerator, MISS
-from .emission import Photons
+from .emission import Photons, hash_uniform
 from .illumination_map import IlluminationMap
 from .interface import orient, scatter
 from .materials import Materials
@@ -42,23 +42,23 @@ class TransportStats:
 
 
 def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap],
-                  photons: Photons, max_depth: int, rng: np.random.Generator) -> TransportStats:
+                  photons: Photons, max_depth: int, seed: int) -> TransportStats:
     """Trace one batch of photons and splat the ones that land into `maps`
     (keyed by receiver object index). Returns what it did."""
     stats = TransportStats(emitted=len(photons.flux))
-    origins, dirs, flux = photons.origins, photons.dirs, photons.flux.copy()
+    origins, dirs, flux, ids = photons.origins, photons.dirs, photons.flux.copy(), photons.ids
     start_flux = flux.max(axis=1)
     medium = np.full(len(flux), MISS, dtype=np.int64)
     specular = np.zeros(len(flux), dtype=bool)
 
-    for _ in range(max_depth + 1):
+    for depth in range(max_depth + 1):
         if len(flux) == 0:
             break
         hits = accel.intersect(origins, dirs)
         stats.rays += len(flux)
         keep = hits.hit
-        origins, dirs, flux, start_flux, medium, specular = (
-            a[keep] for a in (origins, dirs, flux, start_flux, medium, specular))
+        origins, dirs, flux, start_flux, medium, specular, ids = (
+            a[keep] for a in (origins, dirs, flux, start_flux, medium, specular, ids))
         hits = hits.select(keep)
         points = origins + hits.t[:, None] * dirs
 
@@ -75,29 +75,29 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, Illu
             stats.flux_landed = stats.flux_landed + flux[sel].sum(axis=0)
 
         glass = materials.dielectric[hits.obj]
-        origins, dirs, flux, start_flux, medium, points = (
-            a[glass] for a in (origins, dirs, flux, start_flux, medium, points))
+        origins, dirs, flux, start_flux, medium, points, ids = (
+            a[glass] for a in (origins, dirs, flux, start_flux, medium, points, ids))
         hits = hits.select(glass)
         if len(flux) == 0:
             break
 
         surface = orient(accel, hits, dirs, points, materials.ior)
-        dirs, crossed = scatter(surface, dirs, rng.random(len(flux)) < surface.fresnel)
+        dirs, crossed = scatter(surface, dirs, hash_uniform(ids, 2 * depth, seed) < surface.fresnel)
         flux *= materials.color[hits.obj]
         medium = np.where(crossed, np.where(surface.entering, hits.obj, MISS), medium)
         specular = np.ones(len(flux), dtype=bool)
         origins = accel.offset(points, surface.facing, dirs)
 
-        flux, alive = _roulette(flux, start_flux, rng)
-        origins, dirs, flux, start_flux, medium, specular = (
-            a[alive] for a in (origins, dirs, flux, start_flux, medium, specular))
+        flux, alive = _roulette(flux, start_flux, hash_uniform(ids, 2 * depth + 1, seed))
+        origins, dirs, flux, start_flux, medium, specular, ids = (
+            a[alive] for a in (origins, dirs, flux, start_flux, medium, specular, ids))
     return stats
 
 
-def _roulette(flux: np.ndarray, start_flux: np.ndarray, rng: np.random.Generator):
+def _roulette(flux: np.ndarray, start_flux: np.ndarray, xi: np.ndarray):
     """Russian roulette on photons below ROULETTE_FRACTION of their starting
-    flux: survive with probability q = flux / threshold, flux /= q.
-    Returns (flux (n,3), alive (n,) bool)."""
+    flux: survive with probability q = flux / threshold, flux /= q. `xi (n,)`
+    are uniform random numbers. Returns (flux (n,3), alive (n,) bool)."""
     threshold = ROULETTE_FRACTION * start_flux
     peak = flux.max(axis=1)
     low = peak < threshold
@@ -105,7 +105,7 @@ def _roulette(flux: np.ndarray, start_flux: np.ndarray, rng: np.random.Generator
         return flux, np.ones(len(flux), dtype=bool)
     with np.errstate(divide="ignore", invalid="ignore"):
         q = np.where(low, peak / threshold, 1.0)
-    alive = ~low | (rng.random(len(flux)) < q)
+    alive = ~low | (xi < q)
     flux = flux / np.where(alive, np.maximum(q, 1e-300), 1.0)[:, None]
     return flux, alive & (peak > 0.0)
 
