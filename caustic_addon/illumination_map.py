@@ -151,8 +151,8 @@ class MapEstimate:
 class IlluminationMap:
     """Caustic flux landed on one receiver.
 
-    flux   (h,w,3) W, bilinearly splatted (the paper's scheme)
-    count  (h,w) photons, splatted the same way
+    flux and count (properties) hold the landed flux and photon count per
+    cell, bilinearly splatted (the paper's scheme).
     Cell (i, j) covers chart x in origin_x + [j, j+1) * cell and
     y in origin_y + [i, i+1) * cell.
     """
@@ -160,8 +160,8 @@ class IlluminationMap:
     def __init__(self, name: str, chart: Chart, cell: float, estimate: MapEstimate):
         self.name, self.chart, self.cell, self.estimate = name, chart, cell, estimate
         self.shape = (max(1, int(math.ceil(chart.size[1] / cell))), max(1, int(math.ceil(chart.size[0] / cell))))
-        self.flux = np.zeros(self.shape + (3,))
-        self.count = np.zeros(self.shape)
+        self._flux = np.zeros(self.shape + (3,))
+        self._count = np.zeros(self.shape)
         self.photons = 0
         self._pending: list[tuple[np.ndarray, np.ndarray]] = []
         self._pending_count = 0
@@ -188,13 +188,25 @@ class IlluminationMap:
             if self._pending_count >= _FLUSH_PHOTONS:
                 self._flush()
 
+    @property
+    def flux(self) -> np.ndarray:
+        """(h,w,3) W landed in each cell."""
+        self.prepare()
+        return self._flux
+
+    @property
+    def count(self) -> np.ndarray:
+        """(h,w) photons landed in each cell (bilinear shares)."""
+        self.prepare()
+        return self._count
+
     def prepare(self) -> None:
         """Splat what is pending and build the look-up tables, so that
         concurrent reads need no lock."""
         with self._lock:
             self._flush()
             if self.estimate.k_nearest is not None and self._tables is None:
-                self._tables = (_summed_area_table(self.count), _summed_area_table(self.flux))
+                self._tables = (_summed_area_table(self._count), _summed_area_table(self._flux))
 
     def _flush(self) -> None:
         """Splat the pending photons bilinearly to their 4 nearest cells (the
@@ -218,15 +230,15 @@ class IlluminationMap:
                 index.append(row * w + np.clip(base[:, 1] + dj, 0, w - 1))
         index, weight = np.concatenate(index), np.concatenate(weight)
         flux4 = np.tile(flux, (4, 1))
-        self.count += np.bincount(index, weights=weight, minlength=h * w).reshape(h, w)
+        self._count += np.bincount(index, weights=weight, minlength=h * w).reshape(h, w)
         for c in range(3):
-            self.flux[..., c] += np.bincount(index, weights=weight * flux4[:, c], minlength=h * w).reshape(h, w)
+            self._flux[..., c] += np.bincount(index, weights=weight * flux4[:, c], minlength=h * w).reshape(h, w)
 
     def irradiance_at(self, xy: np.ndarray) -> np.ndarray:
         """Caustic irradiance (n,3) W/m^2 at chart coordinates `xy (n,2)`."""
         self.prepare()
         if self.estimate.k_nearest is None:
-            out = self._bilinear(self.flux / self.cell ** 2, xy)
+            out = self._bilinear(self._flux / self.cell ** 2, xy)
         else:
             out = self._adaptive(xy)
         outside = ((xy < self.chart.origin) | (xy > self.chart.origin + self.chart.size)).any(axis=1)

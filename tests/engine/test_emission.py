@@ -1,0 +1,86 @@
+"""Photon emission: the paper's sphere grid and targeted cones carry the lamp's flux."""
+
+import math
+
+import numpy as np
+import pytest
+
+from caustic_addon import PointLight, SpotLight, SunLight
+from caustic_addon.emission import (PointConeEmitter, PointSphereEmitter, Sphere, SunDiscEmitter, make_emitters,
+                                    sample_cone)
+
+
+def test_sphere_mode_carries_the_whole_power_uniformly():
+    """Eq. (1)'s grid weighted by cell solid angle: total flux = P, and every
+    octant of directions gets an eighth of it."""
+    light = PointLight((0, 0, 0), 100.0)
+    emitter = PointSphereEmitter(light, 1.0, 20_000)
+    photons = emitter.emit(0, emitter.count)
+    assert photons.flux[:, 0].sum() == pytest.approx(100.0, rel=1e-9)
+    octant = (photons.dirs > 0) @ np.array([1, 2, 4])
+    per_octant = np.bincount(octant, weights=photons.flux[:, 0], minlength=8)
+    np.testing.assert_allclose(per_octant, 100.0 / 8, rtol=0.02)
+
+
+def test_targeted_flux_is_the_intensity_times_the_cones_union():
+    """Two overlapping target spheres: the photons' total flux equals
+    I * solid angle of the union of their cones, measured independently by
+    counting uniform directions that fall in either cone."""
+    light = PointLight((0, 0, 5), 4 * math.pi)  # I = 1 W/sr
+    targets = [Sphere(np.array([0.0, 0.0, 0.0]), 1.0), Sphere(np.array([0.8, 0.0, 0.0]), 1.0)]
+    emitter = PointConeEmitter(light, 1.0, 200_000, targets, np.array([0.3, 0.7]))
+    flux = emitter.emit(0, emitter.count).flux[:, 0].sum()
+
+    rng = np.random.default_rng(5)
+    dirs = rng.normal(size=(4_000_000, 3))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    inside = np.zeros(len(dirs), dtype=bool)
+    for s in targets:
+        axis = (s.center - light.position) / np.linalg.norm(s.center - light.position)
+        cos_max = math.sqrt(1 - (s.radius / np.linalg.norm(s.center - light.position)) ** 2)
+        inside |= dirs @ axis >= cos_max
+    union = 4 * math.pi * inside.mean()
+    assert flux == pytest.approx(union, rel=0.01)
+
+
+def test_cone_samples_stay_in_the_cone_and_are_uniform():
+    axis = np.array([0.0, 0.6, -0.8])
+    cos_max = math.cos(0.3)
+    uv = np.random.default_rng(2).random((100_000, 2))
+    dirs = sample_cone(axis, cos_max, uv)
+    cos = dirs @ axis
+    assert cos.min() >= cos_max - 1e-12
+    np.testing.assert_allclose(np.linalg.norm(dirs, axis=1), 1.0, atol=1e-12)
+    # uniform in solid angle: cos(theta) is uniform on [cos_max, 1]
+    hist, _ = np.histogram(cos, bins=10, range=(cos_max, 1.0))
+    np.testing.assert_allclose(hist / hist.mean(), 1.0, atol=0.05)
+
+
+def test_sun_discs_carry_irradiance_times_area():
+    sun = SunLight((0, 0, -1), 3.0)
+    target = Sphere(np.array([0.0, 0.0, 1.0]), 0.5)
+    emitter = SunDiscEmitter(sun, 1.0, 10_000, [target], 10.0, np.array([0.1, 0.2]))
+    photons = emitter.emit(0, emitter.count)
+    assert photons.flux[:, 0].sum() == pytest.approx(3.0 * math.pi * 0.25, rel=1e-9)
+    np.testing.assert_allclose(photons.dirs, np.tile([0.0, 0.0, -1.0], (len(photons.dirs), 1)))
+    assert np.all(photons.origins[:, 2] > 10.0)
+
+
+def test_a_spot_that_misses_every_target_emits_nothing():
+    spot = SpotLight((0, 0, 5), (1, 0, 0), 100.0, spot_size=math.radians(30))
+    targets = [Sphere(np.array([0.0, 0.0, 0.0]), 1.0)]
+    assert make_emitters([spot], targets, targets[0], "targeted", 1.0, 1000, 0) == []
+    aimed = SpotLight((0, 0, 5), (0, 0, -1), 100.0, spot_size=math.radians(30))
+    assert len(make_emitters([aimed], targets, targets[0], "targeted", 1.0, 1000, 0)) == 1
+
+
+def test_photon_budget_follows_the_flux_each_lamp_sends_to_the_targets():
+    targets = [Sphere(np.array([0.0, 0.0, 0.0]), 1.0)]
+    near = PointLight((0, 0, 3), 100.0)
+    far = PointLight((0, 0, 30), 100.0)
+    emitters = make_emitters([near, far], targets, targets[0], "targeted", 1.0, 100_000, 0)
+    counts = [e.count for e in emitters]
+    fluxes = [e.flux_toward_targets for e in emitters]
+    assert counts[0] / counts[1] == pytest.approx(fluxes[0] / fluxes[1], rel=0.01)
+    ids = np.concatenate([e.emit(0, e.count).ids for e in emitters])
+    assert len(np.unique(ids)) == len(ids)
