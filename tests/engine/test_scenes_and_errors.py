@@ -1,0 +1,135 @@
+"""Scene handling: both emission modes agree, all lamp types light the
+floor, progress and cancel work, bad scenes are named, odd meshes warned."""
+
+import math
+
+import numpy as np
+import pytest
+
+from caustic_addon import (Cancelled, Dielectric, Diffuse, Mesh, Object, PointLight, RenderSettings, Scene,
+                           SceneError, SpotLight, SunLight, render, shapes)
+from metrics import annulus_means, annulus_points, relative_l2
+from scenes import ball_lens, quick, shadow_radius
+
+
+def test_targeted_and_sphere_emission_agree():
+    """Targeted emission only skips directions that miss the glass: the
+    caustic it estimates is the paper's full-sphere one, at a fraction of the photons."""
+    scene = ball_lens(pixels=8)
+    r_edges = np.linspace(0.0, shadow_radius(), 41)
+    xy = annulus_points(r_edges, 200)
+
+    def profile(settings):
+        return annulus_means(render(scene, settings).maps["Floor"].irradiance_at(xy)[:, 0], r_edges)
+
+    targeted = profile(quick(photons=300_000))
+    sphere = profile(quick(photons=300_000 * 20, emission="sphere"))
+    assert relative_l2(targeted, sphere, r_edges) < 0.05
+
+
+@pytest.mark.parametrize("light", [
+    SpotLight((0, 0, 6), (0, 0, -1), 1000.0, spot_size=math.radians(60), blend=0.1),
+    SunLight((0, 0, -1), 5.0),
+])
+def test_spot_and_sun_make_a_caustic_too(light):
+    scene = ball_lens(pixels=32)
+    scene.lights = [light]
+    result = render(scene, quick(photons=200_000))
+    floor = result.maps["Floor"].irradiance_at(np.zeros((1, 2)))[0, 0]
+    if isinstance(light, SunLight):
+        unobstructed = light.strength
+    else:
+        unobstructed = light.power / (4 * math.pi) / 36.0
+    assert floor > 3 * unobstructed
+    assert np.isfinite(result.image).all()
+
+
+def test_sun_direct_light_is_its_strength():
+    scene = ball_lens(pixels=16)
+    scene.objects = scene.objects[:1]
+    scene.lights = [SunLight((0, 0, -1), 2.0)]
+    result = render(scene, quick())
+    np.testing.assert_allclose(result.image[..., :3], 2.0 / math.pi, rtol=1e-5)
+
+
+def test_progress_reaches_the_end_and_cancel_stops():
+    scene = ball_lens(pixels=32)
+    seen = []
+    render(scene, quick(photons=100_000, chunk_size=8192), progress=lambda f, stage: seen.append((f, stage)))
+    fractions = [f for f, _ in seen]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0
+    assert {stage for _, stage in seen} == {"photon pass", "eye pass"}
+    with pytest.raises(Cancelled):
+        render(scene, quick(photons=100_000, chunk_size=8192), cancel=lambda: True)
+
+
+def broken(**changes):
+    scene = ball_lens(pixels=8)
+    glass = scene.objects[1]
+    for key, value in changes.items():
+        if key == "ior":
+            glass.material = Dielectric(value)
+        elif key == "vertices":
+            glass.mesh.vertices[3] = value
+        elif key == "empty":
+            glass.mesh = Mesh(glass.mesh.vertices, np.zeros((0, 3), int))
+        elif key == "power":
+            scene.lights = [PointLight((0, 0, 6), value, name="Lamp")]
+    return scene
+
+
+@pytest.mark.parametrize("changes, message", [
+    (dict(ior=0.0), "Glass: IOR must be a positive number"),
+    (dict(ior=float("nan")), "Glass: IOR must be a positive number"),
+    (dict(vertices=[np.nan, 0, 0]), "Glass: its vertex coordinates contains NaN"),
+    (dict(empty=True), "Glass: the mesh has no triangles"),
+    (dict(power=-5.0), "Lamp: power must be"),
+])
+def test_bad_scenes_name_the_culprit(changes, message):
+    with pytest.raises(SceneError, match=message):
+        render(broken(**changes), quick(photons=1000))
+
+
+@pytest.mark.parametrize("field, value", [("photons", -1), ("spp", 0), ("map_scale", -2.0), ("emission", "cone")])
+def test_bad_settings_name_the_field(field, value):
+    with pytest.raises(ValueError, match=field):
+        render(ball_lens(pixels=8), RenderSettings(**{field: value}))
+
+
+def test_open_and_inverted_meshes_are_reported():
+    scene = ball_lens(pixels=8)
+    glass = scene.objects[1].mesh
+    scene.objects[1].mesh = Mesh(glass.vertices, glass.triangles[:, ::-1], -glass.corner_normals[:, ::-1])
+    assert any("inverted normals" in w for w in render(scene, quick(photons=10_000)).warnings)
+    scene.objects[1].mesh = Mesh(glass.vertices, glass.triangles[10:], glass.corner_normals[10:])
+    assert any("not a closed mesh" in w for w in render(scene, quick(photons=10_000)).warnings)
+
+
+def test_inverted_normals_render_like_the_right_ones():
+    scene = ball_lens(pixels=16)
+    right = render(scene, quick()).image
+    glass = scene.objects[1].mesh
+    scene.objects[1].mesh = Mesh(glass.vertices, glass.triangles[:, ::-1], -glass.corner_normals[:, ::-1])
+    flipped = render(scene, quick()).image
+    np.testing.assert_allclose(flipped, right, rtol=1e-3)  # Embree's float32 rounding follows the winding
+
+
+def test_a_curved_receiver_collects_caustics_through_its_uvs():
+    """A floor bent into a shallow trough, with UVs: it gets a map through its
+    UV chart, and the flux landed equals the flux of the flat floor within noise."""
+    flat = ball_lens(pixels=8)
+    n = 64
+    xs = np.linspace(-4, 4, n + 1)
+    gx, gy = np.meshgrid(xs, xs)
+    gz = 0.02 * gx ** 2
+    verts = np.stack([gx, gy, gz], -1).reshape(-1, 3)
+    idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
+    tris = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    uv = (np.stack([gx, gy], -1).reshape(-1, 2) + 4) / 8
+    trough = Scene([Object("Floor", Mesh(verts, tris, corner_uvs=uv[tris]), Diffuse()), flat.objects[1]],
+                   flat.lights, flat.camera)
+    curved = render(trough, quick(photons=200_000))
+    assert "Floor" in curved.maps
+    landed = curved.maps["Floor"].flux.sum()
+    assert landed == pytest.approx(render(flat, quick(photons=200_000)).maps["Floor"].flux.sum(), rel=0.02)
