@@ -1,0 +1,115 @@
+"""Speed of the engine against raw Embree, on issue 2's scene: a smooth
+65k-triangle glass sphere over a floor, a point lamp, a 640x480 camera.
+
+    .venv/bin/python benchmarks/speed.py [--repeats 3]
+
+Prints a table and writes benchmarks/results/speed.json. Each figure is the
+best of `repeats` runs, so a busy machine shows less.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+from concurrent.futures import ThreadPoolExecutor
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+
+from caustic_addon import Camera, Dielectric, Diffuse, Object, PointLight, RenderSettings, Scene, render, shapes
+from caustic_addon.accel import Accelerator
+from caustic_addon.emission import Sphere, sample_cone
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def benchmark_scene() -> Scene:
+    return Scene(
+        objects=[Object("Floor", shapes.plane(10.0), Diffuse(albedo=0.8)),
+                 Object("Glass", shapes.uv_sphere(1.0, (0, 0, 1.5), 256, 128), Dielectric(1.5))],
+        lights=[PointLight((0, 0, 6), 1000.0)],
+        camera=Camera.look_at((0, -6, 5), (0, 0, 0.5), pixx=640, pixy=480),
+    )
+
+
+def machine() -> str:
+    model = "unknown CPU"
+    cpuinfo = Path("/proc/cpuinfo")
+    if cpuinfo.exists():
+        for line in cpuinfo.read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    return f"{model}, {os.cpu_count()} cores, {platform.system()} {platform.machine()}, Python {platform.python_version()}"
+
+
+def raw_embree_rays_per_second(scene: Scene, rays: int, threads: int) -> float:
+    """Closest-hit rays/s of embreex alone on the scene, rays from the lamp
+    into the sphere's cone, the batch split over `threads` as the engine does."""
+    accel = Accelerator(scene.objects, scene.extent(), threads)
+    lamp = scene.lights[0].position
+    sphere = Sphere.around(scene.objects[1].mesh.vertices)
+    axis = (sphere.center - lamp) / np.linalg.norm(sphere.center - lamp)
+    cos_max = np.sqrt(1 - (sphere.radius / np.linalg.norm(sphere.center - lamp)) ** 2)
+    dirs = sample_cone(axis, cos_max, np.random.default_rng(0).random((rays, 2))).astype(np.float32)
+    origins = np.broadcast_to(lamp, dirs.shape).astype(np.float32)
+    parts = np.array_split(np.arange(rays), threads)
+    embree = accel._embree
+    with ThreadPoolExecutor(threads) as pool:
+        start = time.perf_counter()
+        list(pool.map(lambda p: embree.run(origins[p], dirs[p], output=1), parts))
+        seconds = time.perf_counter() - start
+    accel.close()
+    return rays / seconds
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--photons", type=int, default=1_000_000)
+    args = parser.parse_args()
+
+    scene = benchmark_scene()
+    raw = max(raw_embree_rays_per_second(scene, 2_000_000, 2) for _ in range(args.repeats))
+
+    runs = [render(scene, RenderSettings(photons=args.photons, spp=1)).stats for _ in range(args.repeats)]
+    photon = min(runs, key=lambda s: s["seconds"]["photons"])
+    eye = min(runs, key=lambda s: s["seconds"]["eye"])
+
+    paths_per_s = photon["photons_emitted"] / photon["seconds"]["photons"]
+    photon_rays_per_s = photon["rays_photon_pass"] / photon["seconds"]["photons"]
+    eye_rays_per_s = eye["rays_eye_pass"] / eye["seconds"]["eye"]
+    report = {
+        "date": date.today().isoformat(),
+        "machine": machine(),
+        "scene": "smooth glass UV sphere, 65,536 triangles, over a floor; point lamp; 640x480, 1 spp",
+        "raw_embree_rays_per_s": raw,
+        "photons": photon["photons_emitted"],
+        "photon_pass_s": photon["seconds"]["photons"],
+        "photon_paths_per_s": paths_per_s,
+        "photon_pass_rays_per_s": photon_rays_per_s,
+        "photon_pass_fraction_of_raw": photon_rays_per_s / raw,
+        "eye_pass_s": eye["seconds"]["eye"],
+        "eye_pass_rays": eye["rays_eye_pass"],
+        "eye_pass_rays_per_s": eye_rays_per_s,
+        "eye_pass_fraction_of_raw": eye_rays_per_s / raw,
+        "bvh_s": photon["seconds"]["bvh"],
+    }
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "speed.json").write_text(json.dumps(report, indent=2) + "\n")
+    print(f"{report['date']}, {report['machine']}")
+    print(f"raw embreex (2 threads)   {raw / 1e6:6.2f} M rays/s")
+    print(f"photon pass               {paths_per_s / 1e6:6.2f} M paths/s, {photon_rays_per_s / 1e6:.2f} M rays/s "
+          f"({100 * photon_rays_per_s / raw:.0f}% of raw), {photon['seconds']['photons']:.2f} s for "
+          f"{photon['photons_emitted']:,} photons")
+    print(f"eye pass 640x480 1 spp    {eye['seconds']['eye']:6.2f} s, {eye_rays_per_s / 1e6:.2f} M rays/s "
+          f"({100 * eye_rays_per_s / raw:.0f}% of raw)")
+    print(f"BVH build                 {photon['seconds']['bvh']:6.2f} s")
+
+
+if __name__ == "__main__":
+    main()
