@@ -24,8 +24,9 @@ import numpy as np
 
 from .scene import Mesh
 
-# Statements the reader stores: keyword -> (name in messages, fewest numbers, numbers kept)
-_ELEMENTS = {"v": ("vertex", 3, 3), "vt": ("texture coordinate", 1, 2), "vn": ("normal", 3, 3)}
+# Statements the reader stores: keyword -> (name in messages, plural, fewest numbers, numbers kept)
+_ELEMENTS = {"v": ("vertex", "vertices", 3, 3), "vt": ("texture coordinate", "texture coordinates", 1, 2),
+             "vn": ("normal", "normals", 3, 3)}
 
 
 class ObjError(ValueError):
@@ -82,10 +83,12 @@ def parse_obj(text: str, name: str = "<obj>") -> Mesh:
     if len(short):
         raise ObjError(f"{name}: line {faces.lines[short[0]]}: a face needs at least 3 corners")
 
-    index, present, corner_line = _corner_indices(name, faces, np.array(before))
+    index, present, corner_line = _corner_indices(name, faces)
+    corner_before = np.repeat(np.array(before), faces.counts, axis=0)  # (nc,3)
+    resolved = {key: _resolve(name, key, index[:, k], present[:, k], corner_line, len(values[key]),
+                              corner_before[:, k])
+                for k, key in enumerate(_ELEMENTS)}  # each (nc,) 0-based
     corner = _fan(np.array(faces.counts))  # (nt,3) indices into the face corners
-    resolved = {key: _resolve(name, key, index[:, k], present[:, k], corner_line, len(values[key]), before[:, k])
-                for k, key in enumerate(_ELEMENTS) for before in [np.repeat(np.array(before), faces.counts, axis=0)]}
 
     normals = uvs = None
     if present[:, 2].all():
@@ -98,7 +101,7 @@ def parse_obj(text: str, name: str = "<obj>") -> Mesh:
 def _numbers(name: str, key: str, statements: _Statements) -> np.ndarray:
     """(n, kept) float64 values of one kind of statement, with short, malformed
     and non-finite ones reported by line."""
-    what, fewest, kept = _ELEMENTS[key]
+    what, _, fewest, kept = _ELEMENTS[key]
     counts = np.array(statements.counts, dtype=np.int64)
     if len(counts) == 0:
         return np.zeros((0, kept))
@@ -136,7 +139,7 @@ def _parses(tokens: np.ndarray, kind) -> bool:
     return True
 
 
-def _corner_indices(name: str, faces: _Statements, before: np.ndarray):
+def _corner_indices(name: str, faces: _Statements):
     """Each face corner's raw OBJ indices.
 
     Returns index (nc,3) int64 (v, vt, vn; 0 where absent), present (nc,3)
@@ -168,9 +171,9 @@ def _resolve(name: str, key: str, index: np.ndarray, present: np.ndarray, corner
     bad = np.flatnonzero(present & ((index == 0) | (resolved < 0) | (resolved >= total)))
     if len(bad):
         i = bad[0]
-        what = _ELEMENTS[key][0]
-        known = f"the file has {total}" if index[i] > 0 else f"{before[i]} precede this line"
-        raise ObjError(f"{name}: line {corner_line[i]}: {what} index {index[i]} is out of range ({known})")
+        what, plural = _ELEMENTS[key][:2]
+        known = f"the file has {total} {plural}" if index[i] > 0 else f"{before[i]} {plural} precede this line"
+        raise ObjError(f"{name}: line {corner_line[i]}: {what} index {index[i]} is out of range: {known}")
     return resolved
 
 

@@ -1,0 +1,356 @@
+"""The command line without Blender: `python -m caustic_addon render`, its
+scene file (config.py), its OBJ reader (obj.py) and its image files
+(image_io.py)."""
+
+import importlib.util
+import io
+import math
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from caustic_addon import SceneError, cli, config, shapes
+from caustic_addon.image_io import read_exr, read_png, srgb_encode, write_image
+from caustic_addon.obj import ObjError, parse_obj, read_obj, write_obj
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "examples"
+
+# A glass ball over a plane, small enough to render in well under a second.
+SMALL = """\
+[camera]
+FOV = 40.0
+pixx = 64
+pixy = 48
+eye = [0.0, -0.55, 0.4]
+look_at = [0.0, 0.0, 0.03]
+
+[plane]
+size = 2.0
+
+[lamp]
+position = [0.0, 0.0, 0.6]
+power = 0.8
+
+[photons]
+count = 20000
+energy = 10.0
+map_scale = 5.0
+
+[object]
+ior = 1.5
+position = [0.0, 0.0, 0.02]
+scale = 0.1
+
+[render]
+spp = 1
+"""
+
+
+def run_cli(*args, cwd=ROOT):
+    return subprocess.run([sys.executable, "-m", "caustic_addon", *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True, timeout=120)
+
+
+def write(path: Path, text: str) -> Path:
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def assert_bad_input(proc, *fragments):
+    assert proc.returncode == 2, proc.stderr
+    assert "Traceback" not in proc.stderr
+    last = proc.stderr.strip().splitlines()[-1]
+    assert last.startswith("error: ")
+    for fragment in fragments:
+        assert fragment in last
+
+
+def luminance(rgba):
+    return rgba[..., :3].astype(np.float64) @ [0.2126, 0.7152, 0.0722]
+
+
+# --- whole renders -------------------------------------------------------------------------------------------
+
+
+def test_help_lists_the_render_command():
+    proc = run_cli("--help")
+    assert proc.returncode == 0
+    assert "render" in proc.stdout
+
+
+def test_render_writes_a_png_with_a_caustic(tmp_path):
+    scene = write(tmp_path / "scene.toml", SMALL)
+    out = tmp_path / "new" / "folder" / "out.png"
+    proc = run_cli("render", scene, EXAMPLES / "round.obj", "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    assert "photons emitted 20,000" in proc.stderr
+    image = read_png(out)
+    assert image.shape == (48, 64, 4)
+    assert (image[..., 3] == 255).all()
+    lum = luminance(image)
+    # the ball focuses the lamp into a spot far brighter than the lit plane
+    assert lum.max() > 1.5 * np.median(lum)
+
+
+def test_png_and_exr_of_one_render_agree_through_exposure(tmp_path):
+    """The EXR holds the linear render; the PNG is its sRGB encoding, 2^EV
+    brighter, to within the rounding of 8 bits (and of threads summing the
+    illumination map in another order)."""
+    scene = write(tmp_path / "scene.toml", SMALL)
+    mesh = EXAMPLES / "round.obj"
+    assert run_cli("render", scene, mesh, "-o", tmp_path / "out.exr").returncode == 0
+    assert run_cli("render", scene, mesh, "-o", tmp_path / "out.png", "--exposure", "1").returncode == 0
+    linear = read_exr(tmp_path / "out.exr")
+    png = read_png(tmp_path / "out.png")
+    assert linear[..., :3].max() > 1.0  # the caustic, kept unclipped
+    expected = np.round(srgb_encode(2.0 * linear[..., :3]) * 255.0)
+    assert np.abs(png[..., :3] - expected).max() <= 1
+
+
+def test_command_line_overrides_the_scene_file(tmp_path):
+    scene = write(tmp_path / "scene.toml", SMALL)
+    proc = run_cli("render", scene, EXAMPLES / "round.obj", "-o", tmp_path / "out.png", "--photons", "0")
+    assert proc.returncode == 0, proc.stderr
+    assert "photons emitted 0," in proc.stderr
+
+
+# --- bad input: error: <message>, status 2 -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("edit, fragments", [
+    (lambda t: t.replace("pixy = 48", "pixy = = 48"), ["scene.toml", "line 4"]),
+    (lambda t: t.replace("size = 2.0", "size = 2.0\ncolour = 1.0"), ["plane.colour"]),
+    (lambda t: t + "[lights]\npower = 1.0\n", ["[lights]"]),
+    (lambda t: t.replace("count = 20000", "count = -5"), ["scene.toml: photons.count", "integer >= 0", "-5"]),
+    (lambda t: t.replace("count = 20000", "count = 2.5"), ["photons.count"]),
+    (lambda t: t.replace("pixx = 64", 'pixx = "64"'), ["camera.pixx"]),
+    (lambda t: t.replace("eye = [0.0, -0.55, 0.4]\n", ""), ["camera.eye", "missing"]),
+    (lambda t: t.replace("map_scale = 5.0", "map_scale = 0"), ["photons.map_scale"]),
+    (lambda t: t.replace("power = 0.8", "power = 0.8\nstrength = 3.0"), ["lamp.strength", "point lamp"]),
+    (lambda t: t.replace("ior = 1.5", "ior = nan"), ["object.ior"]),
+], ids=["syntax", "unknown-key", "unknown-table", "negative-count", "fractional-count", "string-pixx",
+        "missing-eye", "zero-map-scale", "key-of-another-lamp", "nan-ior"])
+def test_bad_scene_file(tmp_path, edit, fragments):
+    scene = write(tmp_path / "scene.toml", edit(SMALL))
+    assert_bad_input(run_cli("render", scene, EXAMPLES / "round.obj", "-o", tmp_path / "out.png"), *fragments)
+
+
+@pytest.mark.parametrize("obj_text, fragments", [
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\n", ["flat.obj", "no triangles"]),
+    ("v 0 0 0\nv 1 0 0\n# a comment\nv 0 nan 0\nf 1 2 3\n", ["flat.obj", "line 4"]),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", ["flat.obj", "line 4", "out of range"]),
+], ids=["no-faces", "nan", "index-out-of-range"])
+def test_bad_mesh_file(tmp_path, obj_text, fragments):
+    scene = write(tmp_path / "scene.toml", SMALL)
+    mesh = write(tmp_path / "flat.obj", obj_text)
+    assert_bad_input(run_cli("render", scene, mesh, "-o", tmp_path / "out.png"), *fragments)
+
+
+def test_missing_files_are_named(tmp_path):
+    scene = write(tmp_path / "scene.toml", SMALL)
+    assert_bad_input(run_cli("render", scene, tmp_path / "absent.obj", "-o", tmp_path / "out.png"), "absent.obj")
+    assert_bad_input(run_cli("render", tmp_path / "absent.toml", EXAMPLES / "round.obj", "-o", tmp_path / "o.png"),
+                     "absent.toml")
+
+
+def test_bad_command_lines(tmp_path):
+    scene = write(tmp_path / "scene.toml", SMALL)
+    mesh = EXAMPLES / "round.obj"
+    assert_bad_input(run_cli("render", scene, mesh, "-o", tmp_path / "out.jpg"), "out.jpg", ".jpg")
+    assert not (tmp_path / "out.jpg").exists()
+    assert_bad_input(run_cli("render", scene, mesh, "-o", tmp_path / "out.png", "--spp", "0"), "spp")
+    assert_bad_input(run_cli("render", scene, mesh, "-o", tmp_path / "out.png", "--seed", "-1"), "--seed")
+    assert_bad_input(run_cli("render", scene, mesh), "-o")
+    assert_bad_input(run_cli("render", scene, mesh, "-o", scene / "out.png"), "scene.toml")  # a file as folder
+
+
+def test_engine_scene_errors_take_the_same_path(tmp_path, monkeypatch, capsys):
+    def refuse(*args, **kwargs):
+        raise SceneError("Glass: IOR must be a positive number (got 0)")
+
+    monkeypatch.setattr(cli, "render", refuse)
+    scene = write(tmp_path / "scene.toml", SMALL)
+    status = cli.main(["render", str(scene), str(EXAMPLES / "round.obj"), "-o", str(tmp_path / "out.png")])
+    assert status == 2
+    assert capsys.readouterr().err.endswith("error: Glass: IOR must be a positive number (got 0)\n")
+
+
+def test_progress_bar_draws_in_place_only_on_a_terminal():
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    tty, pipe = Terminal(), io.StringIO()
+    for stream in (tty, pipe):
+        bar = cli.ProgressBar(stream)
+        bar(0.25, "photon pass")
+        bar(1.0, "eye pass")
+        bar.close()
+    assert pipe.getvalue() == ""
+    frames = tty.getvalue().split("\r")[1:]
+    assert len(frames) == 2 and "25%" in frames[0] and "100%" in frames[1] and frames[1].endswith("\n")
+    assert frames[1].count("#") == cli.ProgressBar.WIDTH
+
+
+# --- the scene file ------------------------------------------------------------------------------------------
+
+
+def test_the_example_scene_is_the_papers_and_well_exposed():
+    cfg = config.load(EXAMPLES / "paper.toml")
+    s = cfg.settings
+    assert (s.photons, s.energy, s.map_scale, s.density) == (40_000, 10.0, 5.0, "splat")
+    # radiance of the plane under the lamp: albedo * E / pi, E = energy * power / (4 pi h^2)
+    height = cfg.lamp.position[2] - cfg.floor.mesh.vertices[0, 2]
+    irradiance = s.energy * cfg.lamp.power / (4 * math.pi * height ** 2)
+    assert 0.3 <= cfg.floor.material.albedo[0] * irradiance / math.pi <= 0.6
+
+
+def test_scene_file_defaults_and_placement():
+    text = SMALL.replace("map_scale = 5.0", 'map_scale = "auto"').replace("scale = 0.1", "scale = [0.1, 0.2, 0.3]")
+    cfg = config.parse(text)
+    assert cfg.settings.map_scale is None and cfg.settings.density == "adaptive"
+    assert cfg.settings.spp == 1 and cfg.settings.max_depth == 12
+    mesh = shapes.cylinder(0.5, 0.5)
+    scene = cfg.scene(mesh, "Cylinder")
+    placed = scene.objects[1].mesh.vertices
+    np.testing.assert_allclose(placed, mesh.vertices * [0.1, 0.2, 0.3] + [0.0, 0.0, 0.02])
+    assert scene.objects[1].material.ior == 1.5
+
+
+def test_spot_and_sun_lamps():
+    spot = SMALL.replace("power = 0.8", "power = 0.8\ntype = \"spot\"\ndirection = [0, 0, -2]\nspot_size = 30")
+    lamp = config.parse(spot).lamp
+    np.testing.assert_allclose(lamp.direction, [0, 0, -1])
+    assert lamp.spot_size == pytest.approx(math.radians(30))
+    sun = SMALL.replace("position = [0.0, 0.0, 0.6]\npower = 0.8",
+                        'type = "sun"\ndirection = [0, 0, -1]\nstrength = 3.0')
+    assert config.parse(sun).lamp.strength == 3.0
+    with pytest.raises(config.ConfigError, match=r"lamp\.direction is missing"):
+        config.parse(sun.replace("direction = [0, 0, -1]\n", ""))
+
+
+# --- OBJ -----------------------------------------------------------------------------------------------------
+
+SQUARE = "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 3\n"
+
+
+@pytest.mark.parametrize("face, has_uvs, has_normals", [
+    ("f 1 2 3 4", False, False),
+    ("f 1/1 2/2 3/3 4/4", True, False),
+    ("f 1//1 2//1 3//1 4//1", False, True),
+    ("f 1/1/1 2/2/1 3/3/1 4/4/1", True, True),
+    ("f -4/-4/-1 -3/-3/-1 -2/-2/-1 -1/-1/-1", True, True),
+    ("f 1/1/1 2/2 3//1 4", False, False),
+])
+def test_obj_face_formats(face, has_uvs, has_normals):
+    mesh = parse_obj(SQUARE + face + "\n")
+    np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 2, 3]])
+    assert (mesh.corner_uvs is not None) == has_uvs
+    assert (mesh.corner_normals is not None) == has_normals
+    if has_uvs:
+        np.testing.assert_array_equal(mesh.corner_uvs, [[[0, 0], [1, 0], [1, 1]], [[0, 0], [1, 1], [0, 1]]])
+    if has_normals:
+        np.testing.assert_array_equal(mesh.corner_normals, np.tile([0.0, 0.0, 1.0], (2, 3, 1)))
+
+
+def test_obj_negative_indices_count_back_from_their_line():
+    text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 0 0 1\nf -4 -3 -1\nf 1 2 4\n"
+    mesh = parse_obj(text)
+    np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 1, 3], [0, 1, 3]])
+
+
+def test_obj_fans_polygons_and_ignores_what_is_not_geometry():
+    angles = np.linspace(0, 2 * np.pi, 7)[:-1]
+    hexagon = "".join(f"v {math.cos(a)} {math.sin(a)} 0 1.0\n" for a in angles)  # with the optional w
+    text = ("# hexagon\nmtllib x.mtl\no Hex\ng group\ns 1\nusemtl glass\n" + hexagon
+            + "vp 0.5\nl 1 2\nf 1 2 3 4 5 6 # the face\n")
+    mesh = parse_obj(text)
+    assert mesh.vertices.shape == (6, 3)
+    np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5]])
+    corners = mesh.corners
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    assert area.sum() == pytest.approx(1.5 * math.sqrt(3))  # the regular hexagon's area
+
+
+@pytest.mark.parametrize("text, message", [
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", "line 4: vertex index -4 is out of range"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n", "line 4: vertex index 0"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/1 3/1\n", "line 4: texture coordinate index 1"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2\n", "line 5: a face needs at least 3 corners"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3/x\n", "line 4: malformed face corner '3/x'"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3/1/1/1\n", "line 4: malformed face corner"),
+    ("v 0 0\nf 1 1 1\n", "line 1: 'v' needs 3 numbers"),
+    ("v 0 0 0\nv 1 0 zero\n", "line 2: malformed vertex"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n", "line 4: the normal has zero length"),
+    ("v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n", "line 2: the vertex has NaN or infinite"),
+])
+def test_obj_errors_name_the_line(text, message):
+    with pytest.raises(ObjError, match="^mesh.obj: " + re.escape(message)):
+        parse_obj(text, "mesh.obj")
+
+
+def test_obj_round_trip_keeps_corners_normals_and_uvs(tmp_path):
+    for mesh in (shapes.uv_sphere(0.5, (0, 0, 0.5), 16, 8), shapes.plane(2.0)):
+        write_obj(tmp_path / "m.obj", mesh, "a comment\nover two lines")
+        back = read_obj(tmp_path / "m.obj")
+        np.testing.assert_allclose(back.corners, mesh.corners, atol=1e-6)
+        np.testing.assert_allclose(back.corner_normals, mesh.corner_normals, atol=2e-6)
+        assert (back.corner_uvs is None) == (mesh.corner_uvs is None)
+        if mesh.corner_uvs is not None:
+            np.testing.assert_allclose(back.corner_uvs, mesh.corner_uvs, atol=1e-6)
+
+
+def test_example_objects_are_the_shapes_they_claim():
+    for name, expected in (("round", shapes.uv_sphere(0.5, (0.0, 0.0, 0.5), 64, 32)),
+                           ("flat", shapes.cylinder(0.5, 0.5, segments=128)),
+                           ("pointed", shapes.cone(0.5, 0.75, segments=128))):
+        path = EXAMPLES / f"{name}.obj"
+        assert path.stat().st_size < 400_000
+        mesh = read_obj(path)
+        np.testing.assert_allclose(mesh.corners, expected.corners, atol=1e-6)
+        np.testing.assert_allclose(mesh.corner_normals, expected.corner_normals, atol=2e-6)
+        assert mesh.vertices[:, 2].min() == 0.0
+
+
+# --- image files ---------------------------------------------------------------------------------------------
+
+
+def test_srgb_encoding():
+    np.testing.assert_allclose(srgb_encode(np.array([-1.0, 0.0, 0.0031308, 0.18, 1.0, 7.0, np.nan])),
+                               [0.0, 0.0, 0.04045, 0.46135612950044164, 1.0, 1.0, 0.0], rtol=1e-4)
+
+
+def test_exr_keeps_float32_exactly_and_png_quantises(tmp_path):
+    rng = np.random.default_rng(3)
+    image = (rng.random((5, 7, 4)) * 50.0).astype(np.float32)
+    image[0, 0] = [1e-8, 65504.0, 3e5, 0.0]
+    write_image(tmp_path / "a.exr", image)
+    np.testing.assert_array_equal(read_exr(tmp_path / "a.exr"), image)
+    write_image(tmp_path / "a.png", image / 50.0, exposure=-1.0)
+    expected = np.round(srgb_encode(image[..., :3] / 100.0) * 255.0)
+    np.testing.assert_array_equal(read_png(tmp_path / "a.png")[..., :3], expected)
+
+
+@pytest.mark.skipif(importlib.util.find_spec("bpy") is None, reason="bpy is not installed")
+def test_blender_reads_both_images(tmp_path):
+    """Blender's own readers agree with ours, pixel for pixel."""
+    rng = np.random.default_rng(4)
+    image = (rng.random((6, 9, 4)) * 20.0).astype(np.float32)
+    write_image(tmp_path / "b.exr", image)
+    write_image(tmp_path / "b.png", image / 20.0)
+    script = ("import sys, bpy, numpy as np\n"
+              "for path in sys.argv[1:]:\n"
+              "    im = bpy.data.images.load(path)\n"
+              "    w, h = im.size\n"
+              "    px = np.array(im.pixels[:], dtype=np.float32).reshape(h, w, 4)[::-1]\n"
+              "    np.save(path + '.npy', px)\n")
+    proc = subprocess.run([sys.executable, "-c", script, str(tmp_path / "b.exr"), str(tmp_path / "b.png")],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    np.testing.assert_array_equal(np.load(tmp_path / "b.exr.npy"), image)
+    np.testing.assert_allclose(np.load(tmp_path / "b.png.npy") * 255.0, read_png(tmp_path / "b.png"), atol=1e-3)
