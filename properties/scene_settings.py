@@ -1,0 +1,90 @@
+"""Scene.caustic: the render settings (named as in the paper where it has a
+name) and the last runs' results, which the operators write and the panels
+only show."""
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty, IntProperty, PointerProperty
+
+
+class CausticSceneSettings(bpy.types.PropertyGroup):
+    photons: IntProperty(
+        name="Lamp Rays",
+        description="Photons traced from each lamp, the paper's \"number of lamp rays\" (it used 40,000). "
+                    "More rays give smoother caustics and take longer",
+        default=1_000_000, min=0, soft_max=20_000_000)
+    emission: EnumProperty(
+        name="Emission",
+        description="Where the lamps send their rays",
+        items=[('TARGETED', "Targeted", "Only toward transparent objects, so every lamp ray can make a caustic"),
+               ('SPHERE', "Sphere", "Over the whole sphere of directions, as the paper's equation (1)")],
+        default='TARGETED')
+    energy: FloatProperty(
+        name="Lamp Energy",
+        description="Multiplier on every lamp's power, the paper's \"lamp energy\" (it used 10 and 20). "
+                    "At 1 the lamps are as bright as in Cycles",
+        default=1.0, min=0.0, soft_max=100.0)
+    use_auto_map_scale: BoolProperty(
+        name="Auto Map Scale",
+        description="Size the illumination maps' cells from each receiver, with no tuning",
+        default=True)
+    map_scale: FloatProperty(
+        name="Map Scale (mm)",
+        description="Edge of one illumination-map cell, in millimetres of world space, the paper's \"map scale\" "
+                    "(it compared 5 and 40). Larger cells give smoother, blurrier caustics",
+        default=5.0, min=0.001, soft_max=100.0)
+    density: EnumProperty(
+        name="Density",
+        description="How stored lamp rays become irradiance on a receiver",
+        items=[('ADAPTIVE', "Adaptive", "Average over the nearest 64 lamp rays: sharp where they are dense, "
+                                        "smooth where they are sparse"),
+               ('SPLAT', "Splat", "Each ray spread over the 4 nearest map cells, as in the paper")],
+        default='ADAPTIVE')
+    max_depth: IntProperty(
+        name="Max Bounces",
+        description="Reflections and refractions followed per lamp ray and per eye ray",
+        default=12, min=1, max=64)
+    spp: IntProperty(
+        name="Samples",
+        description="Eye rays per pixel (anti-aliasing)",
+        default=4, min=1, soft_max=64)
+    ambient: FloatVectorProperty(
+        name="Ambient",
+        description="Uniform ambient radiance (W/m^2/sr) a surface reflects times its colour",
+        subtype='COLOR', size=3, default=(0.0, 0.0, 0.0), min=0.0, soft_max=1.0)
+
+    cycles_samples: IntProperty(
+        name="Cycles Samples",
+        description="Samples per pixel of the Cycles reference render",
+        default=128, min=1, soft_max=4096)
+    cycles_time_limit: FloatProperty(
+        name="Cycles Time Limit",
+        description="Stop the Cycles reference render after this many seconds (0: no limit)",
+        default=0.0, min=0.0, soft_max=600.0, subtype='TIME_ABSOLUTE', unit='TIME_ABSOLUTE')
+
+    progress: FloatProperty(
+        name="Progress", description="Share of the running caustic render done",
+        default=0.0, min=0.0, max=1.0, subtype='FACTOR')
+    last_seconds: FloatProperty(
+        name="Render Time", description="Seconds the last caustic render took", default=0.0, min=0.0)
+    last_photons: IntProperty(
+        name="Lamp Rays Traced", description="Lamp rays the last caustic render traced, all lamps", default=0, min=0)
+    cycles_seconds: FloatProperty(
+        name="Cycles Time", description="Seconds the last Cycles reference render took", default=0.0, min=0.0)
+    cycles_relative_l2: FloatProperty(
+        name="Relative L2",
+        description="|caustic render - Cycles| / |Cycles| over the pixels the caustics light, last comparison",
+        default=0.0, min=0.0)
+    cycles_psnr: FloatProperty(
+        name="PSNR (dB)", description="Peak signal-to-noise ratio of the caustic render against Cycles, "
+                                      "peak = brightest Cycles pixel, last comparison",
+        default=0.0)
+
+
+def register():
+    bpy.utils.register_class(CausticSceneSettings)
+    bpy.types.Scene.caustic = PointerProperty(type=CausticSceneSettings)
+
+
+def unregister():
+    del bpy.types.Scene.caustic
+    bpy.utils.unregister_class(CausticSceneSettings)
