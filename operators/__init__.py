@@ -1,0 +1,16 @@
+"""The add-on's operators: thin layers between Blender and the engine."""
+
+import bpy
+
+from .bake import CAUSTIC_OT_bake, CAUSTIC_OT_unbake
+from .compare import CAUSTIC_OT_compare_cycles
+from .presets import CAUSTIC_OT_apply_preset
+from .render import CAUSTIC_OT_render
+
+register, unregister = bpy.utils.register_classes_factory((
+    CAUSTIC_OT_render,
+    CAUSTIC_OT_bake,
+    CAUSTIC_OT_unbake,
+    CAUSTIC_OT_compare_cycles,
+    CAUSTIC_OT_apply_preset,
+))

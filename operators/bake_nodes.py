@@ -1,0 +1,129 @@
+"""The node group a bake adds to a receiver's material: the illumination map
+looked up at the shading point and added to the material's own shader as
+emission of radiance E * albedo / pi, so EEVEE and the Cycles viewport show
+the caustic. `unwire` takes out exactly what `wire` put in."""
+
+from __future__ import annotations
+
+import math
+
+import bpy
+import numpy as np
+from mathutils import Matrix
+
+from ..caustic_addon.illumination_map import IlluminationMap, PlaneChart
+
+NODE_NAME = "Caustic Bake"
+# Custom property marking the node groups a bake made.
+TAG = "caustic_bake"
+
+
+def _chart_coordinates(nodes, links, imap: IlluminationMap, uv_layer: str):
+    """A Mapping node (type TEXTURE: out = R^T (p - location) / scale) that
+    turns the shading point into the map image's [0,1]^2 coordinates: the
+    world position for a plane chart, the UV map for a UV chart."""
+    chart = imap.chart
+    h, w = imap.shape
+    extent = np.array([w * imap.cell, h * imap.cell, 1.0])
+    mapping = nodes.new('ShaderNodeMapping')
+    mapping.vector_type = 'TEXTURE'
+    if isinstance(chart, PlaneChart):
+        source = nodes.new('ShaderNodeNewGeometry')
+        corner = chart.point + chart.origin[0] * chart.axis_x + chart.origin[1] * chart.axis_y
+        frame = Matrix(np.stack([chart.axis_x, chart.axis_y, chart.normal], axis=1).tolist())
+        mapping.inputs['Location'].default_value = corner.tolist()
+        mapping.inputs['Rotation'].default_value = frame.to_euler('XYZ')
+        links.new(source.outputs['Position'], mapping.inputs['Vector'])
+    else:
+        source = nodes.new('ShaderNodeUVMap')
+        source.uv_map = uv_layer
+        metres = chart.metres_per_uv
+        mapping.inputs['Location'].default_value = (chart.origin[0] / metres, chart.origin[1] / metres, 0.0)
+        extent[:2] /= metres
+        links.new(source.outputs['UV'], mapping.inputs['Vector'])
+    mapping.inputs['Scale'].default_value = extent.tolist()
+    return source, mapping
+
+
+def make_group(name: str, image, imap: IlluminationMap, albedo: np.ndarray, uv_layer: str):
+    """A shader node group: Shader in, Shader out = in + emission of the map
+    `image` (irradiance, W/m^2) times `albedo (3,)` / pi."""
+    group = bpy.data.node_groups.new(name, 'ShaderNodeTree')
+    group[TAG] = True
+    group.interface.new_socket(name="Shader", in_out='INPUT', socket_type='NodeSocketShader')
+    group.interface.new_socket(name="Shader", in_out='OUTPUT', socket_type='NodeSocketShader')
+    nodes, links = group.nodes, group.links
+    inputs, outputs = nodes.new('NodeGroupInput'), nodes.new('NodeGroupOutput')
+    source, mapping = _chart_coordinates(nodes, links, imap, uv_layer)
+    texture = nodes.new('ShaderNodeTexImage')
+    texture.image, texture.interpolation, texture.extension = image, 'Linear', 'CLIP'
+    radiance = nodes.new('ShaderNodeVectorMath')
+    radiance.operation = 'MULTIPLY'
+    radiance.inputs[1].default_value = (np.asarray(albedo) / math.pi).tolist()
+    emission, add = nodes.new('ShaderNodeEmission'), nodes.new('ShaderNodeAddShader')
+    links.new(mapping.outputs['Vector'], texture.inputs['Vector'])
+    links.new(texture.outputs['Color'], radiance.inputs[0])
+    links.new(radiance.outputs['Vector'], emission.inputs['Color'])
+    links.new(inputs.outputs[0], add.inputs[0])
+    links.new(emission.outputs['Emission'], add.inputs[1])
+    links.new(add.outputs['Shader'], outputs.inputs[0])
+    for column, node in enumerate((source, mapping, texture, radiance, emission, add, outputs)):
+        node.location = (220.0 * column, 0.0)
+    inputs.location = (880.0, -200.0)
+    return group
+
+
+def _group_image(group):
+    """The map image a bake's node group shows."""
+    return next(node.image for node in group.nodes if node.bl_idname == 'ShaderNodeTexImage')
+
+
+def material_output(material):
+    """The output node that Cycles uses, or None."""
+    return material.node_tree.get_output_node('CYCLES')
+
+
+def wire(material, group) -> None:
+    """Put a node of `group` between the material's surface shader and its output."""
+    tree = material.node_tree
+    output = material_output(material)
+    node = tree.nodes.new('ShaderNodeGroup')
+    node.node_tree, node.name, node.label = group, NODE_NAME, NODE_NAME
+    node.location = (output.location.x, output.location.y + 200.0)
+    surface = output.inputs['Surface']
+    if surface.is_linked:
+        link = surface.links[0]
+        source = link.from_socket
+        tree.links.remove(link)
+        tree.links.new(source, node.inputs[0])
+    tree.links.new(node.outputs[0], surface)
+
+
+def baked_nodes(material) -> list:
+    """The material's nodes that a bake added."""
+    if material.node_tree is None:
+        return []
+    return [node for node in material.node_tree.nodes
+            if node.bl_idname == 'ShaderNodeGroup' and node.node_tree is not None and TAG in node.node_tree]
+
+
+def unwire(material) -> int:
+    """Remove the bake's nodes from `material`, reconnect what they sat
+    between, and delete their node groups and images once unused. Returns how
+    many nodes were removed."""
+    tree = material.node_tree
+    removed = baked_nodes(material)
+    for node in removed:
+        group = node.node_tree
+        source = node.inputs[0].links[0].from_socket if node.inputs[0].is_linked else None
+        targets = [link.to_socket for link in node.outputs[0].links]
+        tree.nodes.remove(node)
+        if source is not None:
+            for target in targets:
+                tree.links.new(source, target)
+        if group.users == 0:
+            image = _group_image(group)
+            bpy.data.node_groups.remove(group)
+            if image is not None and image.users == 0:
+                bpy.data.images.remove(image)
+    return len(removed)

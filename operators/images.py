@@ -1,0 +1,45 @@
+"""Float images in and out of Blender. Arrays here are (h, w, 4) float32
+linear RGBA with row 0 at the TOP; Blender stores rows bottom to top."""
+
+import bpy
+import numpy as np
+
+
+def working_colorspace() -> str:
+    """The scene-linear colour space Blender renders in (5.0+ lets the user choose it)."""
+    colorspace = getattr(bpy.data, "colorspace", None)
+    return colorspace.working_space if colorspace is not None else "Linear Rec.709"
+
+
+def write_image(name: str, rgba: np.ndarray):
+    """Image `name` (created or reused, float, linear) holding `rgba (h,w,4)`."""
+    h, w = rgba.shape[:2]
+    image = bpy.data.images.get(name)
+    if image is None or image.source != 'GENERATED':
+        image = bpy.data.images.new(name, w, h, alpha=True, float_buffer=True)
+    elif tuple(image.size) != (w, h) or not image.use_generated_float:
+        image.generated_width, image.generated_height = w, h
+        image.use_generated_float = True
+    if image.colorspace_settings.name != working_colorspace():
+        image.colorspace_settings.name = working_colorspace()
+    image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1], dtype=np.float32).ravel())
+    image.update()
+    return image
+
+
+def read_pixels(image) -> np.ndarray:
+    """(h,w,4) float32 of `image`, top row first."""
+    w, h = image.size
+    pixels = np.empty(w * h * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    return pixels.reshape(h, w, 4)[::-1]
+
+
+def show_image(context, image) -> None:
+    """Show `image` in the first Image Editor on screen, if there is one."""
+    for window in context.window_manager.windows:
+        for area in window.screen.areas:
+            if area.type == 'IMAGE_EDITOR':
+                area.spaces.active.image = image
+                area.tag_redraw()
+                return

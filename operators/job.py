@@ -1,0 +1,57 @@
+"""One engine render, run here or on a worker thread. Nothing in this module
+touches bpy: the scene comes in as numpy, the result goes out as numpy."""
+
+from __future__ import annotations
+
+import threading
+import time
+import traceback
+
+from ..caustic_addon import Cancelled, RenderResult, RenderSettings, Scene, SceneError, render
+
+
+class RenderJob:
+    """fraction and stage follow the engine's progress; after the run, either
+    `result` is set or `error` holds the message for the user (None when
+    cancelled)."""
+
+    def __init__(self, scene: Scene, settings: RenderSettings):
+        self.scene, self.settings = scene, settings
+        self.fraction, self.stage = 0.0, ""
+        self.result: RenderResult | None = None
+        self.error: str | None = None
+        self.cancelled = False
+        self.seconds = 0.0
+        self._cancel = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def _progress(self, fraction: float, stage: str) -> None:
+        self.fraction, self.stage = fraction, stage
+
+    def run(self) -> None:
+        clock = time.perf_counter()
+        try:
+            self.result = render(self.scene, self.settings, progress=self._progress, cancel=self._cancel.is_set)
+        except Cancelled:
+            self.cancelled = True
+        except SceneError as exc:
+            self.error = str(exc)
+        except Exception as exc:
+            traceback.print_exc()
+            self.error = f"The caustic engine failed: {type(exc).__name__}: {exc}"
+        self.seconds = time.perf_counter() - clock
+
+    def start(self) -> None:
+        self._thread = threading.Thread(target=self.run, name="caustic render", daemon=True)
+        self._thread.start()
+
+    def cancel(self) -> None:
+        self._cancel.set()
+
+    def wait(self) -> None:
+        if self._thread is not None:
+            self._thread.join()
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()

@@ -1,0 +1,92 @@
+"""A Blender material read as the engine's: Glass BSDF, or Principled BSDF
+that mostly transmits, is a Dielectric; Principled and Diffuse BSDFs, plain
+viewport colours and anything not understood are Diffuse receivers. What is
+read approximately comes back as a warning naming the material."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import bpy
+import numpy as np
+
+from ..caustic_addon import Dielectric, Diffuse
+
+DEFAULT_ALBEDO = 0.8
+GLASS_NODES = {'ShaderNodeBsdfGlass', 'ShaderNodeBsdfRefraction'}
+
+
+@dataclass
+class Surface:
+    """How a material reads: `transparent` picks which of the two to use."""
+
+    transparent: bool
+    ior: float = 1.5
+    color: np.ndarray = field(default_factory=lambda: np.ones(3))
+    albedo: np.ndarray = field(default_factory=lambda: np.full(3, DEFAULT_ALBEDO))
+    warnings: list[str] = field(default_factory=list)
+
+
+def _value(node, name: str, what: str, warnings: list[str]):
+    """An input's own value, with a warning if other nodes drive it instead."""
+    socket = node.inputs[name]
+    if socket.is_linked:
+        warnings.append(f"{what}: its {name} comes from other nodes; the unconnected value is used")
+    value = socket.default_value
+    return np.array(value[:3], dtype=np.float64) if hasattr(value, "__len__") else float(value)
+
+
+def _surface_shader(material):
+    """The shader node feeding the material's Cycles output, past reroutes; None if nothing is connected."""
+    output = material.node_tree.get_output_node('CYCLES')
+    if output is None:
+        return None
+    socket = output.inputs['Surface']
+    while socket.is_linked:
+        node = socket.links[0].from_node
+        if node.bl_idname != 'NodeReroute':
+            return node
+        socket = node.inputs[0]
+    return None
+
+
+def read_surface(material) -> Surface:
+    """The engine's view of `material` (None: Blender's default grey)."""
+    if material is None:
+        return Surface(transparent=False)
+    what = f"material '{material.name}'"
+    viewport = np.array(material.diffuse_color[:3], dtype=np.float64)
+    if material.node_tree is None or not (bpy.app.version >= (5, 0, 0) or material.use_nodes):
+        return Surface(transparent=False, albedo=viewport)
+    shader = _surface_shader(material)
+    if shader is None:
+        return Surface(transparent=False, albedo=viewport,
+                       warnings=[f"{what}: no shader reaches its output; its viewport colour is used"])
+    warnings: list[str] = []
+    kind = shader.bl_idname
+    if kind in GLASS_NODES or (kind == 'ShaderNodeBsdfPrincipled'
+                               and _value(shader, "Transmission Weight", what, warnings) > 0.5):
+        color_input = "Color" if kind in GLASS_NODES else "Base Color"
+        surface = Surface(transparent=True, ior=_value(shader, "IOR", what, warnings),
+                          color=_value(shader, color_input, what, warnings), warnings=warnings)
+        if _value(shader, "Roughness", what, warnings) > 0.0:
+            warnings.append(f"{what}: rough glass is rendered as smooth glass")
+        return surface
+    if kind == 'ShaderNodeBsdfPrincipled':
+        return Surface(transparent=False, albedo=_value(shader, "Base Color", what, warnings), warnings=warnings)
+    if kind == 'ShaderNodeBsdfDiffuse':
+        return Surface(transparent=False, albedo=_value(shader, "Color", what, warnings), warnings=warnings)
+    return Surface(transparent=False, albedo=viewport,
+                   warnings=[f"{what}: a '{shader.name}' shader is not understood; it is rendered as diffuse "
+                             "with the material's viewport colour"])
+
+
+def engine_material(surface: Surface, settings) -> Dielectric | Diffuse:
+    """The engine material for an object of `Object.caustic` `settings` whose material reads as `surface`."""
+    role = settings.role
+    transparent = role == 'TRANSPARENT' or (role == 'AUTO' and surface.transparent)
+    if not transparent:
+        return Diffuse(albedo=surface.albedo if not surface.transparent else DEFAULT_ALBEDO)
+    ior = settings.ior if settings.use_ior else (surface.ior if surface.transparent else 1.5)
+    color = surface.color if surface.transparent else np.ones(3)
+    return Dielectric(ior=ior, color=color, absorption=np.array(settings.absorption[:], dtype=np.float64))

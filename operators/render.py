@@ -1,0 +1,109 @@
+"""CAUSTIC_OT_render: the active camera's view with caustics, into the image
+"Caustic Render". In the UI the engine runs on a worker thread (progress in
+the status bar and the panel, Esc cancels); in the background, or when
+called from a script, it runs synchronously in execute()."""
+
+import bpy
+
+from .errors import InputError
+from .images import show_image, write_image
+from .job import RenderJob
+from .scene_reader import SceneRead, read_scene
+from .settings import render_settings
+
+RESULT_IMAGE = "Caustic Render"
+
+
+class CAUSTIC_OT_render(bpy.types.Operator):
+    bl_idname = "caustic.render"
+    bl_label = "Render Caustics"
+    bl_description = "Render the active camera's view with caustics into the image \"Caustic Render\""
+
+    running = False
+
+    @classmethod
+    def poll(cls, context):
+        return not CAUSTIC_OT_render.running
+
+    def _prepare(self, context) -> tuple[SceneRead, RenderJob] | None:
+        try:
+            read = read_scene(context)
+            return read, RenderJob(read.scene, render_settings(context.scene.caustic))
+        except InputError as exc:
+            self.report({'ERROR'}, str(exc))
+            return None
+
+    def execute(self, context):
+        prepared = self._prepare(context)
+        if prepared is None:
+            return {'CANCELLED'}
+        read, job = prepared
+        job.run()
+        return self._finish(context, read, job)
+
+    def invoke(self, context, event):
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        prepared = self._prepare(context)
+        if prepared is None:
+            return {'CANCELLED'}
+        self._read, self._job = prepared
+        self._progress_before = context.scene.caustic.progress
+        wm = context.window_manager
+        wm.progress_begin(0.0, 1.0)
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.modal_handler_add(self)
+        CAUSTIC_OT_render.running = True
+        self._job.start()
+        return {'RUNNING_MODAL'}
+
+    def modal(self, context, event):
+        if event.type == 'ESC' and event.value == 'PRESS':
+            self._job.cancel()
+            return {'RUNNING_MODAL'}
+        if event.type != 'TIMER':
+            return {'PASS_THROUGH'}
+        if self._job.running:
+            context.window_manager.progress_update(self._job.fraction)
+            context.scene.caustic.progress = self._job.fraction
+            context.workspace.status_text_set(f"Caustics: {self._job.stage}, {self._job.fraction:.0%} (Esc to cancel)")
+            for area in context.screen.areas:
+                if area.type == 'VIEW_3D':
+                    area.tag_redraw()
+            return {'RUNNING_MODAL'}
+        self._stop(context)
+        if self._job.result is None:
+            context.scene.caustic.progress = self._progress_before
+        return self._finish(context, self._read, self._job)
+
+    def cancel(self, context):
+        """Blender aborts the operator (a file is loaded, the window closes): stop the worker first."""
+        self._job.cancel()
+        self._job.wait()
+        self._stop(context)
+
+    def _stop(self, context) -> None:
+        wm = context.window_manager
+        wm.event_timer_remove(self._timer)
+        wm.progress_end()
+        context.workspace.status_text_set(None)
+        CAUSTIC_OT_render.running = False
+
+    def _finish(self, context, read: SceneRead, job: RenderJob):
+        if job.cancelled:
+            self.report({'WARNING'}, "Caustic render cancelled")
+            return {'CANCELLED'}
+        if job.error is not None:
+            self.report({'ERROR'}, job.error)
+            return {'CANCELLED'}
+        props = context.scene.caustic
+        image = write_image(RESULT_IMAGE, job.result.image)
+        props.last_seconds = job.seconds
+        props.last_photons = job.result.stats["photons_emitted"]
+        props.progress = 1.0
+        show_image(context, image)
+        for warning in read.warnings + job.result.warnings:
+            self.report({'WARNING'}, warning)
+        self.report({'INFO'}, f"Caustics rendered in {job.seconds:.1f} s from "
+                              f"{props.last_photons:,} lamp rays into \"{RESULT_IMAGE}\"")
+        return {'FINISHED'}

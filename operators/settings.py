@@ -1,0 +1,22 @@
+"""Scene.caustic turned into the engine's RenderSettings."""
+
+import os
+
+from ..caustic_addon import RenderSettings
+from .errors import InputError
+
+
+def render_settings(props, spp: int | None = None) -> RenderSettings:
+    """The engine settings of Scene.caustic `props`; `spp` overrides its samples."""
+    if props.photons == 0:
+        raise InputError("Lamp Rays is 0: the photon pass needs at least one lamp ray")
+    return RenderSettings(
+        photons=props.photons,
+        emission=props.emission.lower(),
+        energy=props.energy,
+        map_scale=None if props.use_auto_map_scale else props.map_scale,
+        density=props.density.lower(),
+        max_depth=props.max_depth,
+        spp=props.spp if spp is None else spp,
+        threads=max(1, os.cpu_count() or 1),
+    )

@@ -1,0 +1,117 @@
+"""Sidebar panels: they draw properties and operator buttons, nothing else."""
+
+import math
+
+import bpy
+
+from ..operators.presets import CAUSTIC_OT_apply_preset
+from ..operators.render import CAUSTIC_OT_render
+
+
+class _CausticPanel:
+    bl_space_type = 'VIEW_3D'
+    bl_region_type = 'UI'
+    bl_category = "Caustics"
+
+
+class CAUSTIC_PT_render(_CausticPanel, bpy.types.Panel):
+    bl_label = "Caustic Render"
+
+    def draw(self, context):
+        layout, props = self.layout, context.scene.caustic
+        row = layout.row(align=True)
+        row.scale_y = 1.4
+        row.operator("caustic.render", icon='RENDER_STILL')
+        if CAUSTIC_OT_render.running:
+            layout.progress(factor=props.progress, type='BAR', text=f"{props.progress:.0%}  (Esc cancels)")
+        col = layout.column(align=True)
+        col.label(text=f"Last render: {props.last_seconds:.1f} s")
+        col.label(text=f"Lamp rays traced: {props.last_photons:,}")
+        row = layout.row(align=True)
+        row.operator("caustic.bake", icon='TEXTURE')
+        row.operator("caustic.unbake", text="", icon='X')
+
+
+class CAUSTIC_PT_photons(_CausticPanel, bpy.types.Panel):
+    bl_label = "Photon Pass"
+    bl_parent_id = "CAUSTIC_PT_render"
+
+    def draw(self, context):
+        layout, props = self.layout, context.scene.caustic
+        layout.operator_menu_enum(CAUSTIC_OT_apply_preset.bl_idname, "preset", text="Presets", icon='PRESET')
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(props, "photons")
+        layout.prop(props, "emission")
+        layout.prop(props, "energy")
+        layout.prop(props, "use_auto_map_scale")
+        sub = layout.column()
+        sub.active = not props.use_auto_map_scale
+        sub.prop(props, "map_scale")
+        layout.prop(props, "density")
+        layout.prop(props, "max_depth")
+
+
+class CAUSTIC_PT_eye(_CausticPanel, bpy.types.Panel):
+    bl_label = "Eye Pass"
+    bl_parent_id = "CAUSTIC_PT_render"
+
+    def draw(self, context):
+        layout, scene = self.layout, context.scene
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(scene.caustic, "spp")
+        layout.prop(scene.caustic, "ambient")
+        col = layout.column(align=True)
+        col.prop(scene.render, "resolution_x", text="pixx")
+        col.prop(scene.render, "resolution_y", text="pixy")
+        col.prop(scene.render, "resolution_percentage", text="%")
+        if scene.camera is not None and scene.camera.type == 'CAMERA':
+            camera = scene.camera.data
+            if camera.type == 'PERSP':
+                layout.prop(camera, "angle", text="FOV")
+            layout.label(text="The paper's screen size S does not change a pinhole image", icon='INFO')
+        else:
+            layout.label(text="No active camera", icon='ERROR')
+
+
+class CAUSTIC_PT_object(_CausticPanel, bpy.types.Panel):
+    bl_label = "Object"
+    bl_parent_id = "CAUSTIC_PT_render"
+
+    @classmethod
+    def poll(cls, context):
+        return context.object is not None and context.object.type == 'MESH'
+
+    def draw(self, context):
+        layout, settings = self.layout, context.object.caustic
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.label(text=context.object.name, icon='OBJECT_DATA')
+        layout.prop(settings, "role")
+        if settings.role in {'AUTO', 'TRANSPARENT'}:
+            row = layout.row(heading="Override IOR")
+            row.prop(settings, "use_ior", text="")
+            sub = row.row()
+            sub.active = settings.use_ior
+            sub.prop(settings, "ior", text="")
+            layout.prop(settings, "absorption")
+
+
+class CAUSTIC_PT_compare(_CausticPanel, bpy.types.Panel):
+    bl_label = "Compare with Cycles"
+    bl_parent_id = "CAUSTIC_PT_render"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        layout, props = self.layout, context.scene.caustic
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(props, "cycles_samples")
+        layout.prop(props, "cycles_time_limit")
+        layout.operator("caustic.compare_cycles", icon='IMAGE_REFERENCE')
+        if props.cycles_seconds > 0:
+            col = layout.column(align=True)
+            col.label(text=f"Caustics: {props.last_seconds:.1f} s   Cycles: {props.cycles_seconds:.1f} s")
+            col.label(text=f"Relative L2 (caustics): {props.cycles_relative_l2:.3f}")
+            col.label(text=f"PSNR: {props.cycles_psnr:.1f} dB" if math.isfinite(props.cycles_psnr) else "PSNR: identical")
