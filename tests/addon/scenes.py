@@ -1,0 +1,90 @@
+"""Test scenes built with bpy: a diffuse plane, a smooth glass sphere, lamps and a camera."""
+
+import bpy
+from mathutils import Vector
+
+
+def _material(name):
+    material = bpy.data.materials.new(name)
+    if material.node_tree is None:
+        material.use_nodes = True
+    material.node_tree.nodes.clear()
+    return material
+
+
+def _shader(material, kind):
+    nodes = material.node_tree.nodes
+    output = nodes.new('ShaderNodeOutputMaterial')
+    shader = nodes.new(kind)
+    material.node_tree.links.new(shader.outputs[0], output.inputs['Surface'])
+    return shader
+
+
+def diffuse_material(name="Floor", color=(0.8, 0.8, 0.8)):
+    material = _material(name)
+    _shader(material, 'ShaderNodeBsdfDiffuse').inputs['Color'].default_value = (*color, 1.0)
+    return material
+
+
+def glass_material(name="Glass", ior=1.5):
+    material = _material(name)
+    shader = _shader(material, 'ShaderNodeBsdfGlass')
+    shader.inputs['IOR'].default_value = ior
+    shader.inputs['Roughness'].default_value = 0.0
+    return material
+
+
+def add_plane(size, material, name="Floor"):
+    bpy.ops.mesh.primitive_plane_add(size=size, location=(0.0, 0.0, 0.0))
+    plane = bpy.context.object
+    plane.name = name
+    plane.data.materials.append(material)
+    return plane
+
+
+def add_sphere(radius, location, material, name="Ball", segments=64, rings=32):
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=segments, ring_count=rings, radius=radius, location=location)
+    sphere = bpy.context.object
+    sphere.name = name
+    sphere.data.shade_smooth()
+    sphere.data.materials.append(material)
+    return sphere
+
+
+def add_point_light(location, power, name="Lamp"):
+    light = bpy.data.lights.new(name, 'POINT')
+    light.energy = power
+    light.shadow_soft_size = 0.0
+    lamp = bpy.data.objects.new(name, light)
+    lamp.location = location
+    bpy.context.scene.collection.objects.link(lamp)
+    return lamp
+
+
+def add_camera(location, target=(0.0, 0.0, 0.0), lens=35.0, name="Camera"):
+    camera = bpy.data.objects.new(name, bpy.data.cameras.new(name))
+    camera.data.lens = lens
+    camera.location = location
+    camera.rotation_euler = (Vector(target) - Vector(location)).to_track_quat('-Z', 'Y').to_euler()
+    bpy.context.scene.collection.objects.link(camera)
+    bpy.context.scene.camera = camera
+    return camera
+
+
+def set_resolution(width, height):
+    render = bpy.context.scene.render
+    render.resolution_x, render.resolution_y, render.resolution_percentage = width, height, 100
+
+
+def ball_lens_scene(width=160, height=120, photons=100_000, segments=64, rings=32):
+    """The ball lens of the engine's reference, at half scale: a glass sphere
+    (radius 0.5, IOR 1.5) centred 0.75 above a 6 m diffuse floor, lit by a
+    point lamp straight above at 3 m, seen obliquely."""
+    scene = bpy.context.scene
+    floor = add_plane(6.0, diffuse_material())
+    ball = add_sphere(0.5, (0.0, 0.0, 0.75), glass_material(), segments=segments, rings=rings)
+    lamp = add_point_light((0.0, 0.0, 3.0), 1000.0)
+    camera = add_camera((0.0, -4.5, 3.5), target=(0.0, 0.3, 0.0))
+    set_resolution(width, height)
+    scene.caustic.photons = photons
+    return dict(floor=floor, ball=ball, lamp=lamp, camera=camera)

@@ -1,0 +1,124 @@
+"""caustic.render on real Blender scenes, checked against geometry and against Cycles."""
+
+import math
+import os
+
+import bpy
+import numpy as np
+import pytest
+from bpy_extras.object_utils import world_to_camera_view
+from mathutils import Vector
+
+import scenes
+
+
+def pixels_of(name):
+    image = bpy.data.images[name]
+    w, h = image.size
+    pixels = np.empty(w * h * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    return pixels.reshape(h, w, 4)[::-1]  # row 0 at the top
+
+
+def pixel_at(point):
+    """(row from the top, column) of the pixel the scene camera sees `point` in."""
+    scene = bpy.context.scene
+    x, y, _ = world_to_camera_view(scene, scene.camera, Vector(point))
+    return int((1.0 - y) * scene.render.resolution_y), int(x * scene.render.resolution_x)
+
+
+def line_clears_sphere(start, end, centre, radius):
+    """Whether the segment start-end passes outside the sphere."""
+    start, end, centre = (np.asarray(v, dtype=float) for v in (start, end, centre))
+    d = end - start
+    t = np.clip(np.dot(centre - start, d) / np.dot(d, d), 0.0, 1.0)
+    return np.linalg.norm(start + t * d - centre) > radius
+
+
+def test_caustic_under_the_ball_and_dark_shadow_ring():
+    parts = scenes.ball_lens_scene(160, 120, photons=100_000)
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    image = pixels_of("Caustic Render")
+    assert image.shape == (120, 160, 4)
+
+    ball, lamp, camera = parts["ball"], parts["lamp"], parts["camera"]
+    radius, centre = 0.5, np.array(ball.location)
+    lamp_z = lamp.location.z
+    # The shadow disc on the floor: the cone from the lamp tangent to the ball.
+    shadow_radius = lamp_z * math.tan(math.asin(radius / (lamp_z - centre[2])))
+    angles = np.radians(np.arange(0, 360, 20))
+
+    def visible_points(r):
+        points = [(r * math.cos(a), r * math.sin(a), 0.0) for a in angles]
+        return [p for p in points if line_clears_sphere(camera.location, p, centre, 1.1 * radius)]
+
+    ring, lit = visible_points(0.75 * shadow_radius), visible_points(1.5 * shadow_radius)
+    assert len(ring) >= 3 and len(lit) >= 3
+    assert line_clears_sphere(camera.location, (0, 0, 0), centre, radius)
+
+    def brightness(points):
+        return np.mean([image[pixel_at(p)][:3].mean() for p in points])
+
+    caustic, shadow_ring, unshadowed = brightness([(0.0, 0.0, 0.0)]), brightness(ring), brightness(lit)
+    print(f"caustic {caustic:.3g}, shadow ring {shadow_ring:.3g}, unshadowed floor {unshadowed:.3g}")
+    assert caustic > 5.0 * unshadowed
+    assert shadow_ring < 0.5 * unshadowed
+    assert np.all(np.isfinite(image)) and np.all(image[..., 3] == 1.0)
+
+
+def test_output_image_is_float_linear_at_the_render_resolution():
+    scenes.ball_lens_scene(100, 80, photons=20_000, segments=32, rings=16)
+    bpy.context.scene.render.resolution_percentage = 50
+    bpy.ops.caustic.render()
+    image = bpy.data.images["Caustic Render"]
+    assert tuple(image.size) == (50, 40)
+    assert image.is_float
+    assert image.colorspace_settings.name == "Linear Rec.709"
+    props = bpy.context.scene.caustic
+    assert props.last_photons == 20_000 and props.last_seconds > 0 and props.progress == 1.0
+
+
+def cycles_render(tmp_path, samples):
+    """(h,w,4) top row first: Cycles on the CPU, box filter of one pixel, no denoiser, via an EXR."""
+    scene = bpy.context.scene
+    scene.render.engine = 'CYCLES'
+    scene.cycles.device = 'CPU'
+    scene.cycles.samples = samples
+    scene.cycles.use_denoising = False
+    scene.cycles.pixel_filter_type = 'BOX'
+    scene.cycles.filter_width = 1.0
+    scene.render.film_transparent = True
+    scene.render.image_settings.file_format = 'OPEN_EXR'
+    scene.render.image_settings.color_depth = '32'
+    scene.render.filepath = os.path.join(tmp_path, "cycles.exr")
+    scene.render.use_file_extension = False
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(scene.render.filepath)
+    w, h = image.size
+    pixels = np.empty(w * h * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    return pixels.reshape(h, w, 4)[::-1]
+
+
+def test_direct_light_on_a_diffuse_floor_matches_cycles(tmp_path):
+    """Lamp units: a point lamp of P W on a Lambertian floor of albedo 0.8, no glass."""
+    scenes.add_plane(4.0, scenes.diffuse_material(color=(0.8, 0.6, 0.4)))
+    lamp = scenes.add_point_light((0.6, -0.4, 2.0), 300.0)
+    lamp.data.color = (1.0, 0.9, 0.8)
+    scenes.add_camera((0.0, -2.5, 3.0), target=(0.0, 0.0, 0.0), lens=40.0)
+    scenes.set_resolution(64, 48)
+    bpy.context.scene.caustic.spp = 16
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    ours = pixels_of("Caustic Render")
+    reference = cycles_render(str(tmp_path), samples=64)
+
+    # The floor's inner pixels: fully covered in Cycles, and their neighbours too.
+    covered = reference[..., 3] > 0.999
+    inner = covered.copy()
+    inner[1:-1, 1:-1] &= covered[:-2, 1:-1] & covered[2:, 1:-1] & covered[1:-1, :-2] & covered[1:-1, 2:]
+    inner[[0, -1], :] = False
+    inner[:, [0, -1]] = False
+    assert inner.sum() > 0.3 * inner.size
+    ratio = ours[..., :3][inner].mean(axis=0) / reference[..., :3][inner].mean(axis=0)
+    print("direct light, caustic render / Cycles per channel:", ratio)
+    assert np.all(np.abs(ratio - 1.0) < 0.02)
