@@ -43,12 +43,19 @@ def factory(addon):
     yield
 
 
+class Reports:
+    """What the operators reported since the last call (Blender prints
+    'Warning: ...' and 'Info: ...' lines to stdout in the background)."""
+
+    def __init__(self, capfd):
+        self.capfd, self.last = capfd, ""
+
+    def __call__(self) -> str:
+        out, err = self.capfd.readouterr()
+        self.last = out + err
+        return self.last
+
+
 @pytest.fixture
 def reports(capfd):
-    """Reports the operators print (Blender writes 'Warning: ...' lines to stdout)."""
-
-    def read():
-        out, err = capfd.readouterr()
-        return out + err
-
-    return read
+    return Reports(capfd)

@@ -1,6 +1,8 @@
 """Every RNA property of a struct, recursively, as plain Python values, so
 tests can tell whether anything in the file changed."""
 
+import warnings
+
 import bpy
 
 # Runtime state, not data: it changes without anyone editing the file.
@@ -48,8 +50,11 @@ def snapshot_file():
     """All ID datablocks of the kinds a render could touch, by collection and name."""
     kinds = ("objects", "meshes", "materials", "node_groups", "images", "lights", "cameras", "worlds", "scenes",
              "collections", "textures")
-    state = {kind: {block.name: rna(block) for block in getattr(bpy.data, kind)} for kind in kinds}
-    state["material node trees"] = {m.name: material_state(m) for m in bpy.data.materials if m.node_tree}
+    with warnings.catch_warnings():
+        # Blender 5 warns on reading properties it will remove, such as use_nodes.
+        warnings.simplefilter("ignore", DeprecationWarning)
+        state = {kind: {block.name: rna(block) for block in getattr(bpy.data, kind)} for kind in kinds}
+        state["material node trees"] = {m.name: material_state(m) for m in bpy.data.materials if m.node_tree}
     return state
 
 

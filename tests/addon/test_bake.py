@@ -1,0 +1,109 @@
+"""caustic.bake writes each receiver's illumination map into its material
+through one node group; caustic.unbake takes exactly that out again."""
+
+import math
+
+import bpy
+import numpy as np
+
+import scenes
+from snapshot import material_state, snapshot_file
+from test_render import cycles_render
+
+RESULT_FIELDS = {"last_seconds", "last_photons"}
+
+
+def test_bake_adds_one_node_group_and_unbake_restores_the_material():
+    parts = scenes.ball_lens_scene(32, 24, photons=100_000)
+    floor_material = parts["floor"].active_material
+    glass_before = material_state(parts["ball"].active_material)
+    bpy.context.view_layer.update()
+    before, floor_before = snapshot_file(), material_state(floor_material)
+
+    assert bpy.ops.caustic.bake() == {'FINISHED'}
+
+    nodes, _ = material_state(floor_material)
+    added = set(nodes) - set(floor_before[0])
+    assert len(added) == 1 and set(floor_before[0]) <= set(nodes)
+    group_node = floor_material.node_tree.nodes[added.pop()]
+    assert group_node.bl_idname == 'ShaderNodeGroup'
+    assert set(bpy.data.node_groups.keys()) == {group_node.node_tree.name}
+    output = floor_material.node_tree.get_output_node('CYCLES')
+    assert output.inputs['Surface'].links[0].from_node == group_node
+    assert group_node.inputs[0].links[0].from_node.bl_idname == 'ShaderNodeBsdfDiffuse'
+    assert material_state(parts["ball"].active_material) == glass_before
+
+    image = bpy.data.images["Caustic Map Floor"]
+    assert image.is_float and image.packed_file is not None
+    w, h = image.size
+    irradiance = np.empty(w * h * 4, dtype=np.float32)
+    image.pixels.foreach_get(irradiance)
+    # Irradiance the floor would get right under the lamp with no ball in the way.
+    lamp = parts["lamp"]
+    unshadowed = lamp.data.energy / (4.0 * math.pi) / lamp.location.z ** 2
+    print(f"baked map {w}x{h}: max {irradiance.max():.4g} W/m^2, unshadowed {unshadowed:.4g} W/m^2")
+    assert irradiance.reshape(h, w, 4)[..., :3].max() > 5.0 * unshadowed
+
+    assert bpy.ops.caustic.unbake() == {'FINISHED'}
+    assert material_state(floor_material) == floor_before
+    after = snapshot_file()
+    for fields in (before, after):
+        for name in RESULT_FIELDS:
+            fields["scenes"]["Scene"]["caustic"].pop(name)
+    assert after == before
+
+
+def camera_rays_clear_sphere(rows, cols, centre, radius):
+    """Whether the scene camera's rays through the centres of pixels
+    rows x cols all pass outside the sphere."""
+    scene = bpy.context.scene
+    camera = scene.camera
+    w, h = scene.render.resolution_x, scene.render.resolution_y
+    top_right, _, bottom_left, _ = camera.data.view_frame(scene=scene)
+    rotation = np.array(camera.matrix_world.to_3x3())
+    eye = np.array(camera.matrix_world.translation)
+    for r in rows:
+        for c in cols:
+            x = bottom_left.x + (c + 0.5) / w * (top_right.x - bottom_left.x)
+            y = top_right.y - (r + 0.5) / h * (top_right.y - bottom_left.y)
+            d = rotation @ np.array([x, y, top_right.z])
+            d /= np.linalg.norm(d)
+            offset = np.asarray(centre) - eye
+            if np.linalg.norm(offset - np.dot(offset, d) * d) <= radius:
+                return False
+    return True
+
+
+def test_baked_caustic_renders_like_the_caustic_pass(addon, tmp_path):
+    """Cycles shows the baked material's emission (lamp and ball hidden)
+    where the caustic render's caustic pass has the caustic, as bright. The
+    lamp is off to the side so the caustic is not symmetric about the chart's
+    axes, and the camera sees it clear of the ball."""
+    scenes.add_plane(6.0, scenes.diffuse_material())
+    ball = scenes.add_sphere(0.5, (0.0, 0.0, 0.75), scenes.glass_material())
+    lamp = scenes.add_point_light((-1.5, 0.6, 3.0), 1000.0)
+    scenes.add_camera((3.5, -2.5, 2.5), target=(0.5, -0.2, 0.0))
+    scenes.set_resolution(64, 48)
+    bpy.context.scene.caustic.photons = 200_000
+    assert bpy.ops.caustic.bake() == {'FINISHED'}
+    read = addon.operators.scene_reader.read_scene(bpy.context)
+    settings = addon.operators.settings.render_settings(bpy.context.scene.caustic, spp=64)
+    caustic = addon.caustic_addon.render(read.scene, settings).passes["caustic"]
+
+    ball.hide_render = lamp.hide_render = True
+    baked = cycles_render(str(tmp_path), samples=64)[..., :3]
+
+    row, col = np.unravel_index(caustic[..., 0].argmax(), caustic.shape[:2])
+    rows, cols = range(row - 3, row + 4), range(col - 3, col + 4)
+    assert camera_rays_clear_sphere(rows, cols, ball.location, 0.5)
+    peak = np.unravel_index(baked[..., 0].argmax(), baked.shape[:2])
+    assert abs(peak[0] - row) <= 1 and abs(peak[1] - col) <= 1
+    window = (slice(rows.start, rows.stop), slice(cols.start, cols.stop))
+    core = (slice(row - 1, row + 2), slice(col - 1, col + 2))
+    ratio = baked[window].sum() / caustic[window].sum()
+    # Around the sub-pixel focus: the image's cells, interpolated, against exact look-ups.
+    ratio_around = (baked[window].sum() - baked[core].sum()) / (caustic[window].sum() - caustic[core].sum())
+    print(f"baked caustic in Cycles / caustic pass around the peak: 7x7 pixels {ratio:.3f}, "
+          f"7x7 without the central 3x3 {ratio_around:.4f}")
+    assert abs(ratio - 1.0) < 0.15
+    assert abs(ratio_around - 1.0) < 0.03

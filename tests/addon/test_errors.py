@@ -1,0 +1,100 @@
+"""Inputs the add-on cannot render: each operator refuses with a message
+naming the problem and leaves every datablock of the file as it was."""
+
+import bmesh
+import bpy
+import pytest
+
+import scenes
+from snapshot import snapshot_file
+
+
+def no_camera(parts):
+    bpy.context.scene.camera = None
+
+
+def no_lamp(parts):
+    bpy.data.objects.remove(parts["lamp"])
+
+
+def only_an_area_lamp(parts):
+    parts["lamp"].data.type = 'AREA'
+
+
+def no_receiver(parts):
+    parts["floor"].caustic.role = 'IGNORE'
+
+
+def zero_lamp_rays(parts):
+    bpy.context.scene.caustic.photons = 0
+
+
+def zero_ior_in_the_material(parts):
+    bpy.data.materials["Glass"].node_tree.nodes["Glass BSDF"].inputs["IOR"].default_value = 0.0
+
+
+def negative_ior_override(parts):
+    parts["ball"].caustic.use_ior = True
+    parts["ball"].caustic.ior = 0.0
+
+
+CASES = [
+    (no_camera, "The scene has no active camera", {"render", "compare_cycles"}),
+    (no_lamp, "The scene has no point, spot or sun lamp", {"render", "compare_cycles", "bake"}),
+    (only_an_area_lamp, "(area lamps are not supported)", {"render", "compare_cycles", "bake"}),
+    (no_receiver, "No object receives caustics", {"render", "compare_cycles", "bake"}),
+    (zero_lamp_rays, "Lamp Rays is 0", {"render", "compare_cycles", "bake"}),
+    (zero_ior_in_the_material, "Ball: IOR must be a positive number", {"render", "compare_cycles", "bake"}),
+    (negative_ior_override, "Ball: IOR must be a positive number", {"render", "compare_cycles", "bake"}),
+]
+
+
+@pytest.mark.parametrize("operator", ["render", "compare_cycles", "bake"])
+@pytest.mark.parametrize("spoil, message, operators", CASES, ids=[case[0].__name__ for case in CASES])
+def test_bad_input_is_refused_and_changes_nothing(operator, spoil, message, operators):
+    if operator not in operators:
+        pytest.skip(f"{operator} does not need this")
+    parts = scenes.ball_lens_scene(32, 24, photons=2000, segments=16, rings=8)
+    spoil(parts)
+    bpy.context.view_layer.update()
+    before = snapshot_file()
+    with pytest.raises(RuntimeError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        getattr(bpy.ops.caustic, operator)()
+    assert snapshot_file() == before
+
+
+def test_bake_without_glass_is_refused():
+    scenes.add_plane(4.0, scenes.diffuse_material())
+    scenes.add_point_light((0.0, 0.0, 2.0), 100.0)
+    bpy.context.view_layer.update()
+    before = snapshot_file()
+    with pytest.raises(RuntimeError, match="Nothing to bake: no object is transparent"):
+        bpy.ops.caustic.bake()
+    assert snapshot_file() == before
+
+
+def test_open_glass_mesh_renders_with_a_warning(reports):
+    parts = scenes.ball_lens_scene(32, 24, photons=2000, segments=16, rings=8)
+    mesh = parts["ball"].data
+    bm = bmesh.new()
+    bm.from_mesh(mesh)
+    bmesh.ops.delete(bm, geom=[f for f in bm.faces if f.calc_center_median().z > 0.4], context='FACES')
+    bm.to_mesh(mesh)
+    bm.free()
+    bpy.context.view_layer.update()
+    before = snapshot_file()
+    reports()
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    assert "'Ball' is not a closed mesh" in reports() and "light may leak" in reports.last
+    after = snapshot_file()
+    # Only the asked-for output changed: the new image and the result fields.
+    assert set(after["images"]) - set(before["images"]) == {"Caustic Render"}
+    for kind in after:
+        if kind not in ("images", "scenes"):
+            assert after[kind] == before[kind], kind
+    result_fields = {"last_seconds", "last_photons", "progress"}
+    caustic_before = {k: v for k, v in before["scenes"]["Scene"]["caustic"].items() if k not in result_fields}
+    caustic_after = {k: v for k, v in after["scenes"]["Scene"]["caustic"].items() if k not in result_fields}
+    assert caustic_after == caustic_before
+    before["scenes"]["Scene"].pop("caustic"), after["scenes"]["Scene"].pop("caustic")
+    assert after["scenes"] == before["scenes"]
