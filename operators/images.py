@@ -12,14 +12,16 @@ def working_colorspace() -> str:
 
 
 def write_image(name: str, rgba: np.ndarray):
-    """Image `name` (created or reused, float, linear) holding `rgba (h,w,4)`."""
+    """Image `name` (float, linear) holding `rgba (h,w,4)`: the existing one
+    if it can take it (a saved one too), else a new one."""
     h, w = rgba.shape[:2]
     image = bpy.data.images.get(name)
-    if image is None or image.source != 'GENERATED':
+    if image is not None and image.source == 'GENERATED':
+        if tuple(image.size) != (w, h) or not image.use_generated_float:
+            image.generated_width, image.generated_height = w, h
+            image.use_generated_float = True
+    elif image is None or tuple(image.size) != (w, h) or not image.is_float:
         image = bpy.data.images.new(name, w, h, alpha=True, float_buffer=True)
-    elif tuple(image.size) != (w, h) or not image.use_generated_float:
-        image.generated_width, image.generated_height = w, h
-        image.use_generated_float = True
     if image.colorspace_settings.name != working_colorspace():
         image.colorspace_settings.name = working_colorspace()
     image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1], dtype=np.float32).ravel())

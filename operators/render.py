@@ -1,7 +1,8 @@
 """CAUSTIC_OT_render: the active camera's view with caustics, into the image
-"Caustic Render". In the UI the engine runs on a worker thread (progress in
-the status bar and the panel, Esc cancels); in the background, or when
-called from a script, it runs synchronously in execute()."""
+"Caustic Render", and optionally to a file. In the UI the engine runs on a
+worker thread (progress in the status bar and the panel, Esc cancels); in the
+background, or when called from a script, it runs synchronously in
+execute()."""
 
 import bpy
 
@@ -18,6 +19,11 @@ class CAUSTIC_OT_render(bpy.types.Operator):
     bl_idname = "caustic.render"
     bl_label = "Render Caustics"
     bl_description = "Render the active camera's view with caustics into the image \"Caustic Render\""
+
+    filepath: bpy.props.StringProperty(
+        name="File Path", options={'SKIP_SAVE'},
+        description="Also save the render here, in the scene's output file format (// is the .blend's folder)")
+    # No FILE_PATH subtype: with it, bpy 5.2 crashes when a script passes a "//" path.
 
     running = False
 
@@ -104,6 +110,12 @@ class CAUSTIC_OT_render(bpy.types.Operator):
         show_image(context, image)
         for warning in read.warnings + job.result.warnings:
             self.report({'WARNING'}, warning)
+        if self.filepath:
+            try:
+                image.save_render(bpy.path.abspath(self.filepath), scene=context.scene)
+            except RuntimeError as exc:
+                self.report({'ERROR'}, f"Rendered into \"{RESULT_IMAGE}\" but could not save it: {exc}")
+                return {'CANCELLED'}
         self.report({'INFO'}, f"Caustics rendered in {job.seconds:.1f} s from "
                               f"{props.last_photons:,} lamp rays into \"{RESULT_IMAGE}\"")
         return {'FINISHED'}
