@@ -11,17 +11,18 @@ import bpy
 import numpy as np
 from mathutils import Matrix
 
-from ..caustic_addon.illumination_map import IlluminationMap, PlaneChart
+from ..caustic_addon.illumination_map import PlaneChart
 
 NODE_NAME = "Caustic Bake"
 # Custom property marking the node groups a bake made.
 TAG = "caustic_bake"
 
 
-def _chart_coordinates(nodes, links, imap: IlluminationMap, uv_layer: str):
+def _chart_coordinates(nodes, links, imap, uv_layer: str):
     """A Mapping node (type TEXTURE: out = R^T (p - location) / scale) that
-    turns the shading point into the map image's [0,1]^2 coordinates: the
-    world position for a plane chart, the UV map for a UV chart."""
+    turns the shading point into [0,1]^2 coordinates of the image of
+    illumination map `imap`: from the world position for a plane chart, from
+    the UV map for a UV chart."""
     chart = imap.chart
     h, w = imap.shape
     extent = np.array([w * imap.cell, h * imap.cell, 1.0])
@@ -45,7 +46,7 @@ def _chart_coordinates(nodes, links, imap: IlluminationMap, uv_layer: str):
     return source, mapping
 
 
-def make_group(name: str, image, imap: IlluminationMap, albedo: np.ndarray, uv_layer: str):
+def make_group(name: str, image, imap, albedo: np.ndarray, uv_layer: str):
     """A shader node group: Shader in, Shader out = in + emission of the map
     `image` (irradiance, W/m^2) times `albedo (3,)` / pi."""
     group = bpy.data.node_groups.new(name, 'ShaderNodeTree')

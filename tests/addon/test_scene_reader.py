@@ -1,0 +1,193 @@
+"""What the add-on reads from Blender: the evaluated scene in world space,
+render visibility, roles and materials, lamps and the camera."""
+
+import math
+
+import bpy
+import numpy as np
+import pytest
+from mathutils import Matrix
+
+import scenes
+
+
+def read(addon):
+    return addon.operators.scene_reader.read_scene(bpy.context)
+
+
+def engine_object(result, name):
+    return next(o for o in result.scene.objects if o.name == name)
+
+
+def lamp_scene():
+    """A floor and a lamp: the least the reader accepts."""
+    floor = scenes.add_plane(4.0, scenes.diffuse_material())
+    lamp = scenes.add_point_light((0.0, 0.0, 2.0), 100.0)
+    scenes.add_camera((0.0, -3.0, 3.0))
+    return floor, lamp
+
+
+def test_modifiers_are_applied(addon):
+    lamp_scene()
+    ball = scenes.add_sphere(1.0, (0.0, 0.0, 1.0), scenes.glass_material(), segments=16, rings=8)
+    ball.modifiers.new("Subdivide", 'SUBSURF').levels = 1
+    quads, fans = 16 * (8 - 2), 2 * 16
+    # One subdivision makes 4 quads of a quad and 3 of a triangle; each quad is 2 triangles.
+    assert len(engine_object(read(addon), "Ball").mesh.triangles) == 2 * (4 * quads + 3 * fans)
+
+
+def test_world_space_with_normals_by_the_inverse_transpose(addon):
+    lamp_scene()
+    bpy.ops.mesh.primitive_cube_add(size=1.0)
+    box = bpy.context.object
+    box.data.materials.append(scenes.glass_material())
+    box.matrix_world = (Matrix.Translation((1.0, 2.0, 3.0)) @ Matrix.Rotation(0.7, 4, (1.0, 1.0, 0.0))
+                        @ Matrix.Diagonal((3.0, 1.0, 0.25, 1.0)))
+    mesh = engine_object(read(addon), box.name).mesh
+    corners = mesh.corners
+    assert np.allclose(corners.reshape(-1, 3).mean(axis=0), (1.0, 2.0, 3.0), atol=1e-6)
+    # Flat faces: each corner normal is perpendicular to its triangle's world-space edges, and points out.
+    for a, b in ((0, 1), (1, 2), (2, 0)):
+        edges = corners[:, b] - corners[:, a]
+        edges /= np.linalg.norm(edges, axis=-1, keepdims=True)
+        assert np.abs(np.einsum("ti,tci->tc", edges, mesh.corner_normals)).max() < 1e-6
+    outward = corners.mean(axis=1) - (1.0, 2.0, 3.0)
+    assert (np.einsum("ti,ti->t", outward, mesh.corner_normals[:, 0]) > 0).all()
+
+
+def test_hidden_objects_are_left_out(addon, reports):
+    lamp_scene()
+    glass = scenes.glass_material()
+    hidden = scenes.add_sphere(0.3, (1.0, 0.0, 0.5), glass, name="NotRendered", segments=8, rings=4)
+    hidden.hide_render = True
+    in_hidden_collection = scenes.add_sphere(0.3, (-1.0, 0.0, 0.5), glass, name="InHidden", segments=8, rings=4)
+    collection = bpy.data.collections.new("Hidden")
+    bpy.context.scene.collection.children.link(collection)
+    collection.objects.link(in_hidden_collection)
+    bpy.context.scene.collection.objects.unlink(in_hidden_collection)
+    collection.hide_render = True
+    viewport_hidden = scenes.add_sphere(0.3, (0.0, 1.0, 0.5), glass, name="ViewportHidden", segments=8, rings=4)
+    viewport_hidden.hide_viewport = True
+    result = read(addon)
+    assert {o.name for o in result.scene.objects} == {"Floor"}
+    assert any("'ViewportHidden' is hidden in the viewport" in w for w in result.warnings)
+
+
+def test_collection_instances_are_read_in_world_space(addon):
+    lamp_scene()
+    collection = bpy.data.collections.new("Props")
+    ball = scenes.add_sphere(0.5, (0.0, 0.0, 0.75), scenes.glass_material(), segments=16, rings=8)
+    collection.objects.link(ball)
+    bpy.context.scene.collection.objects.unlink(ball)
+    empty = bpy.data.objects.new("Placer", None)
+    empty.instance_type, empty.instance_collection = 'COLLECTION', collection
+    empty.location = (2.0, 0.0, 0.0)
+    bpy.context.scene.collection.objects.link(empty)
+    result = read(addon)
+    instanced = [o for o in result.scene.objects if o.name.startswith("Ball [Placer")]
+    assert len(instanced) == 1 and instanced[0].name in result.instanced
+    assert np.allclose(instanced[0].mesh.vertices.mean(axis=0), (2.0, 0.0, 0.75), atol=1e-6)
+    assert instanced[0].is_transparent
+
+
+def principled(name, **inputs):
+    material = bpy.data.materials.new(name)
+    if material.node_tree is None:
+        material.use_nodes = True
+    node = material.node_tree.nodes["Principled BSDF"]
+    for socket, value in inputs.items():
+        node.inputs[socket].default_value = value
+    return material
+
+
+def test_roles_from_materials_and_overrides(addon):
+    floor, _ = lamp_scene()
+    floor.data.materials[0] = principled("Painted", **{"Base Color": (0.2, 0.4, 0.6, 1.0)})
+    water = scenes.add_sphere(0.3, (1.0, 0.0, 0.5), principled(
+        "Water", **{"Transmission Weight": 1.0, "IOR": 1.33, "Roughness": 0.0}), name="Water", segments=8, rings=4)
+    forced = scenes.add_sphere(0.3, (-1.0, 0.0, 0.5), scenes.diffuse_material("Chalk"), name="Forced",
+                               segments=8, rings=4)
+    forced.caustic.role = 'TRANSPARENT'
+    forced.caustic.absorption = (0.5, 1.0, 2.0)
+    gem = scenes.add_sphere(0.3, (0.0, 1.0, 0.5), scenes.glass_material("Gem"), name="Gem", segments=8, rings=4)
+    gem.caustic.use_ior, gem.caustic.ior = True, 2.42
+    ignored = scenes.add_sphere(0.3, (0.0, -1.0, 0.5), scenes.glass_material("Other"), name="Ignored",
+                                segments=8, rings=4)
+    ignored.caustic.role = 'IGNORE'
+    result = read(addon)
+    names = {o.name: o.material for o in result.scene.objects}
+    assert set(names) == {"Floor", "Water", "Forced", "Gem"}
+    assert names["Floor"].receiver and np.allclose(names["Floor"].albedo, (0.2, 0.4, 0.6))
+    assert names["Water"].ior == pytest.approx(1.33)
+    assert names["Forced"].ior == 1.5 and np.allclose(names["Forced"].absorption, (0.5, 1.0, 2.0))
+    assert names["Gem"].ior == pytest.approx(2.42)
+    assert result.materials["Water"] == "Water"
+
+
+def test_approximations_are_named_in_warnings(addon):
+    floor, _ = lamp_scene()
+    material = floor.data.materials[0]
+    texture = material.node_tree.nodes.new('ShaderNodeTexChecker')
+    shader = material.node_tree.nodes["Diffuse BSDF"]
+    material.node_tree.links.new(texture.outputs['Color'], shader.inputs['Color'])
+    rough = scenes.glass_material("Frosted")
+    rough.node_tree.nodes["Glass BSDF"].inputs["Roughness"].default_value = 0.3
+    scenes.add_sphere(0.3, (1.0, 0.0, 0.5), rough, segments=8, rings=4)
+    bpy.ops.curve.primitive_bezier_circle_add()
+    curve = bpy.context.object.name
+    bpy.data.objects.new("Area", bpy.data.lights.new("Area", 'AREA'))
+    bpy.context.scene.collection.objects.link(bpy.data.objects["Area"])
+    warnings = "\n".join(read(addon).warnings)
+    assert "material 'Floor': its Color comes from other nodes" in warnings
+    assert "material 'Frosted': rough glass is rendered as smooth glass" in warnings
+    assert f"'{curve}': curve objects are not supported" in warnings
+    assert "lamp 'Area': area lamps are not supported" in warnings
+
+
+def test_lamps_in_blender_units(addon):
+    scenes.add_plane(4.0, scenes.diffuse_material())
+    scenes.add_camera((0.0, -3.0, 3.0))
+    point = scenes.add_point_light((0.0, 0.0, 2.0), 100.0, name="Point")
+    point.data.color = (1.0, 0.5, 0.25)
+    if hasattr(point.data, "exposure"):
+        point.data.exposure = 1.0
+    spot = bpy.data.objects.new("Spot", bpy.data.lights.new("Spot", 'SPOT'))
+    spot.data.energy, spot.data.spot_size, spot.data.spot_blend = 50.0, math.radians(30.0), 0.2
+    spot.location, spot.rotation_euler = (1.0, 0.0, 2.0), (math.radians(90.0), 0.0, 0.0)
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))
+    sun.data.energy = 3.0
+    sun.rotation_euler = (0.0, math.radians(45.0), 0.0)
+    for ob in (spot, sun):
+        bpy.context.scene.collection.objects.link(ob)
+    lights = {light.name: light for light in read(addon).scene.lights}
+    exposure = 2.0 if hasattr(point.data, "exposure") else 1.0
+    assert lights["Point"].power == pytest.approx(100.0 * exposure)
+    assert np.allclose(lights["Point"].color, (1.0, 0.5, 0.25)) and np.allclose(lights["Point"].position, (0, 0, 2))
+    # The spot points along its local -Z: rotated 90 degrees about X, that is +Y.
+    assert np.allclose(lights["Spot"].direction, (0.0, 1.0, 0.0), atol=1e-6)
+    assert lights["Spot"].spot_size == pytest.approx(math.radians(30.0)) and lights["Spot"].blend == pytest.approx(0.2)
+    assert lights["Sun"].strength == 3.0
+    assert np.allclose(lights["Sun"].direction, (-math.sqrt(0.5), 0.0, -math.sqrt(0.5)), atol=1e-6)
+
+
+@pytest.mark.skipif("temperature" not in bpy.types.Light.bl_rna.properties, reason="lamp temperature is Blender 4.5+")
+def test_lamp_temperature_tints_the_colour(addon):
+    lamp_scene()
+    light = bpy.data.lights["Lamp"]
+    light.use_temperature, light.temperature = True, 3000.0
+    color = read(addon).scene.lights[0].color
+    assert np.allclose(color, light.temperature_color[:])
+
+
+def test_camera_at_the_render_resolution(addon):
+    lamp_scene()
+    camera = bpy.context.scene.camera
+    camera.data.sensor_fit, camera.data.lens = 'VERTICAL', 50.0
+    camera.data.shift_x = 0.1
+    scenes.set_resolution(200, 100)
+    bpy.context.scene.render.resolution_percentage = 30
+    result = read(addon).scene.camera
+    assert (result.pixx, result.pixy) == (60, 30)
+    assert result.fov == pytest.approx(2.0 * math.atan(camera.data.sensor_height / (2.0 * 50.0)))
+    assert result.sensor_fit == 'VERTICAL' and result.shift_x == pytest.approx(0.1)
+    assert np.allclose(result.matrix, np.array(camera.matrix_world), atol=1e-6)
