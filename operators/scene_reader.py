@@ -174,6 +174,20 @@ def _dummy_camera() -> Camera:
     return Camera(matrix=np.eye(4), pixx=1, pixy=1)
 
 
+def _mesh_object(ob, name: str, matrix: np.ndarray, surfaces: dict, warnings: list[str]):
+    """(engine Object in world space or None if the mesh has no faces, name of its material or None)."""
+    with evaluated_mesh(ob) as mesh:
+        local, material_index = _local_mesh(mesh)
+        material = _main_material(ob, material_index, name, warnings) if local is not None else None
+    if local is None:
+        return None, None
+    key = material.original.name if material is not None else None
+    if key not in surfaces:
+        surfaces[key] = read_surface(material)
+        warnings += surfaces[key].warnings
+    return Object(name, local.transformed(matrix), engine_material(surfaces[key], ob.original.caustic)), key
+
+
 def read_scene(context, with_camera: bool = True) -> SceneRead:
     """The engine scene of the context's view layer. Raises InputError if it
     has no camera (when `with_camera`), no lamp or no receiver."""
@@ -202,21 +216,12 @@ def read_scene(context, with_camera: bool = True) -> SceneRead:
         elif ob.type in UNSUPPORTED_GEOMETRY:
             warnings.append(f"'{name}': {ob.type.lower()} objects are not supported; convert it to a mesh")
         elif ob.type == 'MESH' and source.caustic.role != 'IGNORE':
-            with evaluated_mesh(ob) as mesh:
-                local, material_index = _local_mesh(mesh)
-                material = _main_material(ob, material_index, name, warnings) if local is not None else None
-            if local is None:
-                continue
-            key = material.original.name if material is not None else None
-            if key not in surfaces:
-                surfaces[key] = read_surface(material)
-                warnings += surfaces[key].warnings
-            read.scene.objects.append(Object(name, local.transformed(matrix),
-                                             engine_material(surfaces[key], source.caustic)))
-            read.sources[name] = source.name
-            read.materials[name] = key
-            if inst.is_instance:
-                read.instanced.add(name)
+            obj, material = _mesh_object(ob, name, matrix, surfaces, warnings)
+            if obj is not None:
+                read.scene.objects.append(obj)
+                read.sources[name], read.materials[name] = source.name, material
+                if inst.is_instance:
+                    read.instanced.add(name)
     hidden = sorted(n for n in renderable - seen if bpy.data.objects[n].type in {'MESH', 'LIGHT'})
     warnings += [f"'{n}' is hidden in the viewport, so it was left out; unhide it to render it" for n in hidden]
     read.scene.background = _background(scene.world, warnings)
