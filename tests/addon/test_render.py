@@ -5,7 +5,6 @@ import os
 
 import bpy
 import numpy as np
-import pytest
 from bpy_extras.object_utils import world_to_camera_view
 from mathutils import Vector
 

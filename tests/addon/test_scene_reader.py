@@ -103,7 +103,7 @@ def principled(name, **inputs):
 def test_roles_from_materials_and_overrides(addon):
     floor, _ = lamp_scene()
     floor.data.materials[0] = principled("Painted", **{"Base Color": (0.2, 0.4, 0.6, 1.0)})
-    water = scenes.add_sphere(0.3, (1.0, 0.0, 0.5), principled(
+    scenes.add_sphere(0.3, (1.0, 0.0, 0.5), principled(
         "Water", **{"Transmission Weight": 1.0, "IOR": 1.33, "Roughness": 0.0}), name="Water", segments=8, rings=4)
     forced = scenes.add_sphere(0.3, (-1.0, 0.0, 0.5), scenes.diffuse_material("Chalk"), name="Forced",
                                segments=8, rings=4)
