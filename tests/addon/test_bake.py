@@ -5,6 +5,7 @@ import math
 
 import bpy
 import numpy as np
+import pytest
 
 import scenes
 from snapshot import material_state, snapshot_file
@@ -74,18 +75,24 @@ def camera_rays_clear_sphere(rows, cols, centre, radius):
     return True
 
 
-def test_baked_caustic_renders_like_the_caustic_pass(addon, tmp_path):
+@pytest.mark.parametrize("floor_kind", ["flat", "bent"])
+def test_baked_caustic_renders_like_the_caustic_pass(addon, tmp_path, floor_kind):
     """Cycles shows the baked material's emission (lamp and ball hidden)
     where the caustic render's caustic pass has the caustic, as bright. The
     lamp is off to the side so the caustic is not symmetric about the chart's
-    axes, and the camera sees it clear of the ball."""
-    scenes.add_plane(6.0, scenes.diffuse_material())
+    axes, and the camera sees it clear of the ball. A bent floor (one corner
+    raised) is not a plane: its map is charted by its UV map instead."""
+    floor = scenes.add_plane(6.0, scenes.diffuse_material())
+    if floor_kind == "bent":
+        floor.data.vertices[0].co.z = 0.05
     ball = scenes.add_sphere(0.5, (0.0, 0.0, 0.75), scenes.glass_material())
     lamp = scenes.add_point_light((-1.5, 0.6, 3.0), 1000.0)
     scenes.add_camera((3.5, -2.5, 2.5), target=(0.5, -0.2, 0.0))
     scenes.set_resolution(64, 48)
     bpy.context.scene.caustic.photons = 200_000
     assert bpy.ops.caustic.bake() == {'FINISHED'}
+    chart_input = 'ShaderNodeUVMap' if floor_kind == "bent" else 'ShaderNodeNewGeometry'
+    assert any(node.bl_idname == chart_input for node in bpy.data.node_groups[0].nodes)
     read = addon.operators.scene_reader.read_scene(bpy.context)
     settings = addon.operators.settings.render_settings(bpy.context.scene.caustic, spp=64)
     caustic = addon.caustic_addon.render(read.scene, settings).passes["caustic"]
