@@ -82,7 +82,7 @@ def main() -> None:
     args = parser.parse_args()
     counts = [int(c) for c in 10 ** np.arange(4, np.log10(args.max_photons) + 0.01, 0.5)]
 
-    truth = ball_lens.pixel_reference(ball_lens.scene(), SPP)
+    truth = ball_lens.pixel_reference(ball_lens.scene())
     curves = {name: run_engine(name, fields, counts, truth) for name, fields in engine_methods().items()}
 
     table = {name: {f"{int(100 * t)}%": time_to_reach(points, t) for t in THRESHOLDS} for name, points in curves.items()}

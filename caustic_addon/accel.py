@@ -68,9 +68,12 @@ def signed_volume(corners: np.ndarray) -> float:
 def open_edge_count(triangles: np.ndarray, vertices: np.ndarray) -> int:
     """Number of edges not shared by exactly two triangles. Vertices at the
     same position count as one, so meshes split for UVs or sharp edges still
-    read as closed."""
+    read as closed; triangles that repeat a vertex, and copies of a
+    triangle, are left out."""
     _, weld = np.unique(np.round(vertices, 9), axis=0, return_inverse=True)
     tris = weld.reshape(-1)[triangles]
+    tris = tris[(tris[:, 0] != tris[:, 1]) & (tris[:, 1] != tris[:, 2]) & (tris[:, 2] != tris[:, 0])]
+    tris = np.unique(np.sort(tris, axis=1), axis=0)
     edges = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
     edges = edges[edges[:, 0] != edges[:, 1]]
     _, counts = np.unique(edges, axis=0, return_counts=True)
@@ -79,6 +82,9 @@ def open_edge_count(triangles: np.ndarray, vertices: np.ndarray) -> int:
 
 class Accelerator:
     """The scene's triangles in one Embree BVH, with per-triangle shading data.
+
+    closed (m,) bool per object: a dielectric mesh without holes, whose
+    inside a ray's own state can track.
 
     Per global triangle index (all objects' triangles, in object order):
       face_normal    (N,3) unit geometric normal, facing out of closed meshes
@@ -97,6 +103,7 @@ class Accelerator:
         self._embree = rtcore_scene.EmbreeScene()
 
         face_normals, corner_normals, owners, offsets = [], [], [], [0]
+        self.closed = np.zeros(len(objects), dtype=bool)
         for index, obj in enumerate(objects):
             mesh = obj.mesh
             TriangleMesh(self._embree, mesh.vertices.astype(np.float32), mesh.triangles.astype(np.int32))
@@ -104,7 +111,8 @@ class Accelerator:
             normals, _ = triangle_normals(corners)
             sign = 1.0
             if obj.is_transparent:
-                sign = self._outward_sign(obj, corners)
+                self.closed[index] = open_edge_count(obj.mesh.triangles, obj.mesh.vertices) == 0
+                sign = self._outward_sign(obj, corners, self.closed[index])
             normals *= sign
             if mesh.corner_normals is None:
                 shading = np.repeat(normals[:, None, :], 3, axis=1)
@@ -120,9 +128,9 @@ class Accelerator:
         self.owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
         self.prim_offset = np.asarray(offsets, dtype=np.int64)
 
-    def _outward_sign(self, obj: Object, corners: np.ndarray) -> float:
+    def _outward_sign(self, obj: Object, corners: np.ndarray, closed: bool) -> float:
         """+1 if the mesh's winding faces out, -1 if it is inside out."""
-        if open_edge_count(obj.mesh.triangles, obj.mesh.vertices):
+        if not closed:
             self.warnings.append(
                 f"'{obj.name}' is not a closed mesh: inside and outside are guessed per hit "
                 "from its normals, so light may leak through its holes")

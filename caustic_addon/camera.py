@@ -25,10 +25,14 @@ def _viewfac(camera: Camera) -> int:
 
 
 def pixel_offsets(spp: int, seed: int) -> np.ndarray:
-    """(spp,2) sub-pixel positions in [0,1)^2: the centre for one sample,
-    else the R2 sequence with a random rotation."""
-    if spp == 1:
-        return np.array([[0.5, 0.5]])
+    """(spp,2) sub-pixel positions in [0,1)^2. A square count s^2 takes the
+    centres of an s x s grid of strata, which tile the pixel exactly (the eye
+    pass averages caustics over them); other counts take the R2 sequence
+    with a random rotation."""
+    side = int(round(math.sqrt(spp)))
+    if side * side == spp:
+        ticks = (np.arange(side) + 0.5) / side
+        return np.stack(np.meshgrid(ticks, ticks), axis=-1).reshape(-1, 2)
     return r2_sequence(np.arange(spp), np.random.default_rng(seed).random(2))
 
 

@@ -32,7 +32,7 @@ _R2_ALPHA = np.array([1.0 / _PLASTIC, 1.0 / _PLASTIC ** 2])
 
 
 def hash_uniform(ids: np.ndarray, stream: int, seed: int) -> np.ndarray:
-    """(n,) uniform floats in [0,1) that depend only on (id, stream, seed):
+    """(n,) uniform floats in (0,1) that depend only on (id, stream, seed):
     the splitmix64 finaliser (Steele et al. 2014) of their combination. A
     photon's random choices are then the same however the work is chunked."""
     with np.errstate(over="ignore"):
@@ -41,7 +41,7 @@ def hash_uniform(ids: np.ndarray, stream: int, seed: int) -> np.ndarray:
         x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
         x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
         x ^= x >> np.uint64(31)
-    return (x >> np.uint64(11)).astype(np.float64) * (1.0 / (1 << 53))
+    return ((x >> np.uint64(11)).astype(np.float64) + 0.5) * (1.0 / (1 << 53))
 
 
 def r2_sequence(index: np.ndarray, shift: np.ndarray) -> np.ndarray:

@@ -1,6 +1,10 @@
 """The backward pass: Whitted ray tracing from the eye (the paper's backward
 ray tracing), with the illumination maps' light on the receivers.
 
+Where a camera ray meets a flat receiver directly, the caustic is averaged
+over the footprint of the ray's pixel stratum, not read at one point: a
+caustic's folds are singular, and point samples of them alias.
+
 At an opaque surface: ambient * albedo, plus direct light from each lamp
 (lighting.py), plus caustic irradiance E_c * albedo / pi read from the
 receiver's map. At a dielectric: both the reflected ray (weight F) and the
@@ -13,11 +17,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
 from .accel import Accelerator, MISS
-from .illumination_map import IlluminationMap
+from .illumination_map import IlluminationMap, PlaneChart
 from .interface import orient, scatter
 from .lighting import direct_radiance
 from .materials import Materials
@@ -32,16 +37,20 @@ MIN_WEIGHT = 1e-4
 @dataclass
 class EyeRays:
     """n eye rays in flight: origins (n,3), dirs (n,3), weight (n,3)
-    throughput, pixel (n,) flat pixel index, medium (n,) object inside or MISS."""
+    throughput, pixel (n,) flat pixel index, medium (n,) object inside or
+    MISS. Camera rays also carry `footprint (n,4,2,3)`: the origin and
+    direction of the rays through the corners of their pixel stratum."""
 
     origins: np.ndarray
     dirs: np.ndarray
     weight: np.ndarray
     pixel: np.ndarray
     medium: np.ndarray
+    footprint: Optional[np.ndarray] = None
 
     def select(self, mask: np.ndarray) -> "EyeRays":
-        return EyeRays(self.origins[mask], self.dirs[mask], self.weight[mask], self.pixel[mask], self.medium[mask])
+        return EyeRays(self.origins[mask], self.dirs[mask], self.weight[mask], self.pixel[mask], self.medium[mask],
+                       None if self.footprint is None else self.footprint[mask])
 
     @staticmethod
     def concat(parts: list["EyeRays"]) -> "EyeRays":
@@ -105,14 +114,20 @@ class EyePass:
                 continue
             local = hits.prim[sel] - accel.prim_offset[index]
             xy = imap.chart.coords(local, hits.u[sel], hits.v[sel], points[sel])
-            radiance = imap.irradiance_at(xy) * albedo[sel] / math.pi
+            irradiance = np.empty((len(xy), 3))
+            spread = np.zeros(len(xy), dtype=bool)
+            if rays.footprint is not None and isinstance(imap.chart, PlaneChart):
+                lo, hi, spread = imap.chart.footprint(rays.footprint[sel])
+                irradiance[spread] = imap.mean_over(lo[spread], hi[spread])
+            irradiance[~spread] = imap.irradiance_at(xy[~spread])
+            radiance = irradiance * albedo[sel] / math.pi
             self._add("caustic", rays.pixel[sel], rays.weight[sel] * radiance)
 
     def _split_at_glass(self, rays: EyeRays, hits, points: np.ndarray) -> EyeRays:
         """The reflected and refracted children of rays at dielectric hits."""
         if len(rays.pixel) == 0:
             return rays
-        surface = orient(self.accel, hits, rays.dirs, points, self.materials.ior)
+        surface = orient(self.accel, hits, rays.dirs, points, self.materials.ior, rays.medium)
         tint = self.materials.color[hits.obj]
         children = []
         for mirror in (True, False):

@@ -29,8 +29,9 @@ from .accel import triangle_normals
 from .emission import orthonormal_basis
 from .scene import Object
 
-# Photons held back before a splat: one bincount over the whole grid each time.
-_FLUSH_PHOTONS = 1 << 22
+# Photons held back before a splat (one bincount over the whole grid each
+# time); the splat's temporaries, ~300 B a photon, bound the memory.
+_FLUSH_PHOTONS = 1 << 20
 # Half-widths, in cells, of the windows the adaptive estimate tries. The
 # largest bounds the blur: where fewer than k photons land within it, the
 # estimate is its plain mean (zero far from any caustic), not a halo of flux
@@ -75,6 +76,18 @@ class PlaneChart(Chart):
 
     def area_scale(self, prim):
         return np.ones(len(prim))
+
+    def footprint(self, rays: np.ndarray):
+        """Chart bounds of where corner rays `rays (m,k,2,3)` (origin,
+        direction) meet the plane: (lo (m,2), hi (m,2), ok (m,) bool); not ok
+        where a corner ray misses the plane."""
+        origins, dirs = rays[:, :, 0], rays[:, :, 1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = ((self.point - origins) @ self.normal) / (dirs @ self.normal)
+        ok = np.all(np.isfinite(t) & (t > 0), axis=1)
+        local = self._local((origins + np.where(ok[:, None], t, 0.0)[..., None] * dirs).reshape(-1, 3))
+        local = local.reshape(len(rays), -1, 2)
+        return local.min(axis=1), local.max(axis=1), ok
 
     def world(self, xy: np.ndarray) -> np.ndarray:
         """(n,3) world points of chart coordinates `xy (n,2)`."""
@@ -124,16 +137,68 @@ def make_chart(obj: Object, planarity_tolerance: float = 1e-6) -> Optional[Chart
     return None
 
 
+def bilinear_splat(shape: tuple[int, int], rc: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """(h,w,c) grid of `values (n,c)` spread bilinearly to the 4 cells nearest
+    each continuous (row, col) position `rc (n,2)` (cell centres at integers).
+    Weights reaching past the border fold onto the edge cells."""
+    h, w = shape
+    base = np.floor(rc).astype(np.int64)
+    frac = rc - base
+    index, weight = [], []
+    for di in (0, 1):
+        wi = frac[:, 0] if di else 1.0 - frac[:, 0]
+        row = np.clip(base[:, 0] + di, 0, h - 1)
+        for dj in (0, 1):
+            weight.append(wi * (frac[:, 1] if dj else 1.0 - frac[:, 1]))
+            index.append(row * w + np.clip(base[:, 1] + dj, 0, w - 1))
+    index, weight = np.concatenate(index), np.concatenate(weight)
+    grid = np.empty((h * w, values.shape[1]))
+    for c in range(values.shape[1]):
+        grid[:, c] = np.bincount(index, weights=weight * np.tile(values[:, c], 4), minlength=h * w)
+    return grid.reshape(h, w, -1)
+
+
+def bilinear_sample(grid: np.ndarray, rc: np.ndarray) -> np.ndarray:
+    """(n,c) values of `grid (h,w,c)` interpolated bilinearly at continuous
+    (row, col) positions `rc (n,2)` (cell centres at integers), clamped to
+    the outermost centres."""
+    h, w = grid.shape[:2]
+    rc = np.clip(rc, 0.0, [h - 1, w - 1])
+    base = np.minimum(np.floor(rc).astype(np.int64), [max(h - 2, 0), max(w - 2, 0)])
+    frac = rc - base
+    i1, j1 = np.minimum(base[:, 0] + 1, h - 1), np.minimum(base[:, 1] + 1, w - 1)
+    fy, fx = frac[:, :1], frac[:, 1:]
+    return ((1 - fy) * ((1 - fx) * grid[base[:, 0], base[:, 1]] + fx * grid[base[:, 0], j1])
+            + fy * ((1 - fx) * grid[i1, base[:, 1]] + fx * grid[i1, j1]))
+
+
+def rect_means(table: np.ndarray, origin_rc: np.ndarray, cell: float, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(n,c) means over chart rectangles [lo, hi] ((n,2) x, y) of a
+    cell-constant grid whose summed-area table is `table (h+1, w+1, c)` and
+    whose first corner is at chart (y, x) `origin_rc`. Exact: the grid's
+    integral function is bilinear between cell corners. Rectangles narrower
+    than a thousandth of a cell are widened to it."""
+    h, w = table.shape[0] - 1, table.shape[1] - 1
+    centre, half = 0.5 * (lo + hi), np.maximum(0.5 * (hi - lo), 1e-3 * cell)
+    lo, hi = centre - half, centre + half
+    r0 = np.clip((lo[:, ::-1] - origin_rc) / cell, 0.0, [h, w])
+    r1 = np.clip((hi[:, ::-1] - origin_rc) / cell, 0.0, [h, w])
+    total = (bilinear_sample(table, r1) - bilinear_sample(table, np.c_[r0[:, 0], r1[:, 1]])
+             - bilinear_sample(table, np.c_[r1[:, 0], r0[:, 1]]) + bilinear_sample(table, r0))
+    return np.maximum(total, 0.0) / ((hi - lo) / cell).prod(axis=1)[:, None]
+
+
 def _box_sums(table: np.ndarray, i: np.ndarray, j: np.ndarray, r: np.ndarray) -> np.ndarray:
     """Sums over the windows [i-r, i+r] x [j-r, j+r] (clipped to the grid) of
     the array whose summed-area table is `table (h+1, w+1, ...)`."""
     h, w = table.shape[0] - 1, table.shape[1] - 1
     i0, i1 = np.clip(i - r, 0, h), np.clip(i + r + 1, 0, h)
     j0, j1 = np.clip(j - r, 0, w), np.clip(j + r + 1, 0, w)
-    return table[i1, j1] - table[i0, j1] - table[i1, j0] + table[i0, j0]
+    # the four partial sums cancel to a few ulp, not 0, where nothing landed
+    return np.maximum(table[i1, j1] - table[i0, j1] - table[i1, j0] + table[i0, j0], 0.0)
 
 
-def _summed_area_table(grid: np.ndarray) -> np.ndarray:
+def summed_area_table(grid: np.ndarray) -> np.ndarray:
     """Summed-area table (h+1, w+1, ...) of `grid (h, w, ...)`, zero-padded."""
     table = np.zeros((grid.shape[0] + 1, grid.shape[1] + 1) + grid.shape[2:])
     np.cumsum(np.cumsum(grid, axis=0), axis=1, out=table[1:, 1:])
@@ -205,40 +270,25 @@ class IlluminationMap:
         concurrent reads need no lock."""
         with self._lock:
             self._flush()
-            if self.estimate.k_nearest is not None and self._tables is None:
-                self._tables = (_summed_area_table(self._count), _summed_area_table(self._flux))
+            if self._tables is None:
+                self._tables = (summed_area_table(self._count), summed_area_table(self._flux))
 
     def _flush(self) -> None:
-        """Splat the pending photons bilinearly to their 4 nearest cells (the
-        paper's figure 2). Weights reaching past the border fold onto the edge
-        cells."""
+        """Splat the pending photons (the paper's figure 2)."""
         if not self._pending:
             return
         xy = np.concatenate([p[0] for p in self._pending])
         flux = np.concatenate([p[1] for p in self._pending])
         self._pending, self._pending_count = [], 0
-        rc = self._cell_coords(xy)
-        base = np.floor(rc).astype(np.int64)
-        frac = rc - base
-        h, w = self.shape
-        index, weight = [], []
-        for di in (0, 1):
-            wi = frac[:, 0] if di else 1.0 - frac[:, 0]
-            row = np.clip(base[:, 0] + di, 0, h - 1)
-            for dj in (0, 1):
-                weight.append(wi * (frac[:, 1] if dj else 1.0 - frac[:, 1]))
-                index.append(row * w + np.clip(base[:, 1] + dj, 0, w - 1))
-        index, weight = np.concatenate(index), np.concatenate(weight)
-        flux4 = np.tile(flux, (4, 1))
-        self._count += np.bincount(index, weights=weight, minlength=h * w).reshape(h, w)
-        for c in range(3):
-            self._flux[..., c] += np.bincount(index, weights=weight * flux4[:, c], minlength=h * w).reshape(h, w)
+        grid = bilinear_splat(self.shape, self._cell_coords(xy), np.c_[np.ones(len(xy)), flux])
+        self._count += grid[..., 0]
+        self._flux += grid[..., 1:]
 
     def irradiance_at(self, xy: np.ndarray) -> np.ndarray:
         """Caustic irradiance (n,3) W/m^2 at chart coordinates `xy (n,2)`."""
         self.prepare()
         if self.estimate.k_nearest is None:
-            out = self._bilinear(self._flux / self.cell ** 2, xy)
+            out = bilinear_sample(self._flux / self.cell ** 2, self._cell_coords(xy))
         else:
             out = self._adaptive(xy)
         outside = ((xy < self.chart.origin) | (xy > self.chart.origin + self.chart.size)).any(axis=1)
@@ -252,25 +302,30 @@ class IlluminationMap:
         xy = np.stack([(cols.ravel() + 0.5) * self.cell, (rows.ravel() + 0.5) * self.cell], axis=1)
         return self.irradiance_at(xy + self.chart.origin).reshape(h, w, 3)
 
-    def _bilinear(self, grid: np.ndarray, xy: np.ndarray) -> np.ndarray:
-        rc = self._cell_coords(xy)
-        h, w = self.shape
-        rc = np.clip(rc, 0.0, [h - 1, w - 1])
-        base = np.minimum(np.floor(rc).astype(np.int64), [max(h - 2, 0), max(w - 2, 0)])
-        frac = rc - base
-        i1, j1 = np.minimum(base[:, 0] + 1, h - 1), np.minimum(base[:, 1] + 1, w - 1)
-        fy, fx = frac[:, :1], frac[:, 1:]
-        return ((1 - fy) * ((1 - fx) * grid[base[:, 0], base[:, 1]] + fx * grid[base[:, 0], j1])
-                + fy * ((1 - fx) * grid[i1, base[:, 1]] + fx * grid[i1, j1]))
+    def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """Mean caustic irradiance (n,3) W/m^2 over chart rectangles [lo, hi]
+        (each (n,2)): what a pixel whose footprint they bound should show.
+        The adaptive window is at least as large as the rectangle."""
+        self.prepare()
+        if self.estimate.k_nearest is None:
+            return rect_means(self._tables[1], self.origin_rc, self.cell, lo, hi) / self.cell ** 2
+        half = 0.5 * (hi - lo).max(axis=1) / self.cell
+        return self._adaptive(0.5 * (lo + hi), np.ceil(half - 0.5).astype(np.int64))
 
-    def _adaptive(self, xy: np.ndarray) -> np.ndarray:
+    @property
+    def origin_rc(self) -> np.ndarray:
+        """(2,) chart (y, x) of the grid's first corner."""
+        return self.chart.origin[::-1]
+
+    def _adaptive(self, xy: np.ndarray, min_radius: np.ndarray = 0) -> np.ndarray:
         count_table, flux_table = self._tables
         h, w = self.shape
         rc = np.floor(self._cell_coords(xy) + 0.5).astype(np.int64)
         i, j = np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)
-        # Smallest window holding k photons: a binary search per point over
-        # _WINDOW_RADII, since the count only grows with the radius.
-        lo = np.zeros(len(xy), dtype=np.int64)
+        # Smallest window holding k photons, and at least min_radius: a binary
+        # search per point over _WINDOW_RADII, since the count only grows with
+        # the radius.
+        lo = np.searchsorted(_WINDOW_RADII, np.minimum(min_radius, _WINDOW_RADII[-1]) * np.ones(len(xy), np.int64))
         hi = np.full(len(xy), len(_WINDOW_RADII) - 1)
         active = lo < hi
         while active.any():
@@ -279,7 +334,7 @@ class IlluminationMap:
             hi = np.where(active & enough, mid, hi)
             lo = np.where(active & ~enough, mid + 1, lo)
             active = lo < hi
-        radius = _WINDOW_RADII[lo]
+        radius = np.maximum(_WINDOW_RADII[lo], min_radius)
         flux = _box_sums(flux_table, i, j, radius)
         rows = np.minimum(i + radius + 1, h) - np.maximum(i - radius, 0)
         cols = np.minimum(j + radius + 1, w) - np.maximum(j - radius, 0)

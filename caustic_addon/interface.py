@@ -33,17 +33,21 @@ class Interface:
 
 
 def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, points: np.ndarray,
-           ior_by_object: np.ndarray) -> Interface:
+           ior_by_object: np.ndarray, medium: np.ndarray) -> Interface:
     """Orient the hits' normals against `dirs (n,3)` and evaluate Fresnel.
 
-    The geometric normal decides entering or leaving: it faces out of a
-    closed mesh, so dot(d, n) < 0 means entering. The shading normal is put
-    on the same side; where interpolation tips it past the ray
+    Entering or leaving: for a closed mesh, the ray's own state `medium (n,)`
+    (the object it is inside, or MISS) decides, since a hit at an edge or a
+    grazing hit can land on a face whose normal says otherwise; for an open
+    mesh, the outward geometric normal does (dot(d, n) < 0 means entering).
+    The geometric normal is turned against the ray, and the shading normal
+    put on its side; where interpolation tips it past the ray
     (dot(d, n_s) >= 0), the geometric normal is used instead.
     """
     face = accel.face_normal[hits.prim]
-    entering = dot(dirs, face) < 0.0
-    facing = np.where(entering[:, None], face, -face)
+    toward = dot(dirs, face) < 0.0
+    entering = np.where(accel.closed[hits.obj], medium != hits.obj, toward)
+    facing = np.where(toward[:, None], face, -face)
     shading = accel.shading_normal(hits.prim, hits.u, hits.v)
     shading = np.where((dot(shading, facing) < 0.0)[:, None], -shading, shading)
     tipped = dot(dirs, shading) >= 0.0

@@ -35,17 +35,24 @@ def refract(d: np.ndarray, n: np.ndarray, eta) -> tuple[np.ndarray, np.ndarray]:
         t = eta d + (eta cos_i - sqrt(1 - sin2_t)) n
 
     Returns (t (n,3), tir (n,)): `tir` marks total internal reflection
-    (sin2_t > 1), where t is meaningless and the caller must reflect.
-    1 - cos_i^2 is clamped at 0 so that |t| = 1 holds to rounding at grazing
-    incidence and at normal incidence alike.
+    (cos_t^2 < 0), where t is meaningless and the caller must reflect.
+    cos_t^2 = 1 - eta^2 (1 - cos_i^2) is evaluated as
+    (1 - eta)(1 + eta) + eta^2 cos_i^2, which keeps its digits at grazing
+    incidence when eta is near 1.
     """
     eta = np.broadcast_to(np.asarray(eta, dtype=np.float64), d.shape[:1])
     cos_i = np.clip(-dot(d, n), 0.0, 1.0)
-    sin2_t = eta * eta * np.maximum(0.0, 1.0 - cos_i * cos_i)
-    tir = sin2_t > 1.0
-    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
+    cos2_t = cos2_transmitted(cos_i, eta)
+    tir = cos2_t < 0.0
+    cos_t = np.sqrt(np.maximum(0.0, cos2_t))
     t = eta[:, None] * d + (eta * cos_i - cos_t)[:, None] * n
     return t, tir
+
+
+def cos2_transmitted(cos_i: np.ndarray, eta: np.ndarray) -> np.ndarray:
+    """cos^2 of the refraction angle by Snell's law, negative under total
+    internal reflection: (1 - eta)(1 + eta) + eta^2 cos_i^2."""
+    return (1.0 - eta) * (1.0 + eta) + eta * eta * cos_i * cos_i
 
 
 def fresnel_dielectric(cos_i: np.ndarray, eta) -> np.ndarray:
@@ -60,14 +67,14 @@ def fresnel_dielectric(cos_i: np.ndarray, eta) -> np.ndarray:
     """
     cos_i = np.clip(np.asarray(cos_i, dtype=np.float64), 0.0, 1.0)
     eta = np.broadcast_to(np.asarray(eta, dtype=np.float64), cos_i.shape)
-    sin2_t = eta * eta * (1.0 - cos_i * cos_i)
-    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
+    cos2_t = cos2_transmitted(cos_i, eta)
+    cos_t = np.sqrt(np.maximum(0.0, cos2_t))
     with np.errstate(invalid="ignore", divide="ignore"):
         rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
         rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
     f = 0.5 * (rs * rs + rp * rp)
     f = np.where(np.isfinite(f), f, np.where(eta == 1.0, 0.0, 1.0))
-    return np.where(sin2_t > 1.0, 1.0, np.clip(f, 0.0, 1.0))
+    return np.where(cos2_t < 0.0, 1.0, np.clip(f, 0.0, 1.0))
 
 
 def beer_lambert(absorption: np.ndarray, distance: np.ndarray) -> np.ndarray:

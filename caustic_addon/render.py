@@ -13,6 +13,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from .accel import Accelerator
+from .beams import BeamMap, band_beams, beam_sources
 from .camera import eye_rays, pixel_offsets
 from .emission import Sphere, make_emitters
 from .errors import Cancelled
@@ -62,7 +63,8 @@ class _Monitor:
 
 def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str]) -> dict[int, IlluminationMap]:
     """An empty illumination map for each receiver that can hold one."""
-    estimate = MapEstimate(settings.k_nearest if settings.density == "adaptive" else None)
+    estimate = MapEstimate(settings.k_nearest if settings.density in ("adaptive", "beam") else None)
+    kind = BeamMap if settings.density == "beam" else IlluminationMap
     limit = settings.map_resolution_limit
     maps = {}
     for index, obj in enumerate(scene.objects):
@@ -78,7 +80,7 @@ def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str]) -> d
             warnings.append(f"'{obj.name}': a map scale of {cell * 1000:.4g} mm needs more than {limit} cells "
                             f"across; using {coarser * 1000:.4g} mm")
             cell = coarser
-        maps[index] = IlluminationMap(obj.name, chart, cell, estimate)
+        maps[index] = kind(obj.name, chart, cell, estimate)
     return maps
 
 
@@ -130,6 +132,32 @@ def forward_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, mat
     return stats
 
 
+def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
+              maps: dict[int, IlluminationMap], monitor: _Monitor, share: float) -> TransportStats:
+    """Trace every source's grid in bands of rows into beams on `maps`.
+    Neighbouring bands share a row, so every grid triangle is in one band."""
+    targets = [Sphere.around(o.mesh.vertices) for o in scene.transparent]
+    lo, hi = scene.bounds()
+    sources = beam_sources(scene.lights, targets, Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo))),
+                           settings.energy, settings.photons)
+    jobs = []
+    for source in sources:
+        rows = max(1, settings.chunk_size // source.grid)
+        jobs += [partial(band_beams, source, first, min(first + rows + 1, source.grid), accel, materials, maps,
+                         settings.max_depth) for first in range(0, source.grid - 1, rows)]
+    stats = TransportStats()
+    for band in run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass"):
+        for obj, (corners, irradiance) in band.beams.items():
+            maps[obj].add_beams(corners, irradiance)
+        for obj, (xy, flux, scale) in band.photons.items():
+            maps[obj].add_photons(xy, flux, scale)
+        stats.rays += band.rays
+        stats.flux_landed = stats.flux_landed + band.flux_landed
+    stats.emitted = sum(s.grid ** 2 for s in sources)
+    stats.landed = sum(m.beams for m in maps.values())
+    return stats
+
+
 def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
              maps: dict[int, IlluminationMap], monitor: _Monitor, start: float) -> dict[str, np.ndarray]:
     """Trace `spp` eye rays through every pixel, chunk by chunk. Returns the
@@ -141,14 +169,20 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     for imap in maps.values():
         imap.prepare()
 
+    # each sample stands for a square stratum of its pixel, 1/spp of its area
+    half = 0.5 / np.sqrt(settings.spp)
+    corners = np.array([[-half, -half], [half, -half], [half, half], [-half, half]])
+
     def job(first):
         sample = np.arange(first, min(first + settings.chunk_size, samples))
         pixel = sample // settings.spp
-        origins, dirs = eye_rays(cam, pixel, offsets[sample % settings.spp])
+        offset = offsets[sample % settings.spp]
+        origins, dirs = eye_rays(cam, pixel, offset)
+        footprint = np.stack([np.stack(eye_rays(cam, pixel, offset + c), axis=1) for c in corners], axis=1)
         weight = np.full((len(sample), 3), 1.0 / settings.spp)
         tracer = EyePass(accel, scene, materials, maps, settings.energy, settings.max_depth,
                          pixel[0], pixel[-1] + 1)
-        tracer.trace(EyeRays(origins, dirs, weight, pixel, np.full(len(sample), -1, dtype=np.int64)))
+        tracer.trace(EyeRays(origins, dirs, weight, pixel, np.full(len(sample), -1, dtype=np.int64), footprint))
         return tracer
 
     jobs = [partial(job, first) for first in range(0, samples, settings.chunk_size)]
@@ -183,7 +217,8 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         share = _FORWARD_SHARE if run_forward else 0.0
         photon_stats = TransportStats()
         if run_forward:
-            photon_stats = forward_pass(scene, settings, accel, materials, maps, monitor, share)
+            trace = beam_pass if settings.density == "beam" else forward_pass
+            photon_stats = trace(scene, settings, accel, materials, maps, monitor, share)
         rays_forward = accel.rays_cast
         seconds["photons"] = time.perf_counter() - clock
 

@@ -235,6 +235,8 @@ class Camera:
         """A camera at `eye` looking at `target`, with `up` as near to its +Y as possible."""
         eye = np.asarray(eye, dtype=np.float64)
         back = eye - np.asarray(target, dtype=np.float64)
+        if not np.linalg.norm(back) > 0:
+            raise ValueError("camera: the eye and the point it looks at must differ")
         back /= np.linalg.norm(back)
         right = np.cross(np.asarray(up, dtype=np.float64), back)
         if np.linalg.norm(right) < 1e-9:
@@ -301,8 +303,9 @@ class RenderSettings:
     map_scale     edge of one illumination-map cell in millimetres of world
                   space (the paper's map scale, 5 or 40), or None for the
                   adaptive estimate that needs no tuning
-    density       'splat' (the paper's bilinear map) or 'adaptive' (k nearest
-                  photons, on the map's grid)
+    density       'splat' (the paper's bilinear map), 'adaptive' (k nearest
+                  photons, on the map's grid) or 'beam' (photons on a grid
+                  whose neighbours bound beams: no noise; beams.py)
     max_depth     specular bounces per photon and per eye ray
     spp           eye samples per pixel
     """
@@ -311,7 +314,7 @@ class RenderSettings:
     emission: Literal["targeted", "sphere"] = "targeted"
     energy: float = 1.0
     map_scale: Optional[float] = None
-    density: Literal["splat", "adaptive"] = "adaptive"
+    density: Literal["splat", "adaptive", "beam"] = "adaptive"
     k_nearest: int = 64
     max_depth: int = 12
     spp: int = 4
@@ -324,11 +327,12 @@ class RenderSettings:
         """Raise ValueError naming the field that is out of range."""
         checks = [
             ("photons", self.photons >= 0, "must be >= 0"),
+            ("seed", self.seed >= 0, "must be >= 0"),
             ("emission", self.emission in ("targeted", "sphere"), "must be 'targeted' or 'sphere'"),
             ("energy", math.isfinite(self.energy) and self.energy >= 0, "must be a finite number >= 0"),
             ("map_scale", self.map_scale is None or (math.isfinite(self.map_scale) and self.map_scale > 0),
              "must be a positive number of millimetres"),
-            ("density", self.density in ("splat", "adaptive"), "must be 'splat' or 'adaptive'"),
+            ("density", self.density in ("splat", "adaptive", "beam"), "must be 'splat', 'adaptive' or 'beam'"),
             ("k_nearest", self.k_nearest >= 1, "must be >= 1"),
             ("max_depth", self.max_depth >= 1, "must be >= 1"),
             ("spp", self.spp >= 1, "must be >= 1"),

@@ -81,7 +81,7 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, Illu
         if len(flux) == 0:
             break
 
-        surface = orient(accel, hits, dirs, points, materials.ior)
+        surface = orient(accel, hits, dirs, points, materials.ior, medium)
         dirs, crossed = scatter(surface, dirs, hash_uniform(ids, 2 * depth, seed) < surface.fresnel)
         flux *= materials.color[hits.obj]
         medium = np.where(crossed, np.where(surface.entering, hits.obj, MISS), medium)
