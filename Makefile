@@ -23,8 +23,11 @@ $(VENV311)/.installed: requirements/py311.txt
 
 venv: $(VENV)/.installed $(VENV311)/.installed
 
+# The paper's scene through Blender, with a Cycles render beside it, then
+# the same scene through the engine's command line, all into out/.
 demo: $(VENV)/.installed
-	$(VENV)/bin/python -m caustic_addon render examples/paper.toml examples/round.obj -o out/paper.png
+	$(VENV)/bin/python tests/paper_scene.py --compare
+	$(VENV)/bin/python -m caustic_addon render examples/paper.toml examples/round.obj -o out/paper_cli.png
 
 test-engine: venv
 	$(VENV)/bin/python -m pytest -c tests/pytest.ini tests/engine
@@ -53,6 +56,7 @@ package: $(VENV)/.installed
 
 bench: $(VENV)/.installed
 	$(VENV)/bin/python benchmarks/speed.py
+	$(VENV)/bin/python benchmarks/accuracy.py
 
 clean:
 	rm -rf $(VENV) $(VENV311) dist wheels out

@@ -1,6 +1,6 @@
 """Error against time on issue 4's ball-lens scene (benchmarks/ball_lens.py).
 
-    .venv/bin/python benchmarks/accuracy.py [--max-photons 1e7] [--cycles]
+    .venv/bin/python benchmarks/accuracy.py [--max-photons 1e6]
 
 For each density estimate of the engine, and photon counts from 1e4 up,
 renders the 320x240 view and measures the relative L2 error of the caustic
@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]
 
 import ball_lens  # noqa: E402
 from caustic_addon import RenderSettings, render  # noqa: E402
@@ -31,10 +31,15 @@ SPP = 4
 THRESHOLDS = (0.10, 0.05, 0.02)
 
 
-def engine_methods() -> dict[str, dict]:
-    """Name -> RenderSettings fields of each density estimate compared."""
-    methods = {f"adaptive k={k}": dict(density="adaptive", k_nearest=k) for k in (16, 64, 256)}
-    methods.update({f"splat {mm} mm": dict(density="splat", map_scale=mm) for mm in (5.0, 10.0, 40.0)})
+def engine_methods(max_photons: float) -> dict[str, tuple[dict, list[int]]]:
+    """Name -> (RenderSettings fields, photon counts) of each density
+    estimate compared. Beams need far fewer paths, and their rasterisation
+    grows with the grid, so they sweep lower counts."""
+    photons = [int(c) for c in 10 ** np.arange(4, np.log10(max_photons) + 0.01, 0.5)]
+    beams = [int(c) for c in 10 ** np.arange(3.5, 5.01, 0.5)]
+    methods = {"beam": (dict(density="beam"), beams)}
+    methods.update({f"adaptive k={k}": (dict(density="adaptive", k_nearest=k), photons) for k in (16, 64, 256)})
+    methods.update({f"splat {mm:g} mm": (dict(density="splat", map_scale=mm), photons) for mm in (5.0, 10.0, 40.0)})
     return methods
 
 
@@ -58,39 +63,22 @@ def time_to_reach(points: list[dict], threshold: float):
     return min(times) if times else None
 
 
-def plot(curves: dict[str, list[dict]], path: Path) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 5))
-    for name, points in curves.items():
-        ax.loglog([p["seconds"] for p in points], [100 * p["error"] for p in points], "o-", label=name)
-    for threshold in THRESHOLDS:
-        ax.axhline(100 * threshold, color="grey", lw=0.5, ls=":")
-    ax.set_xlabel("wall time (s)")
-    ax.set_ylabel("relative L2 error of the caustic (%)")
-    ax.set_title("Ball lens, 320x240: error against time")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--max-photons", type=float, default=1e7)
+    parser.add_argument("--max-photons", type=float, default=1e6)
     args = parser.parse_args()
-    counts = [int(c) for c in 10 ** np.arange(4, np.log10(args.max_photons) + 0.01, 0.5)]
 
     truth = ball_lens.pixel_reference(ball_lens.scene())
-    curves = {name: run_engine(name, fields, counts, truth) for name, fields in engine_methods().items()}
+    curves = {name: run_engine(name, fields, counts, truth)
+              for name, (fields, counts) in engine_methods(args.max_photons).items()}
 
     table = {name: {f"{int(100 * t)}%": time_to_reach(points, t) for t in THRESHOLDS} for name, points in curves.items()}
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / "accuracy.json").write_text(json.dumps(
         dict(date=date.today().isoformat(), machine=machine(), spp=SPP, curves=curves, time_to_reach=table),
         indent=2) + "\n")
-    plot(curves, RESULTS / "accuracy.png")
+    from plot_accuracy import main as plot_all
+    plot_all()
     print("\ntime to reach   " + "  ".join(f"{int(100 * t):>6d}%" for t in THRESHOLDS))
     for name, row in table.items():
         print(f"{name:18s}" + "  ".join(f"{v:6.2f}s" if v is not None else "     -" for v in row.values()))

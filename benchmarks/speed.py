@@ -13,6 +13,7 @@ import argparse
 import json
 import os
 import platform
+import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from datetime import date
@@ -20,9 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
-from caustic_addon import Camera, Dielectric, Diffuse, Object, PointLight, RenderSettings, Scene, render, shapes
-from caustic_addon.accel import Accelerator
-from caustic_addon.emission import Sphere, sample_cone
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from caustic_addon import Camera, Dielectric, Diffuse, Object, PointLight, RenderSettings, Scene, render, shapes  # noqa: E402
+from caustic_addon.accel import Accelerator  # noqa: E402
+from caustic_addon.emission import Sphere, sample_cone  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 

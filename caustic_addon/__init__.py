@@ -7,11 +7,12 @@ and a Whitted eye pass, on Embree. This package never imports bpy.
 """
 
 from .errors import Cancelled, SceneError
+from .illumination_map import PlaneChart, UVChart
 from .render import RenderResult, render
 from .scene import (Camera, Dielectric, Diffuse, Mesh, Object, PointLight, RenderSettings, Scene, SpotLight,
                     SunLight)
 
 __all__ = [
-    "Camera", "Cancelled", "Dielectric", "Diffuse", "Mesh", "Object", "PointLight", "RenderResult",
-    "RenderSettings", "Scene", "SceneError", "SpotLight", "SunLight", "render",
+    "Camera", "Cancelled", "Dielectric", "Diffuse", "Mesh", "Object", "PlaneChart", "PointLight", "RenderResult",
+    "RenderSettings", "Scene", "SceneError", "SpotLight", "SunLight", "UVChart", "render",
 ]

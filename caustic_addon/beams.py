@@ -362,11 +362,11 @@ class _Layer:
     def rc(self, xy: np.ndarray) -> np.ndarray:
         return (xy[:, ::-1] - self.origin[::-1]) / self.cell - 0.5
 
-    def add(self, corners: np.ndarray, flux: np.ndarray, points_per_splat: int) -> None:
-        """Spread each beam's flux over a lattice inside it, half a cell apart
-        (at most MAX_SIDE points a side), splatting in batches. Coarser
-        lattices alias against the grid."""
-        per_side = np.ceil(2.0 * np.ptp(corners, axis=1).max(axis=1) / self.cell)
+    def add(self, corners: np.ndarray, flux: np.ndarray, spacing: float, points_per_splat: int) -> None:
+        """Spread each beam's flux over a lattice inside it, `spacing` cells
+        apart (at most MAX_SIDE points a side), splatting in batches. A
+        lattice as coarse as the grid aliases against it."""
+        per_side = np.ceil(np.ptp(corners, axis=1).max(axis=1) / (spacing * self.cell))
         per_side = per_side.clip(1, BeamMap.MAX_SIDE).astype(np.int64)
         points, values, held = [], [], 0
         for k in np.unique(per_side):
@@ -404,7 +404,8 @@ class BeamMap(IlluminationMap):
     nothing at a fold cannot spike. Beams go to a layer whose cells match
     their size: under 2 map cells (the sharp part of a caustic) to a grid
     FINE times finer, laid over where 99.9% of their flux lands; up to 16
-    cells to the map's own grid; larger (dim, smooth) to one 4 times coarser.
+    cells to the map's own grid; larger (dim, smooth) to one 4 times coarser,
+    sampled less densely.
     """
 
     FINE = 8
@@ -447,14 +448,14 @@ class BeamMap(IlluminationMap):
             fine_lo, fine_hi = bounds[:, 0] - self.cell, bounds[:, 1] + self.cell
             small[small] = ((centre >= fine_lo) & (centre <= fine_hi)).all(axis=1)
             cell = max(self.cell / self.FINE, float((fine_hi - fine_lo).max()) / self.FINE_LIMIT)
-            self._add_layer(_Layer.covering(fine_lo, fine_hi, cell), corners[small], flux[small])
+            self._add_layer(_Layer.covering(fine_lo, fine_hi, cell), corners[small], flux[small], 0.5)
         large = size >= 16.0
-        self._add_layer(_Layer.covering(lo, hi, self.cell), corners[~small & ~large], flux[~small & ~large])
-        self._add_layer(_Layer.covering(lo, hi, 4.0 * self.cell), corners[large], flux[large])
+        self._add_layer(_Layer.covering(lo, hi, self.cell), corners[~small & ~large], flux[~small & ~large], 0.5)
+        self._add_layer(_Layer.covering(lo, hi, 4.0 * self.cell), corners[large], flux[large], 1.0)
 
-    def _add_layer(self, layer: _Layer, corners: np.ndarray, flux: np.ndarray) -> None:
+    def _add_layer(self, layer: _Layer, corners: np.ndarray, flux: np.ndarray, spacing: float) -> None:
         if len(corners):
-            layer.add(corners, flux, self._POINTS_PER_SPLAT)
+            layer.add(corners, flux, spacing, self._POINTS_PER_SPLAT)
             self._layers.append(layer)
 
     def prepare(self) -> None:

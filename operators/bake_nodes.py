@@ -11,7 +11,7 @@ import bpy
 import numpy as np
 from mathutils import Matrix
 
-from ..caustic_addon.illumination_map import PlaneChart
+from ..caustic_addon import PlaneChart
 
 NODE_NAME = "Caustic Bake"
 # Custom property marking the node groups a bake made.

@@ -35,7 +35,9 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
     density: EnumProperty(
         name="Density",
         description="How stored lamp rays become irradiance on a receiver",
-        items=[('ADAPTIVE', "Adaptive", "Average over the nearest 64 lamp rays: sharp where they are dense, "
+        items=[('BEAM', "Beam", "Lamp rays on a grid: each triangle of neighbours that takes the same path "
+                                "carries its light onto the triangle it lands on. No noise, sharp caustics"),
+               ('ADAPTIVE', "Adaptive", "Average over the nearest 64 lamp rays: sharp where they are dense, "
                                         "smooth where they are sparse"),
                ('SPLAT', "Splat", "Each ray spread over the 4 nearest map cells, as in the paper")],
         default='ADAPTIVE')
