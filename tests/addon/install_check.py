@@ -17,7 +17,7 @@ sys.path.insert(0, site_packages)
 import bpy  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import scenes  # noqa: E402
+import blender_scenes as scenes  # noqa: E402
 
 MODULE = "bl_ext.user_default.caustics"
 

@@ -7,7 +7,7 @@ import bpy
 import numpy as np
 import pytest
 
-import scenes
+import blender_scenes as scenes
 from snapshot import material_state, snapshot_file
 from test_render import cycles_render
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import bpy
 import numpy as np
 
-import scenes
+import blender_scenes as scenes
 
 REPO = Path(__file__).resolve().parents[2]
 

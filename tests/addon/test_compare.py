@@ -6,7 +6,7 @@ import math
 import bpy
 import numpy as np
 
-import scenes
+import blender_scenes as scenes
 from snapshot import rna
 
 

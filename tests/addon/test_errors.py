@@ -5,7 +5,7 @@ import bmesh
 import bpy
 import pytest
 
-import scenes
+import blender_scenes as scenes
 from snapshot import snapshot_file
 
 

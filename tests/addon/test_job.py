@@ -6,7 +6,7 @@ import time
 import bpy
 import pytest
 
-import scenes
+import blender_scenes as scenes
 
 
 def job_for_scene(addon, photons):

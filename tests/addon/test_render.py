@@ -8,7 +8,7 @@ import numpy as np
 from bpy_extras.object_utils import world_to_camera_view
 from mathutils import Vector
 
-import scenes
+import blender_scenes as scenes
 
 
 def pixels_of(name):

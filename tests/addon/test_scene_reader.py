@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from mathutils import Matrix
 
-import scenes
+import blender_scenes as scenes
 
 
 def read(addon):
