@@ -71,7 +71,6 @@ class BeamSource:
     center: np.ndarray = None
     radius: float = 0.0
     start_distance: float = 0.0
-    id_base: int = 0
     overlap: list = field(default_factory=list)
 
     @property
@@ -99,7 +98,7 @@ class BeamSource:
     def vertices(self, first_row: int, end_row: int):
         """Grid rows [first_row, end_row): (origins (n,3), dirs (n,3),
         weight (n,3) intensity (W/sr) or irradiance (W/m^2) times the overlap
-        share, ids (n,) global vertex ids)."""
+        share)."""
         rows, cols = np.meshgrid(np.arange(first_row, end_row), np.arange(self.grid), indexing="ij")
         uv = np.stack([rows.ravel(), cols.ravel()], axis=1) / (self.grid - 1)
         disc = concentric_disc(uv)
@@ -123,8 +122,7 @@ class BeamSource:
             weight = units.intensity(self.light, self.energy, dirs).copy()
         density = sum(src.contains(origins, dirs) / src.cell_measure for src in self.overlap)
         weight *= ((1.0 / self.cell_measure) / density)[:, None]
-        ids = self.id_base + rows.ravel() * self.grid + cols.ravel()
-        return origins, dirs, weight, ids
+        return origins, dirs, weight
 
 
 def beam_sources(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere, energy: float,
@@ -150,12 +148,8 @@ def beam_sources(lights: list[Light], targets: list[Sphere], scene_sphere: Spher
     if not sources:
         return []
     flux = np.array([s.measure * (s.light.strength if s.is_disc else s.light.power) for s in sources])
-    share = vertices * flux / flux.sum()
-    base = 0
-    for src, n in zip(sources, share):
-        src.grid = max(3, int(round(math.sqrt(n))))
-        src.id_base = base
-        base += src.grid ** 2
+    for src, share in zip(sources, vertices * flux / flux.sum()):
+        src.grid = max(3, int(round(math.sqrt(share))))
     return sources
 
 
@@ -262,7 +256,6 @@ class BandBeams:
 
     beams: dict
     photons: dict
-    paths: int
     rays: int
     flux_landed: np.ndarray
 
@@ -272,7 +265,7 @@ def band_beams(source: BeamSource, first_row: int, end_row: int, accel: Accelera
     """Trace grid rows [first_row, end_row) of `source` and turn the landed
     paths into beams (coherent triangles) and fallback photons."""
     rays_before = accel.rays_cast
-    origins, dirs, weight, _ = source.vertices(first_row, end_row)
+    origins, dirs, weight = source.vertices(first_row, end_row)
     landings = trace_paths(accel, materials, maps, origins, dirs, weight, max_depth)
     triangles = grid_triangles(end_row - first_row, source.grid)
     triangle_measure = 0.5 * source.cell_measure
@@ -322,7 +315,7 @@ def band_beams(source: BeamSource, first_row: int, end_row: int, accel: Accelera
             old = photons.get(obj)
             new = (landings.xy[holders], share, landings.scale[holders])
             photons[obj] = new if old is None else tuple(np.concatenate([a, b]) for a, b in zip(old, new))
-    return BandBeams(beams, photons, len(origins), accel.rays_cast - rays_before, flux_landed)
+    return BandBeams(beams, photons, accel.rays_cast - rays_before, flux_landed)
 
 
 def _weighted_quantiles(values: np.ndarray, weights: np.ndarray, q) -> np.ndarray:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from caustic_addon import (Cancelled, Dielectric, Diffuse, Mesh, Object, PointLight, RenderSettings, Scene,
-                           SceneError, SpotLight, SunLight, render, shapes)
+                           SceneError, SpotLight, SunLight, render)
 from metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
 
