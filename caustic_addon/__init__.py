@@ -6,6 +6,7 @@ and a Whitted eye pass, on Embree. This package never imports bpy.
     result.image  # (pixy, pixx, 4) float32, linear
 """
 
+from .cache import MapCache
 from .errors import Cancelled, SceneError
 from .illumination_map import PlaneChart, UVChart
 from .render import RenderResult, render
@@ -13,6 +14,6 @@ from .scene import (Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Rende
                     SunLight)
 
 __all__ = [
-    "Camera", "Cancelled", "Dielectric", "Diffuse", "Mesh", "Object", "PlaneChart", "PointLight", "RenderResult",
+    "Camera", "Cancelled", "Dielectric", "Diffuse", "MapCache", "Mesh", "Object", "PlaneChart", "PointLight", "RenderResult",
     "RenderSettings", "Scene", "SceneError", "SpotLight", "SunLight", "UVChart", "render",
 ]

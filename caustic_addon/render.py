@@ -14,6 +14,7 @@ import numpy as np
 
 from .accel import Accelerator
 from .beams import BeamMap, band_beams, beam_sources
+from .cache import MapCache, photon_pass_key
 from .camera import eye_rays, pixel_offsets
 from .emission import Sphere, make_emitters
 from .errors import Cancelled
@@ -194,10 +195,12 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
 
 
 def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Optional[Progress] = None,
-           cancel: Optional[Cancel] = None) -> RenderResult:
+           cancel: Optional[Cancel] = None, cache: Optional[MapCache] = None) -> RenderResult:
     """Render `scene`. `progress(fraction, stage)` is called between chunks;
-    `cancel()` returning True stops the render with `Cancelled`. Raises
-    `SceneError` (naming the culprit) for scenes that cannot render."""
+    `cancel()` returning True stops the render with `Cancelled`. With a
+    `cache`, the photon pass is skipped when an earlier render had the same
+    geometry, lamps and photon settings. Raises `SceneError` (naming the
+    culprit) for scenes that cannot render."""
     settings = settings or RenderSettings()
     settings.validate()
     warnings = validate_scene(scene)
@@ -212,13 +215,22 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         seconds["bvh"] = time.perf_counter() - clock
 
         clock = time.perf_counter()
-        maps = build_maps(scene, settings, warnings)
-        run_forward = bool(maps) and bool(scene.transparent) and settings.photons > 0
-        share = _FORWARD_SHARE if run_forward else 0.0
-        photon_stats = TransportStats()
-        if run_forward:
-            trace = beam_pass if settings.density == "beam" else forward_pass
-            photon_stats = trace(scene, settings, accel, materials, maps, monitor, share)
+        key = photon_pass_key(scene, settings) if cache is not None else None
+        cached = cache.get(key) if cache is not None else None
+        if cached is None:
+            maps = build_maps(scene, settings, warnings)
+            run_forward = bool(maps) and bool(scene.transparent) and settings.photons > 0
+            share = _FORWARD_SHARE if run_forward else 0.0
+            photon_stats = TransportStats()
+            if run_forward:
+                trace = beam_pass if settings.density == "beam" else forward_pass
+                photon_stats = trace(scene, settings, accel, materials, maps, monitor, share)
+            if cache is not None:
+                cache.put(key, (maps, photon_stats, list(warnings)))
+        else:
+            maps, photon_stats, map_warnings = cached
+            warnings += [w for w in map_warnings if w not in warnings]
+            share = 0.0
         rays_forward = accel.rays_cast
         seconds["photons"] = time.perf_counter() - clock
 
@@ -247,6 +259,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         "rays_photon_pass": rays_forward,
         "rays_eye_pass": accel.rays_cast - rays_forward,
         "seconds": seconds,
+        "photon_pass_cached": cached is not None,
         "triangles": int(len(accel.owner)),
     }
     return RenderResult(image, passes, {m.name: m for m in maps.values()}, stats, warnings)

@@ -7,7 +7,10 @@ import threading
 import time
 import traceback
 
-from ..caustic_addon import Cancelled, RenderResult, RenderSettings, Scene, SceneError, render
+from ..caustic_addon import Cancelled, MapCache, RenderResult, RenderSettings, Scene, SceneError, render
+
+# Illumination maps of the last renders: a camera move re-runs only the eye pass.
+MAP_CACHE = MapCache()
 
 
 class RenderJob:
@@ -31,7 +34,8 @@ class RenderJob:
     def run(self) -> None:
         clock = time.perf_counter()
         try:
-            self.result = render(self.scene, self.settings, progress=self._progress, cancel=self._cancel.is_set)
+            self.result = render(self.scene, self.settings, progress=self._progress, cancel=self._cancel.is_set,
+                                 cache=MAP_CACHE)
         except Cancelled:
             self.cancelled = True
         except SceneError as exc:

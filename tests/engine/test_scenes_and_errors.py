@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from caustic_addon import (Cancelled, Dielectric, Diffuse, Mesh, Object, PointLight, RenderSettings, Scene,
-                           SceneError, SpotLight, SunLight, render)
+from caustic_addon import (Cancelled, Dielectric, Diffuse, MapCache, Mesh, Object, PointLight, RenderSettings,
+                           Scene, SceneError, SpotLight, SunLight, render)
 from metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
 
@@ -133,3 +133,24 @@ def test_a_curved_receiver_collects_caustics_through_its_uvs():
     assert "Floor" in curved.maps
     landed = curved.maps["Floor"].flux.sum()
     assert landed == pytest.approx(render(flat, quick(photons=200_000)).maps["Floor"].flux.sum(), rel=0.02)
+
+
+def test_a_camera_move_reuses_the_illumination_maps():
+    """With a cache, a second render that changes only the camera or the eye
+    pass skips the photon pass and gives the image a fresh render gives;
+    changing the lamp, the glass or the photon settings traces again."""
+    cache = MapCache()
+    scene = ball_lens(pixels=16)
+    first = render(scene, quick(photons=50_000), cache=cache)
+    assert not first.stats["photon_pass_cached"]
+
+    scene.camera.matrix[0, 3] += 0.3
+    moved = render(scene, quick(photons=50_000, spp=4), cache=cache)
+    assert moved.stats["photon_pass_cached"] and moved.stats["rays_photon_pass"] == 0
+    np.testing.assert_allclose(moved.image, render(scene, quick(photons=50_000, spp=4)).image, rtol=1e-6)
+
+    scene.lights = [PointLight((0, 0, 6), 500.0)]
+    assert not render(scene, quick(photons=50_000), cache=cache).stats["photon_pass_cached"]
+    scene.objects[1].material = Dielectric(1.33)
+    assert not render(scene, quick(photons=50_000), cache=cache).stats["photon_pass_cached"]
+    assert not render(scene, quick(photons=60_000), cache=cache).stats["photon_pass_cached"]
