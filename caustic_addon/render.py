@@ -19,7 +19,7 @@ from .camera import eye_rays, pixel_offsets
 from .emission import Sphere, make_emitters
 from .errors import Cancelled
 from .eye_pass import PASSES, EyePass, EyeRays
-from .illumination_map import IlluminationMap, MapEstimate, auto_cell_size, make_chart
+from .illumination_map import IlluminationMap, MapEstimate, PlaneChart, auto_cell_size, make_chart
 from .materials import Materials
 from .scene import RenderSettings, Scene
 from .transport import TransportStats, trace_photons
@@ -173,13 +173,15 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     # each sample stands for a square stratum of its pixel, 1/spp of its area
     half = 0.5 / np.sqrt(settings.spp)
     corners = np.array([[-half, -half], [half, -half], [half, half], [-half, half]])
+    filtered = any(isinstance(imap.chart, PlaneChart) for imap in maps.values())
 
     def job(first):
         sample = np.arange(first, min(first + settings.chunk_size, samples))
         pixel = sample // settings.spp
         offset = offsets[sample % settings.spp]
         origins, dirs = eye_rays(cam, pixel, offset)
-        footprint = np.stack([np.stack(eye_rays(cam, pixel, offset + c), axis=1) for c in corners], axis=1)
+        footprint = (np.stack([np.stack(eye_rays(cam, pixel, offset + c), axis=1) for c in corners], axis=1)
+                     if filtered else None)
         weight = np.full((len(sample), 3), 1.0 / settings.spp)
         tracer = EyePass(accel, scene, materials, maps, settings.energy, settings.max_depth,
                          pixel[0], pixel[-1] + 1)
