@@ -418,13 +418,6 @@ class BeamMap(IlluminationMap):
             self._beam_parts.append((corners, irradiance))
             self.beams += len(corners)
 
-    def add_photons(self, xy: np.ndarray, flux: np.ndarray, scale: np.ndarray) -> None:
-        with self._lock:
-            self._pending.append((xy, flux * scale[:, None]))
-            self._pending_count += len(xy)
-            self.photons += len(xy)
-            self._tables = None
-
     def _rasterise_beams(self) -> None:
         corners = np.concatenate([c for c, _ in self._beam_parts])
         irradiance = np.concatenate([e for _, e in self._beam_parts])

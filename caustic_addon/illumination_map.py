@@ -244,11 +244,15 @@ class IlluminationMap:
         pending ones pass `_FLUSH_PHOTONS` or the map is read. Safe to call
         from several threads."""
         xy = self.chart.coords(prim, u, v, points)
-        weighted = flux * self.chart.area_scale(prim)[:, None]
+        self.add_photons(xy, flux, self.chart.area_scale(prim))
+
+    def add_photons(self, xy: np.ndarray, flux: np.ndarray, scale: np.ndarray) -> None:
+        """Hold photons given in chart coordinates `xy (n,2)`, with flux
+        (n,3) W and chart area per world area `scale (n,)`."""
         with self._lock:
-            self._pending.append((xy, weighted))
-            self._pending_count += len(prim)
-            self.photons += len(prim)
+            self._pending.append((xy, flux * scale[:, None]))
+            self._pending_count += len(xy)
+            self.photons += len(xy)
             self._tables = None
             if self._pending_count >= _FLUSH_PHOTONS:
                 self._flush()

@@ -85,6 +85,14 @@ def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str]) -> d
     return maps
 
 
+def targets_and_bounds(scene: Scene) -> tuple[list[Sphere], Sphere]:
+    """The transparent objects' bounding spheres, which lamps aim at, and
+    the sphere around the whole scene."""
+    lo, hi = scene.bounds()
+    return ([Sphere.around(o.mesh.vertices) for o in scene.transparent],
+            Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo))))
+
+
 def run_chunks(jobs: list[Callable[[], object]], threads: int, monitor: _Monitor, start: float, share: float,
                stage: str) -> list:
     """Run `jobs` with up to `threads` in flight, reporting progress from
@@ -116,10 +124,8 @@ def run_chunks(jobs: list[Callable[[], object]], threads: int, monitor: _Monitor
 def forward_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
                  maps: dict[int, IlluminationMap], monitor: _Monitor, share: float) -> TransportStats:
     """Emit and trace every photon, chunk by chunk, into `maps`."""
-    targets = [Sphere.around(o.mesh.vertices) for o in scene.transparent]
-    lo, hi = scene.bounds()
-    emitters = make_emitters(scene.lights, targets, Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo))),
-                             settings.emission, settings.energy, settings.photons, settings.seed)
+    emitters = make_emitters(scene.lights, *targets_and_bounds(scene), settings.emission, settings.energy,
+                             settings.photons, settings.seed)
 
     def job(emitter, start):
         stop = min(start + settings.chunk_size, emitter.count)
@@ -137,10 +143,7 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
               maps: dict[int, IlluminationMap], monitor: _Monitor, share: float) -> TransportStats:
     """Trace every source's grid in bands of rows into beams on `maps`.
     Neighbouring bands share a row, so every grid triangle is in one band."""
-    targets = [Sphere.around(o.mesh.vertices) for o in scene.transparent]
-    lo, hi = scene.bounds()
-    sources = beam_sources(scene.lights, targets, Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo))),
-                           settings.energy, settings.photons)
+    sources = beam_sources(scene.lights, *targets_and_bounds(scene), settings.energy, settings.photons)
     jobs = []
     for source in sources:
         rows = max(1, settings.chunk_size // source.grid)
