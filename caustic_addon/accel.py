@@ -24,16 +24,22 @@ _MIN_SPLIT = 8192
 # Origins move this fraction of the scene's diagonal off a surface: well above
 # float32 hit-distance error (~1e-7 relative), well below features we resolve.
 EPSILON_FRACTION = 2e-6
+# Faces of closed meshes met from the side the ray's medium rules out are
+# passed, at most this many times per ray and call (see Accelerator.intersect).
+_MAX_SKIPS = 4
+# Triangles per closed dielectric probed for walls thinner than epsilon.
+_THICKNESS_PROBES = 1 << 16
 
 
 @dataclass
 class Hits:
     """Closest hits of a batch of n rays.
 
-    t       (n,) float64 hit distance, inf on a miss
+    t       (n,) float64 distance travelled to the hit, inf on a miss
     obj     (n,) int64 object index into Accelerator.objects, MISS on a miss
     prim    (n,) int64 global triangle index (over all objects), MISS on a miss
     u, v    (n,) float64 Embree barycentrics: p = (1-u-v) p0 + u p1 + v p2
+    points  (n,3) float64 world hit points; the ray's origin on a miss
     """
 
     t: np.ndarray
@@ -41,13 +47,19 @@ class Hits:
     prim: np.ndarray
     u: np.ndarray
     v: np.ndarray
+    points: np.ndarray
 
     @property
     def hit(self) -> np.ndarray:
         return self.obj != MISS
 
     def select(self, mask: np.ndarray) -> "Hits":
-        return Hits(self.t[mask], self.obj[mask], self.prim[mask], self.u[mask], self.v[mask])
+        return Hits(self.t[mask], self.obj[mask], self.prim[mask], self.u[mask], self.v[mask], self.points[mask])
+
+    def replace(self, index: np.ndarray, other: "Hits") -> None:
+        """Overwrite the hits at `index (k,)` with `other`'s k hits."""
+        for name in ("t", "obj", "prim", "u", "v", "points"):
+            getattr(self, name)[index] = getattr(other, name)
 
 
 def triangle_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -87,8 +99,11 @@ class Accelerator:
     inside a ray's own state can track.
 
     Per global triangle index (all objects' triangles, in object order):
+      corners        (N,3,3) world positions of the corners
       face_normal    (N,3) unit geometric normal, facing out of closed meshes
       corner_normal  (N,3,3) unit shading normals at the corners, same side
+      min_barycentric (N,3) the barycentric coordinate, per corner, of a point
+                     epsilon from the opposite edge (at most 0.3)
       owner          (N,) index of the object the triangle belongs to
     """
 
@@ -102,7 +117,7 @@ class Accelerator:
         self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
         self._embree = rtcore_scene.EmbreeScene()
 
-        face_normals, corner_normals, owners, offsets = [], [], [], [0]
+        all_corners, face_normals, corner_normals, owners, offsets = [], [], [], [], [0]
         self.closed = np.zeros(len(objects), dtype=bool)
         for index, obj in enumerate(objects):
             mesh = obj.mesh
@@ -118,15 +133,45 @@ class Accelerator:
                 shading = np.repeat(normals[:, None, :], 3, axis=1)
             else:
                 shading = mesh.corner_normals * sign
+            all_corners.append(corners)
             face_normals.append(normals)
             corner_normals.append(shading)
             owners.append(np.full(len(normals), index, dtype=np.int64))
             offsets.append(offsets[-1] + len(normals))
 
+        self.corners = np.concatenate(all_corners) if all_corners else np.zeros((0, 3, 3))
+        self.min_barycentric = self._min_barycentric(self.corners)
         self.face_normal = np.concatenate(face_normals) if face_normals else np.zeros((0, 3))
         self.corner_normal = np.concatenate(corner_normals) if corner_normals else np.zeros((0, 3, 3))
         self.owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
         self.prim_offset = np.asarray(offsets, dtype=np.int64)
+        for index in np.flatnonzero(self.closed):
+            self._warn_if_thin(index)
+        self.rays_cast = 0  # counts the passes' rays, not the probes'
+
+    def _min_barycentric(self, corners: np.ndarray) -> np.ndarray:
+        """(N,3) epsilon / altitude onto each corner's opposite edge, where
+        altitude = 2 area / edge length; at most 0.3 (tiny triangles)."""
+        _, area = triangle_normals(corners)
+        opposite = np.linalg.norm(np.roll(corners, -1, axis=1) - np.roll(corners, 1, axis=1), axis=2)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            fraction = self.epsilon * opposite / (2.0 * area[:, None])
+        return np.where(np.isfinite(fraction), np.minimum(fraction, 0.3), 0.3)
+
+    def _warn_if_thin(self, index: int) -> None:
+        """Warn when closed object `index` has a wall thinner than epsilon:
+        a ray offset off one side would start beyond the other. Probes from
+        up to _THICKNESS_PROBES face centres, half an epsilon inside, along
+        the inward normal."""
+        first, end = self.prim_offset[index], self.prim_offset[index + 1]
+        prim = np.unique(np.linspace(first, end - 1, min(end - first, _THICKNESS_PROBES)).astype(np.int64))
+        prim = prim[np.linalg.norm(self.face_normal[prim], axis=1) > 0.0]
+        inward = -self.face_normal[prim]
+        hits = self._closest(self.corners[prim].mean(axis=1) + 0.5 * self.epsilon * inward, inward)
+        if np.any((hits.obj == index) & (hits.t < 0.5 * self.epsilon)):
+            self.warnings.append(
+                f"'{self.objects[index].name}' is thinner than the tracing epsilon ({self.epsilon:.2g} m) in "
+                "places: light crosses such a wall as if it were one surface")
 
     def _outward_sign(self, obj: Object, corners: np.ndarray, closed: bool) -> float:
         """+1 if the mesh's winding faces out, -1 if it is inside out."""
@@ -161,11 +206,45 @@ class Accelerator:
                    for a, b in parts]
         return [f.result() for f in futures]
 
-    def intersect(self, origins: np.ndarray, dirs: np.ndarray) -> Hits:
-        """Closest hits of rays `origins (n,3)`, `dirs (n,3)` (unit), world space."""
+    def intersect(self, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray | None = None) -> Hits:
+        """Closest hits of rays `origins (n,3)`, `dirs (n,3)` (unit), world space.
+
+        With `medium (n,)`, the closed object each ray is inside (MISS if
+        none), a face of a closed mesh met from the side the medium rules out
+        (entering the object the ray is in, or leaving one it is not in) is
+        passed: the ray goes on from just beyond it, and `t` adds up the legs.
+        Such hits are float32 artefacts: the neighbour of the face just
+        crossed, met again at t ~ 0 past a shared edge; a face turned away
+        from a ray that only touches a vertex; the far side of a crack in
+        Embree's non-watertight triangle test. Passing them keeps a ray's
+        medium true to the side of the surface it is on."""
+        hits = self._closest(origins, dirs)
+        if medium is None:
+            return hits
+        for _ in range(_MAX_SKIPS):
+            skip = np.flatnonzero(self._contradicts(hits, dirs, medium))
+            if len(skip) == 0:
+                break
+            face = self.face_normal[hits.prim[skip]]
+            start = self.offset(hits.points[skip], face, dirs[skip])
+            again = self._closest(start, dirs[skip])
+            again.t += hits.t[skip] + np.linalg.norm(start - hits.points[skip], axis=1)
+            hits.replace(skip, again)
+        return hits
+
+    def _contradicts(self, hits: Hits, dirs: np.ndarray, medium: np.ndarray) -> np.ndarray:
+        """(n,) bool: hits on closed meshes from the side the ray's medium rules out."""
+        closed = hits.hit.copy()
+        closed[closed] = self.closed[hits.obj[closed]]
+        index = np.flatnonzero(closed)
+        toward = np.einsum("ij,ij->i", dirs[index], self.face_normal[hits.prim[index]]) < 0.0
+        closed[index] = toward == (medium[index] == hits.obj[index])
+        return closed
+
+    def _closest(self, origins: np.ndarray, dirs: np.ndarray) -> Hits:
         if len(origins) == 0:
             empty = np.zeros(0)
-            return Hits(empty, empty.astype(np.int64), empty.astype(np.int64), empty, empty)
+            return Hits(empty, empty.astype(np.int64), empty.astype(np.int64), empty, empty, np.zeros((0, 3)))
         parts = self._run(origins, dirs, output=1)
         geom = np.concatenate([p["geomID"] for p in parts]).astype(np.int64)
         prim = np.concatenate([p["primID"] for p in parts]).astype(np.int64)
@@ -175,7 +254,20 @@ class Accelerator:
         miss = geom < 0
         t[miss] = np.inf
         prim = np.where(miss, MISS, prim + self.prim_offset[np.maximum(geom, 0)])
-        return Hits(t, np.where(miss, MISS, geom), prim, u, v)
+        points = origins.astype(np.float64, copy=True)
+        hit = np.flatnonzero(~miss)
+        points[hit] = self.surface_points(prim[hit], u[hit], v[hit])
+        return Hits(t, np.where(miss, MISS, geom), prim, u, v, points)
+
+    def surface_points(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """(n,3) float64 points of triangles `prim` at Embree's barycentrics,
+        each kept epsilon inside its triangle's edges. A float32 hit can fall
+        just past an edge; a ray leaving from there would already be beyond
+        the neighbouring face's plane and miss it."""
+        bary = np.stack([1.0 - u - v, u, v], axis=1)
+        bary = np.maximum(bary, self.min_barycentric[prim])
+        bary /= bary.sum(axis=1, keepdims=True)
+        return np.einsum("ij,ijk->ik", bary, self.corners[prim])
 
     def occluded(self, origins: np.ndarray, dirs: np.ndarray, dists: np.ndarray) -> np.ndarray:
         """(n,) bool: is anything between `origins` and `origins + dists * dirs`?"""

@@ -189,12 +189,12 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
     for _ in range(max_depth + 1):
         if len(vertex) == 0:
             break
-        hits = accel.intersect(origins, dirs)
+        hits = accel.intersect(origins, dirs, medium)
         keep = hits.hit
         origins, dirs, weight, vertex, family, medium, floor, specular = (
             a[keep] for a in (origins, dirs, weight, vertex, family, medium, floor, specular))
         hits = hits.select(keep)
-        points = origins + hits.t[:, None] * dirs
+        points = hits.points
         inside = medium != MISS
         if inside.any():
             weight[inside] *= beer_lambert(materials.absorption[medium[inside]], hits.t[inside])

@@ -79,11 +79,11 @@ class EyePass:
         for _ in range(self.max_depth + 1):
             if len(rays.pixel) == 0:
                 return
-            hits = self.accel.intersect(rays.origins, rays.dirs)
+            hits = self.accel.intersect(rays.origins, rays.dirs, rays.medium)
             missed = ~hits.hit
             self._add("ambient", rays.pixel[missed], rays.weight[missed] * self.scene.background)
             rays, hits = rays.select(~missed), hits.select(~missed)
-            points = rays.origins + hits.t[:, None] * rays.dirs
+            points = hits.points
             inside = rays.medium != MISS
             if inside.any():
                 rays.weight[inside] *= beer_lambert(self.materials.absorption[rays.medium[inside]], hits.t[inside])

@@ -29,9 +29,11 @@ from .accel import triangle_normals
 from .emission import orthonormal_basis
 from .scene import Object
 
-# Photons held back before a splat (one bincount over the whole grid each
-# time); the splat's temporaries, ~300 B a photon, bound the memory.
-_FLUSH_PHOTONS = 1 << 20
+# Photons held back before a splat: as many as the map has cells (at least
+# _MIN_FLUSH_PHOTONS), so the bincount over the whole grid costs at most about
+# one pass per photon, and the splat's temporaries (~300 B a photon) stay
+# bounded by the map's size, whatever the photon count.
+_MIN_FLUSH_PHOTONS = 1 << 15
 # Half-widths, in cells, of the windows the adaptive estimate tries. The
 # largest bounds the blur: where fewer than k photons land within it, the
 # estimate is its plain mean (zero far from any caustic), not a halo of flux
@@ -241,7 +243,7 @@ class IlluminationMap:
                 flux: np.ndarray) -> None:
         """Store photons (flux (n,3) W at world `points (n,3)` on local
         triangles `prim`). They are splatted in large batches, when the
-        pending ones pass `_FLUSH_PHOTONS` or the map is read. Safe to call
+        pending ones outnumber the map's cells or the map is read. Safe to call
         from several threads."""
         xy = self.chart.coords(prim, u, v, points)
         self.add_photons(xy, flux, self.chart.area_scale(prim))
@@ -254,7 +256,7 @@ class IlluminationMap:
             self._pending_count += len(xy)
             self.photons += len(xy)
             self._tables = None
-            if self._pending_count >= _FLUSH_PHOTONS:
+            if self._pending_count >= max(_MIN_FLUSH_PHOTONS, self.shape[0] * self.shape[1]):
                 self._flush()
 
     @property

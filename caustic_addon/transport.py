@@ -54,13 +54,13 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, Illu
     for depth in range(max_depth + 1):
         if len(flux) == 0:
             break
-        hits = accel.intersect(origins, dirs)
+        hits = accel.intersect(origins, dirs, medium)
         stats.rays += len(flux)
         keep = hits.hit
         origins, dirs, flux, start_flux, medium, specular, ids = (
             a[keep] for a in (origins, dirs, flux, start_flux, medium, specular, ids))
         hits = hits.select(keep)
-        points = origins + hits.t[:, None] * dirs
+        points = hits.points
 
         inside = medium != MISS
         if inside.any():
