@@ -29,6 +29,9 @@ EPSILON_FRACTION = 2e-6
 _MAX_SKIPS = 4
 # Triangles per closed dielectric probed for walls thinner than epsilon.
 _THICKNESS_PROBES = 1 << 16
+# Directions that `medium_at` looks along, and vote over: fixed, and unlikely
+# to line up with a mesh's edges.
+_PROBE_DIRS = normalize(np.array([[0.2672, 0.5345, 0.8018], [-0.7071, 0.1104, -0.6984], [0.5774, -0.8083, 0.1155]]))
 
 
 @dataclass
@@ -231,6 +234,33 @@ class Accelerator:
             again.t += hits.t[skip] + np.linalg.norm(start - hits.points[skip], axis=1)
             hits.replace(skip, again)
         return hits
+
+    def medium_at(self, points: np.ndarray) -> np.ndarray:
+        """(n,) the closed object each of `points (n,3)` is inside, MISS if
+        none: along each of three fixed directions, the first closed mesh
+        met from behind (its inside) holds the point; the three vote, so a
+        ray through a crack between triangles cannot decide alone."""
+        votes = []
+        for direction in _PROBE_DIRS:
+            dirs = np.broadcast_to(direction, points.shape)
+            origins = np.array(points, dtype=np.float64)
+            found = np.full(len(points), MISS, dtype=np.int64)
+            open_hit = np.arange(len(points))
+            for _ in range(_MAX_SKIPS):
+                hits = self._closest(origins[open_hit], dirs[open_hit])
+                closed = hits.hit.copy()
+                closed[closed] = self.closed[hits.obj[closed]]
+                behind = np.einsum("ij,ij->i", dirs[open_hit], self.face_normal[np.maximum(hits.prim, 0)]) > 0.0
+                found[open_hit[closed & behind]] = hits.obj[closed & behind]
+                through = hits.hit & ~closed
+                origins[open_hit[through]] = self.offset(hits.points[through], self.face_normal[hits.prim[through]],
+                                                         dirs[open_hit[through]])
+                open_hit = open_hit[through]
+                if len(open_hit) == 0:
+                    break
+            votes.append(found)
+        a, b, c = votes
+        return np.where((a == b) | (a == c), a, b)
 
     def _contradicts(self, hits: Hits, dirs: np.ndarray, medium: np.ndarray) -> np.ndarray:
         """(n,) bool: hits on closed meshes from the side the ray's medium rules out."""

@@ -26,7 +26,7 @@ import numpy as np
 
 from . import units
 from .accel import Accelerator, MISS
-from .emission import Sphere, orthonormal_basis, visible_targets
+from .emission import Sphere, orthonormal_basis, target_cone, visible_targets
 from .illumination_map import IlluminationMap, summed_area_table, bilinear_sample, bilinear_splat, rect_means
 from .interface import orient, scatter
 from .materials import Materials
@@ -138,10 +138,8 @@ def beam_sources(lights: list[Light], targets: list[Sphere], scene_sphere: Spher
                 per_light.append(BeamSource(light, energy, 2, center=sphere.center, radius=sphere.radius,
                                             start_distance=start_distance))
                 continue
-            to_center = sphere.center - light.position
-            dist = float(np.linalg.norm(to_center))
-            cos_max = math.sqrt(1.0 - (sphere.radius / dist) ** 2) if dist > sphere.radius else -1.0
-            per_light.append(BeamSource(light, energy, 2, axis=to_center / max(dist, 1e-300), cos_max=cos_max))
+            axis, cos_max = target_cone(light.position, sphere)
+            per_light.append(BeamSource(light, energy, 2, axis=axis, cos_max=cos_max))
         for src in per_light:
             src.overlap = per_light
         sources += per_light
@@ -176,13 +174,13 @@ def _mix(family: np.ndarray, obj: np.ndarray, event: int) -> np.ndarray:
 
 
 def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap], origins: np.ndarray,
-                dirs: np.ndarray, weight: np.ndarray, max_depth: int) -> Landings:
-    """Follow every branch of every vertex path until it lands on a receiver
-    (after at least one specular event), leaves, or fades below
-    MIN_BRANCH_WEIGHT."""
+                dirs: np.ndarray, weight: np.ndarray, max_depth: int, start_medium: int = MISS) -> Landings:
+    """Follow every branch of every vertex path, starting inside object
+    `start_medium` (MISS: in air), until it lands on a receiver (after at
+    least one specular event), leaves, or fades below MIN_BRANCH_WEIGHT."""
     vertex = np.arange(len(origins))
     family = np.zeros(len(origins), dtype=np.uint64)
-    medium = np.full(len(origins), MISS, dtype=np.int64)
+    medium = np.full(len(origins), start_medium, dtype=np.int64)
     floor = MIN_BRANCH_WEIGHT * weight.max(axis=1)
     specular = np.zeros(len(origins), dtype=bool)
     landed = []
@@ -261,12 +259,13 @@ class BandBeams:
 
 
 def band_beams(source: BeamSource, first_row: int, end_row: int, accel: Accelerator, materials: Materials,
-               maps: dict[int, IlluminationMap], max_depth: int) -> BandBeams:
-    """Trace grid rows [first_row, end_row) of `source` and turn the landed
-    paths into beams (coherent triangles) and fallback photons."""
+               maps: dict[int, IlluminationMap], max_depth: int, start_medium: int = MISS) -> BandBeams:
+    """Trace grid rows [first_row, end_row) of `source`, whose paths start
+    inside object `start_medium`, and turn the landed paths into beams
+    (coherent triangles) and fallback photons."""
     rays_before = accel.rays_cast
     origins, dirs, weight = source.vertices(first_row, end_row)
-    landings = trace_paths(accel, materials, maps, origins, dirs, weight, max_depth)
+    landings = trace_paths(accel, materials, maps, origins, dirs, weight, max_depth, start_medium)
     triangles = grid_triangles(end_row - first_row, source.grid)
     triangle_measure = 0.5 * source.cell_measure
     beams, photons = {}, {}

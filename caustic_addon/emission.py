@@ -148,17 +148,23 @@ class PointSphereEmitter(Emitter):
         return _kept(origins, dirs, flux, i + self.id_base)
 
 
+def target_cone(position: np.ndarray, sphere: Sphere) -> tuple[np.ndarray, float]:
+    """(axis (3,) unit, cos_max) of the cone from `position` that holds
+    `sphere`: cos_max = sqrt(1 - (r/d)^2) at distance d; the whole sphere of
+    directions (cos_max = -1, any axis) from inside it."""
+    to_center = sphere.center - position
+    dist = float(np.linalg.norm(to_center))
+    if dist <= sphere.radius:
+        return np.array([0.0, 0.0, -1.0]), -1.0
+    return to_center / dist, math.sqrt(1.0 - (sphere.radius / dist) ** 2)
+
+
 class PointConeEmitter(Emitter):
     """Into the cones from a point or spot lamp that hold the target spheres."""
 
     def __init__(self, light: Light, energy: float, count: int, targets: list[Sphere], shift: np.ndarray):
         self.light, self.energy, self.shift = light, energy, shift
-        axes, cos_max = [], []
-        for sphere in targets:
-            to_center = sphere.center - light.position
-            dist = float(np.linalg.norm(to_center))
-            axes.append(to_center / dist if dist > 0 else np.array([0.0, 0.0, -1.0]))
-            cos_max.append(math.sqrt(1.0 - (sphere.radius / dist) ** 2) if dist > sphere.radius else -1.0)
+        axes, cos_max = zip(*(target_cone(light.position, sphere) for sphere in targets))
         self.axes, self.cos_max = np.array(axes), np.array(cos_max)
         solid_angles = 2.0 * math.pi * (1.0 - self.cos_max)
         self.counts = np.maximum(1, np.round(count * solid_angles / solid_angles.sum())).astype(np.int64)

@@ -12,7 +12,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from .accel import Accelerator
+from .accel import MISS, Accelerator
 from .beams import BeamMap, band_beams, beam_sources
 from .cache import MapCache, photon_pass_key
 from .camera import eye_rays, pixel_offsets
@@ -21,7 +21,7 @@ from .errors import Cancelled
 from .eye_pass import PASSES, EyePass, EyeRays
 from .illumination_map import IlluminationMap, MapEstimate, PlaneChart, auto_cell_size, make_chart
 from .materials import Materials
-from .scene import RenderSettings, Scene
+from .scene import Light, RenderSettings, Scene, SunLight
 from .transport import TransportStats, trace_photons
 from .validate import validate_scene
 
@@ -121,17 +121,28 @@ def run_chunks(jobs: list[Callable[[], object]], threads: int, monitor: _Monitor
     return results
 
 
+def lamp_medium(accel: Accelerator, light: Light) -> int:
+    """The closed glass a lamp sits in, where its photons start; MISS for a
+    sun (its photons start far upstream) or a lamp in air."""
+    if isinstance(light, SunLight):
+        return MISS
+    return int(accel.medium_at(light.position[None])[0])
+
+
 def forward_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
                  maps: dict[int, IlluminationMap], monitor: _Monitor, share: float) -> TransportStats:
     """Emit and trace every photon, chunk by chunk, into `maps`."""
     emitters = make_emitters(scene.lights, *targets_and_bounds(scene), settings.emission, settings.energy,
                              settings.photons, settings.seed)
 
-    def job(emitter, start):
+    def job(emitter, start, medium):
         stop = min(start + settings.chunk_size, emitter.count)
-        return trace_photons(accel, materials, maps, emitter.emit(start, stop), settings.max_depth, settings.seed)
+        return trace_photons(accel, materials, maps, emitter.emit(start, stop), settings.max_depth, settings.seed,
+                             medium)
 
-    jobs = [partial(job, e, start) for e in emitters for start in range(0, e.count, settings.chunk_size)]
+    mediums = [lamp_medium(accel, e.light) for e in emitters]
+    jobs = [partial(job, e, start, medium) for e, medium in zip(emitters, mediums)
+            for start in range(0, e.count, settings.chunk_size)]
     stats = TransportStats()
     for chunk_stats in run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass"):
         stats.add(chunk_stats)
@@ -147,8 +158,9 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
     jobs = []
     for source in sources:
         rows = max(1, settings.chunk_size // source.grid)
+        medium = lamp_medium(accel, source.light)
         jobs += [partial(band_beams, source, first, min(first + rows + 1, source.grid), accel, materials, maps,
-                         settings.max_depth) for first in range(0, source.grid - 1, rows)]
+                         settings.max_depth, medium) for first in range(0, source.grid - 1, rows)]
     stats = TransportStats()
     for band in run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass"):
         for obj, (corners, irradiance) in band.beams.items():
@@ -177,6 +189,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     half = 0.5 / np.sqrt(settings.spp)
     corners = np.array([[-half, -half], [half, -half], [half, half], [-half, half]])
     filtered = any(isinstance(imap.chart, PlaneChart) for imap in maps.values())
+    camera_medium = int(accel.medium_at(cam.position[None])[0])
 
     def job(first):
         sample = np.arange(first, min(first + settings.chunk_size, samples))
@@ -188,7 +201,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
         weight = np.full((len(sample), 3), 1.0 / settings.spp)
         tracer = EyePass(accel, scene, materials, maps, settings.energy, settings.max_depth,
                          pixel[0], pixel[-1] + 1)
-        tracer.trace(EyeRays(origins, dirs, weight, pixel, np.full(len(sample), -1, dtype=np.int64), footprint))
+        tracer.trace(EyeRays(origins, dirs, weight, pixel, np.full(len(sample), camera_medium), footprint))
         return tracer
 
     jobs = [partial(job, first) for first in range(0, samples, settings.chunk_size)]

@@ -42,13 +42,14 @@ class TransportStats:
 
 
 def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap],
-                  photons: Photons, max_depth: int, seed: int) -> TransportStats:
-    """Trace one batch of photons and splat the ones that land into `maps`
-    (keyed by receiver object index). Returns what it did."""
+                  photons: Photons, max_depth: int, seed: int, start_medium: int = MISS) -> TransportStats:
+    """Trace one batch of photons, which start inside object `start_medium`
+    (MISS: in air), and splat the ones that land into `maps` (keyed by
+    receiver object index). Returns what it did."""
     stats = TransportStats(emitted=len(photons.flux))
     origins, dirs, flux, ids = photons.origins, photons.dirs, photons.flux.copy(), photons.ids
     start_flux = flux.max(axis=1)
-    medium = np.full(len(flux), MISS, dtype=np.int64)
+    medium = np.full(len(flux), start_medium, dtype=np.int64)
     specular = np.zeros(len(flux), dtype=bool)
 
     for depth in range(max_depth + 1):
