@@ -8,8 +8,8 @@ and refracted (weight 1 - F) branch, so a path's *family* is its sequence of
 (surface, event). Three grid neighbours of the same family that land on the
 same receiver bound a beam: the grid triangle's flux, spread evenly over the
 triangle the three land on, is irradiance flux / area there (beam tracing,
-Heckbert and Hanrahan 1984; Watt 1990). The eye pass sums the beams that
-contain each of its points, so the caustic has no noise and sharp edges.
+Heckbert and Hanrahan 1984; Watt 1990). `beam_map.BeamMap` rasterises the
+beams with exact area coverage, so the caustic has no noise and sharp edges.
 
 Grid triangles whose three paths disagree (a silhouette, total internal
 reflection on one side, different surfaces) fall back to photons: each
@@ -27,7 +27,7 @@ import numpy as np
 from . import units
 from .accel import Accelerator, MISS
 from .emission import Sphere, orthonormal_basis, target_cone, visible_targets
-from .illumination_map import IlluminationMap, summed_area_table, bilinear_sample, bilinear_splat, rect_means
+from .illumination_map import IlluminationMap
 from .interface import orient, scatter
 from .materials import Materials
 from .optics import beer_lambert
@@ -315,142 +315,3 @@ def band_beams(source: BeamSource, first_row: int, end_row: int, accel: Accelera
             new = (landings.xy[holders], share, landings.scale[holders])
             photons[obj] = new if old is None else tuple(np.concatenate([a, b]) for a, b in zip(old, new))
     return BandBeams(beams, photons, accel.rays_cast - rays_before, flux_landed)
-
-
-def _weighted_quantiles(values: np.ndarray, weights: np.ndarray, q) -> np.ndarray:
-    order = np.argsort(values)
-    cdf = np.cumsum(weights[order])
-    return values[order][np.searchsorted(cdf, np.asarray(q) * cdf[-1]).clip(0, len(values) - 1)]
-
-
-def triangle_samples(corners: np.ndarray, per_side: int) -> np.ndarray:
-    """(m, per_side^2, 2) points spread evenly over each triangle `corners
-    (m,3,2)`: a per_side x per_side lattice on the unit square, folded onto
-    the triangle (the fold preserves area, so the points stay uniform)."""
-    ticks = (np.arange(per_side) + 0.5) / per_side
-    a, b = (g.ravel() for g in np.meshgrid(ticks, ticks, indexing="ij"))
-    fold = a + b > 1.0
-    a, b = np.where(fold, 1.0 - a, a), np.where(fold, 1.0 - b, b)
-    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
-    return corners[:, None, 0] + a[None, :, None] * e1[:, None] + b[None, :, None] * e2[:, None]
-
-
-@dataclass
-class _Layer:
-    """A grid of beam flux: `flux (h,w,3)` W per cell of edge `cell` m, its
-    first corner at chart `origin (2,)`, and its summed-area table."""
-
-    origin: np.ndarray
-    cell: float
-    flux: np.ndarray
-    table: np.ndarray = None
-
-    @staticmethod
-    def covering(lo: np.ndarray, hi: np.ndarray, cell: float) -> "_Layer":
-        """An empty layer over the chart box [lo, hi] with a cell of margin."""
-        shape = tuple((np.ceil((hi - lo) / cell).astype(int) + 2)[::-1])
-        return _Layer(lo - cell, cell, np.zeros(shape + (3,)))
-
-    def rc(self, xy: np.ndarray) -> np.ndarray:
-        return (xy[:, ::-1] - self.origin[::-1]) / self.cell - 0.5
-
-    def add(self, corners: np.ndarray, flux: np.ndarray, spacing: float, points_per_splat: int) -> None:
-        """Spread each beam's flux over a lattice inside it, `spacing` cells
-        apart (at most MAX_SIDE points a side), splatting in batches. A
-        lattice as coarse as the grid aliases against it."""
-        per_side = np.ceil(np.ptp(corners, axis=1).max(axis=1) / (spacing * self.cell))
-        per_side = per_side.clip(1, BeamMap.MAX_SIDE).astype(np.int64)
-        points, values, held = [], [], 0
-        for k in np.unique(per_side):
-            chosen = np.flatnonzero(per_side == k)
-            for batch in np.array_split(chosen, max(1, len(chosen) * int(k) ** 2 // points_per_splat)):
-                points.append(triangle_samples(corners[batch], int(k)).reshape(-1, 2))
-                values.append(np.repeat(flux[batch] / (k * k), k * k, axis=0))
-                held += len(points[-1])
-                if held >= points_per_splat:
-                    self.flux += bilinear_splat(self.flux.shape[:2], self.rc(np.concatenate(points)),
-                                                np.concatenate(values))
-                    points, values, held = [], [], 0
-        if held:
-            self.flux += bilinear_splat(self.flux.shape[:2], self.rc(np.concatenate(points)), np.concatenate(values))
-        self.table = summed_area_table(self.flux)
-
-    def at(self, xy: np.ndarray) -> np.ndarray:
-        """(n,3) W/m^2 at chart points, zero off the layer."""
-        rc = self.rc(xy)
-        inside = ((rc >= -0.5) & (rc <= np.array(self.flux.shape[:2]) - 0.5)).all(axis=1)
-        out = np.zeros((len(xy), 3))
-        out[inside] = bilinear_sample(self.flux / self.cell ** 2, rc[inside])
-        return out
-
-    def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-        return rect_means(self.table, self.origin[::-1], self.cell, lo, hi) / self.cell ** 2
-
-
-class BeamMap(IlluminationMap):
-    """An illumination map whose caustic comes from beams, plus the ordinary
-    density estimate of the fallback photons it holds.
-
-    Each beam's flux is spread over a lattice of points inside it and
-    splatted bilinearly, so flux is conserved exactly and a beam squeezed to
-    nothing at a fold cannot spike. Beams go to a layer whose cells match
-    their size: under 2 map cells (the sharp part of a caustic) to a grid
-    FINE times finer, laid over where 99.9% of their flux lands; up to 16
-    cells to the map's own grid; larger (dim, smooth) to one 4 times coarser,
-    sampled less densely.
-    """
-
-    FINE = 8
-    FINE_LIMIT = 2048
-    MAX_SIDE = 32
-    _POINTS_PER_SPLAT = 1 << 22
-
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
-        self._beam_parts: list[tuple[np.ndarray, np.ndarray]] = []
-        self._layers: list[_Layer] = []
-        self.beams = 0
-
-    def add_beams(self, corners: np.ndarray, irradiance: np.ndarray) -> None:
-        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2."""
-        with self._lock:
-            self._beam_parts.append((corners, irradiance))
-            self.beams += len(corners)
-
-    def _rasterise_beams(self) -> None:
-        corners = np.concatenate([c for c, _ in self._beam_parts])
-        irradiance = np.concatenate([e for _, e in self._beam_parts])
-        self._beam_parts = []
-        e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
-        flux = irradiance * (0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]))[:, None]
-        size = np.ptp(corners, axis=1).max(axis=1) / self.cell
-        lo, hi = self.chart.origin, self.chart.origin + self.chart.size
-        small = size < 2.0
-        if small.any():
-            centre = corners[small].mean(axis=1)
-            weight = flux[small].sum(axis=1)
-            bounds = np.array([_weighted_quantiles(centre[:, a], weight, (5e-4, 1 - 5e-4)) for a in (0, 1)])
-            fine_lo, fine_hi = bounds[:, 0] - self.cell, bounds[:, 1] + self.cell
-            small[small] = ((centre >= fine_lo) & (centre <= fine_hi)).all(axis=1)
-            cell = max(self.cell / self.FINE, float((fine_hi - fine_lo).max()) / self.FINE_LIMIT)
-            self._add_layer(_Layer.covering(fine_lo, fine_hi, cell), corners[small], flux[small], 0.5)
-        large = size >= 16.0
-        self._add_layer(_Layer.covering(lo, hi, self.cell), corners[~small & ~large], flux[~small & ~large], 0.5)
-        self._add_layer(_Layer.covering(lo, hi, 4.0 * self.cell), corners[large], flux[large], 1.0)
-
-    def _add_layer(self, layer: _Layer, corners: np.ndarray, flux: np.ndarray, spacing: float) -> None:
-        if len(corners):
-            layer.add(corners, flux, spacing, self._POINTS_PER_SPLAT)
-            self._layers.append(layer)
-
-    def prepare(self) -> None:
-        super().prepare()
-        with self._lock:
-            if self._beam_parts:
-                self._rasterise_beams()
-
-    def irradiance_at(self, xy: np.ndarray) -> np.ndarray:
-        return super().irradiance_at(xy) + sum(layer.at(xy) for layer in self._layers)
-
-    def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-        return super().mean_over(lo, hi) + sum(layer.mean_over(lo, hi) for layer in self._layers)

@@ -13,7 +13,8 @@ from typing import Callable, Optional
 import numpy as np
 
 from .accel import MISS, Accelerator
-from .beams import BeamMap, band_beams, beam_sources
+from .beam_map import BeamMap
+from .beams import band_beams, beam_sources
 from .cache import MapCache, photon_pass_key
 from .camera import eye_rays, pixel_offsets
 from .emission import Sphere, make_emitters

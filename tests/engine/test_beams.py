@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from caustic_addon import render
-from caustic_addon.beams import concentric_disc, grid_triangles, triangle_samples
+from caustic_addon.beams import concentric_disc, grid_triangles
 from metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
 
@@ -29,13 +29,6 @@ def test_grid_triangles_tile_the_grid_once():
     area = 0.5 * np.abs((rows[:, 1] - rows[:, 0]) * (cols[:, 2] - cols[:, 0])
                         - (rows[:, 2] - rows[:, 0]) * (cols[:, 1] - cols[:, 0]))
     assert area.sum() == pytest.approx(3 * 4)
-
-
-def test_triangle_samples_are_inside_and_centred():
-    corners = np.array([[[0.0, 0.0], [2.0, 0.0], [0.0, 1.0]]])
-    pts = triangle_samples(corners, 16)[0]
-    assert np.all(pts[:, 0] >= 0) and np.all(pts[:, 1] >= 0) and np.all(pts[:, 0] / 2 + pts[:, 1] <= 1 + 1e-12)
-    np.testing.assert_allclose(pts.mean(axis=0), corners[0].mean(axis=0), atol=0.02)
 
 
 def radial_error(photons: int) -> float:

@@ -1,0 +1,64 @@
+"""Exact-area triangle rasterisation, against polygon clipping."""
+
+import numpy as np
+import pytest
+
+from caustic_addon.raster import rasterise_triangles
+
+
+def clipped_area(triangle: np.ndarray, x0: float, x1: float, y0: float, y1: float) -> float:
+    """Area of `triangle (3,2)` inside the box, by Sutherland-Hodgman clipping."""
+    poly = list(triangle)
+    for axis, bound, keep_above in ((0, x0, True), (0, x1, False), (1, y0, True), (1, y1, False)):
+        out = []
+        for p, q in zip(poly, poly[1:] + poly[:1]):
+            p_in = (p[axis] >= bound) if keep_above else (p[axis] <= bound)
+            q_in = (q[axis] >= bound) if keep_above else (q[axis] <= bound)
+            if p_in:
+                out.append(p)
+            if p_in != q_in:
+                out.append(p + (bound - p[axis]) / (q[axis] - p[axis]) * (q - p))
+        poly = out
+        if len(poly) < 3:
+            return 0.0
+    p = np.array(poly)
+    return 0.5 * abs(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - p[:, 1] * np.roll(p[:, 0], -1)))
+
+
+def clipped_grid(shape, triangles, values):
+    h, w = shape
+    grid = np.zeros((h, w, values.shape[1]))
+    for tri, value in zip(triangles, values):
+        for r in range(h):
+            for c in range(w):
+                grid[r, c] += value * clipped_area(tri, c, c + 1, r, r + 1)
+    return grid
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_each_cell_gets_the_exact_area_of_random_triangles(seed):
+    """Triangles of both windings, inside, across and beyond every border."""
+    rng = np.random.default_rng(seed)
+    shape = (9, 13)
+    triangles = rng.uniform([-6.0, -6.0], [19.0, 15.0], size=(12, 3, 2))
+    values = rng.uniform(0.5, 2.0, size=(12, 2))
+    np.testing.assert_allclose(rasterise_triangles(shape, triangles, values),
+                               clipped_grid(shape, triangles, values), atol=1e-11)
+
+
+def test_small_triangles_on_grid_lines_and_corners_keep_their_area():
+    triangles = np.array([[[2.3, 3.1], [2.7, 3.2], [2.5, 3.9]],     # inside one cell
+                          [[1.0, 1.0], [5.0, 1.0], [1.0, 5.0]],     # corners on grid points
+                          [[4.0, 0.5], [4.0, 2.5], [6.0, 2.0]],     # an edge along a grid line
+                          [[3.5, 3.5], [3.5 + 1e-9, 3.5], [3.5, 3.5 + 1e-9]]])
+    values = np.ones((4, 1))
+    grid = rasterise_triangles((8, 8), triangles, values)
+    np.testing.assert_allclose(grid, clipped_grid((8, 8), triangles, values), atol=1e-12)
+    assert grid.sum() == pytest.approx(0.5 * 0.4 * 0.75 + 8.0 + 2.0 + 0.5e-18, rel=1e-12)
+
+
+def test_triangles_off_the_grid_leave_nothing():
+    left = np.array([[[-9.0, 1.0], [-2.0, 2.0], [-5.0, 6.0]]])
+    above = left + [12.0, 20.0]
+    grid = rasterise_triangles((8, 8), np.concatenate([left, above]), np.ones((2, 3)))
+    assert np.abs(grid).max() < 1e-12
