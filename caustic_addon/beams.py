@@ -11,8 +11,10 @@ triangle the three land on, is irradiance flux / area there (beam tracing,
 Heckbert and Hanrahan 1984; Watt 1990). `beam_map.BeamMap` rasterises the
 beams with exact area coverage, so the caustic has no noise and sharp edges.
 
-Grid triangles whose three paths disagree (a silhouette, total internal
-reflection on one side, different surfaces) fall back to photons: each
+Grid cells whose paths diverge (a silhouette, total internal reflection on
+one side, different surfaces, or a fold of the caustic inside the cell) are
+split in four and their new corners traced, up to `levels` times.
+Triangles whose three paths still disagree fall back to photons: each
 landed corner carries a third of the triangle's flux into the map's ordinary
 density estimate.
 """
@@ -25,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import units
-from .accel import Accelerator, MISS
+from .accel import Accelerator, MISS, row_ids
 from .emission import Sphere, orthonormal_basis, target_cone, visible_targets
 from .illumination_map import IlluminationMap
 from .interface import orient, scatter
@@ -35,6 +37,12 @@ from .scene import Light, SunLight
 
 # Branches below this fraction of their vertex's starting weight stop.
 MIN_BRANCH_WEIGHT = 1e-4
+# A cell whose two triangles' landed areas differ by more than this factor is
+# split (measured on the ball lens: lower factors spend paths for no gain).
+REFINE_RATIO = 8.0
+# Families whose throughput is below this (weak internal reflections) never
+# split a cell: their flux is too small to be worth the paths.
+REFINE_THROUGHPUT = 0.02
 # Beams smaller than this fraction of the chart's area squared fall back to photons.
 _MIN_AREA_FRACTION = 1e-16
 _SIGNATURE_PRIME = np.uint64(0x100000001B3)
@@ -95,13 +103,11 @@ class BeamSource:
             return np.einsum("ij,ij->i", perp, perp) <= self.radius ** 2 * (1 + 1e-9)
         return dirs @ self.axis >= self.cos_max - 1e-12
 
-    def vertices(self, first_row: int, end_row: int):
-        """Grid rows [first_row, end_row): (origins (n,3), dirs (n,3),
-        weight (n,3) intensity (W/sr) or irradiance (W/m^2) times the overlap
-        share)."""
-        rows, cols = np.meshgrid(np.arange(first_row, end_row), np.arange(self.grid), indexing="ij")
-        uv = np.stack([rows.ravel(), cols.ravel()], axis=1) / (self.grid - 1)
-        disc = concentric_disc(uv)
+    def rays_at(self, rc: np.ndarray):
+        """Rays at continuous grid positions `rc (n,2)` (row, col) in [0,
+        grid - 1]: (origins (n,3), dirs (n,3), weight (n,3) intensity (W/sr)
+        or irradiance (W/m^2) times the overlap share)."""
+        disc = concentric_disc(rc / (self.grid - 1))
         if self.is_disc:
             t, b = orthonormal_basis(self.light.direction)
             origins = (self.center + self.radius * (disc[:, :1] * t + disc[:, 1:] * b)
@@ -158,7 +164,8 @@ class Landings:
     vertex (n,) grid index within the band, family (n,) uint64 signature,
     obj (n,) receiver object index, xy (n,2) chart metres, scale (n,) chart
     area per world area, weight (n,3) the path's starting weight times its
-    Fresnel, tint and absorption factors."""
+    Fresnel, tint and absorption factors, throughput (n,) that product of
+    factors (max channel)."""
 
     vertex: np.ndarray
     family: np.ndarray
@@ -166,6 +173,12 @@ class Landings:
     xy: np.ndarray
     scale: np.ndarray
     weight: np.ndarray
+    throughput: np.ndarray
+
+    @staticmethod
+    def concat(parts: list["Landings"]) -> "Landings":
+        return Landings(*(np.concatenate([getattr(p, f) for p in parts])
+                          for f in ("vertex", "family", "obj", "xy", "scale", "weight", "throughput")))
 
 
 def _mix(family: np.ndarray, obj: np.ndarray, event: int) -> np.ndarray:
@@ -204,7 +217,8 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
             chart = maps[index].chart
             landed.append(Landings(vertex[sel], family[sel], hits.obj[sel],
                                    chart.coords(local, hits.u[sel], hits.v[sel], points[sel]),
-                                   chart.area_scale(local), weight[sel]))
+                                   chart.area_scale(local), weight[sel],
+                                   weight[sel].max(axis=1) * MIN_BRANCH_WEIGHT / floor[sel]))
 
         glass = materials.dielectric[hits.obj]
         origins, dirs, weight, vertex, family, medium, floor, points = (
@@ -229,19 +243,8 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
     if not landed:
         empty = np.zeros(0)
         return Landings(empty.astype(np.int64), empty.astype(np.uint64), empty.astype(np.int64),
-                        np.zeros((0, 2)), empty, np.zeros((0, 3)))
-    return Landings(*(np.concatenate([getattr(l, f) for l in landed])
-                      for f in ("vertex", "family", "obj", "xy", "scale", "weight")))
-
-
-def grid_triangles(rows: int, cols: int) -> np.ndarray:
-    """(2 (rows-1)(cols-1), 3) vertex indices of a rows x cols grid's
-    triangles, two per cell, counter-clockwise in (row, col)."""
-    r, c = np.meshgrid(np.arange(rows - 1), np.arange(cols - 1), indexing="ij")
-    v00 = (r * cols + c).ravel()
-    v10, v01 = v00 + cols, v00 + 1
-    v11 = v10 + 1
-    return np.concatenate([np.stack([v00, v10, v11], axis=1), np.stack([v00, v11, v01], axis=1)])
+                        np.zeros((0, 2)), empty, np.zeros((0, 3)), empty)
+    return Landings.concat(landed)
 
 
 @dataclass
@@ -250,68 +253,205 @@ class BandBeams:
 
     beams[obj] = (corners (m,3,2) chart metres, irradiance (m,3) W/m^2)
     photons[obj] = (xy (k,2), flux (k,3) W, scale (k,))
-    flux_landed (3,) W carried by both"""
+    flux_landed (3,) W carried by both; paths traced, rays cast"""
 
     beams: dict
     photons: dict
+    paths: int
     rays: int
     flux_landed: np.ndarray
 
 
+class _Lookup:
+    """Landings indexed by grid vertex and by family group.
+
+    Vertices are keys on a grid 2^levels times finer than the source's, key = row * width + col; a group is one (family, receiver)."""
+
+    def __init__(self, landings: Landings, keys: int):
+        self.landings, self.keys = landings, keys
+        self.group = row_ids(np.stack([landings.family, landings.obj.astype(np.uint64)], axis=1))
+        self.groups = int(self.group.max(initial=-1)) + 1
+        combo = self.group * keys + landings.vertex
+        self._combo_order = np.argsort(combo)
+        self._combo = combo[self._combo_order]
+        self._vertex_order = np.argsort(landings.vertex, kind="stable")
+        self._vertex = landings.vertex[self._vertex_order]
+
+    def find(self, group: np.ndarray, vertex: np.ndarray) -> np.ndarray:
+        """(n,) index of the landing of `group` at `vertex` (both (n,)); the
+        caller knows it exists."""
+        pos = np.searchsorted(self._combo, group * self.keys + vertex)
+        return self._combo_order[pos.clip(0, max(len(self._combo) - 1, 0))]
+
+    def pairs(self, corners: np.ndarray):
+        """Every landing at a corner of every element (a cell or a triangle
+        with k corners, `corners (n,k)` vertex keys). Returns (element (p,),
+        group (p,), landing (p,), count (p,) how many of the element's
+        corners landed in that group)."""
+        start = np.searchsorted(self._vertex, corners.ravel(), side="left")
+        found = np.searchsorted(self._vertex, corners.ravel(), side="right") - start
+        element = np.repeat(np.repeat(np.arange(len(corners)), corners.shape[1]), found)
+        offset = np.arange(len(element)) - np.repeat(np.cumsum(found) - found, found)
+        landing = self._vertex_order[np.repeat(start, found) + offset]
+        group = self.group[landing]
+        _, inverse, count = np.unique(element * max(self.groups, 1) + group, return_inverse=True,
+                                      return_counts=True)
+        return element, group, landing, count[inverse.reshape(-1)]
+
+    def first_of_each(self, element: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The distinct (element, group) pairs among rows of `pairs`."""
+        _, first = np.unique(element * max(self.groups, 1) + group, return_index=True)
+        return element[first], group[first]
+
+
+def _signed_area(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    e1, e2 = b - a, c - a
+    return 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+
+
+def _cell_corners(row: np.ndarray, col: np.ndarray, size: np.ndarray, width: int) -> np.ndarray:
+    """(n,4) vertex keys of square cells: (r, c), (r+s, c), (r, c+s), (r+s, c+s)."""
+    return np.stack([row * width + col, (row + size) * width + col,
+                     row * width + col + size, (row + size) * width + col + size], axis=1)
+
+
+def _diverging(lookup: _Lookup, corners: np.ndarray) -> np.ndarray:
+    """(n,) bool: cells whose paths diverge. Some but not all of a cell's
+    corners land in a family of throughput at least REFINE_THROUGHPUT (a
+    silhouette, total internal reflection), or its two triangles land with opposite orientation (a
+    fold of the caustic crosses it) or areas more than REFINE_RATIO apart."""
+    element, group, landing, count = lookup.pairs(corners)
+    split = np.zeros(len(corners), dtype=bool)
+    split[element[(count < 4) & (lookup.landings.throughput[landing] >= REFINE_THROUGHPUT)]] = True
+    cell, group = lookup.first_of_each(element[count == 4], group[count == 4])
+    xy = [lookup.landings.xy[lookup.find(group, corners[cell, k])] for k in range(4)]
+    a = _signed_area(xy[0], xy[1], xy[3])
+    b = _signed_area(xy[0], xy[3], xy[2])
+    small, large = np.minimum(np.abs(a), np.abs(b)), np.maximum(np.abs(a), np.abs(b))
+    split[cell[(a * b <= 0.0) | (large > REFINE_RATIO * small)]] = True
+    return split
+
+
 def band_beams(source: BeamSource, first_row: int, end_row: int, accel: Accelerator, materials: Materials,
-               maps: dict[int, IlluminationMap], max_depth: int, start_medium: int = MISS) -> BandBeams:
+               maps: dict[int, IlluminationMap], max_depth: int, start_medium: int = MISS,
+               levels: int = 0) -> BandBeams:
     """Trace grid rows [first_row, end_row) of `source`, whose paths start
-    inside object `start_medium`, and turn the landed paths into beams
+    inside object `start_medium`, splitting cells where their paths diverge
+    (`levels` times at most), and turn the landed paths into beams
     (coherent triangles) and fallback photons."""
     rays_before = accel.rays_cast
-    origins, dirs, weight = source.vertices(first_row, end_row)
-    landings = trace_paths(accel, materials, maps, origins, dirs, weight, max_depth, start_medium)
-    triangles = grid_triangles(end_row - first_row, source.grid)
-    triangle_measure = 0.5 * source.cell_measure
+    scale = 1 << levels
+    width = (source.grid - 1) * scale + 1
+    keys = width * ((source.grid - 1) * scale + 1)
+
+    def trace(vertex: np.ndarray) -> Landings:
+        origins, dirs, weight = source.rays_at(np.stack([vertex // width, vertex % width], axis=1) / scale)
+        landed = trace_paths(accel, materials, maps, origins, dirs, weight, max_depth, start_medium)
+        landed.vertex = vertex[landed.vertex]
+        return landed
+
+    row, col = (a.ravel() * scale for a in np.meshgrid(np.arange(first_row, end_row - 1),
+                                                         np.arange(source.grid - 1), indexing="ij"))
+    size = np.full(len(row), scale)
+    traced = np.unique(_cell_corners(row, col, size, width))
+    landings = trace(traced)
+    for _ in range(levels):
+        split = _diverging(_Lookup(landings, keys), _cell_corners(row, col, size, width)) & (size > 1)
+        if not split.any():
+            break
+        half = size[split] // 2
+        r, c = row[split], col[split]
+        row = np.concatenate([row[~split], r, r + half, r, r + half])
+        col = np.concatenate([col[~split], c, c, c + half, c + half])
+        size = np.concatenate([size[~split]] + [half] * 4)
+        children = np.unique(_cell_corners(row, col, size, width))
+        fresh = children[~np.isin(children, traced, assume_unique=True)]
+        landings = Landings.concat([landings, trace(fresh)])
+        traced = np.union1d(traced, fresh)
+
+    triangles, area, centres = _crack_free_triangles(row, col, size, width, traced)
+    landings = Landings.concat([landings, trace(centres)])
+    measure = source.cell_measure * area / scale ** 2
+    beams, photons, flux_landed = _beams_and_photons(_Lookup(landings, keys), triangles, measure, maps)
+    return BandBeams(beams, photons, len(traced) + len(centres), accel.rays_cast - rays_before, flux_landed)
+
+
+def _crack_free_triangles(row: np.ndarray, col: np.ndarray, size: np.ndarray, width: int, traced: np.ndarray):
+    """Triangles over the leaf cells that share every traced vertex with
+    their neighbours, so that beams of a split cell and of its unsplit
+    neighbour meet without cracks. A cell with no traced point inside its
+    edges is two triangles; one with such points (a split neighbour's) is a
+    fan from its centre through its boundary points in order.
+
+    Returns (triangles (n,3) vertex keys, area (n,) in fine grid units
+    squared, centres (k,) vertex keys of the fan centres, still to trace)."""
+    count = 4 * size
+    cell = np.repeat(np.arange(len(size)), count)
+    j = np.arange(len(cell)) - np.repeat(np.cumsum(count) - count, count)
+    s, side, along = size[cell], j // size[cell], j % size[cell]
+    # the boundary walked counter-clockwise in (col, row): bottom, right, top, left
+    r = row[cell] + np.choose(side, [0 * along, along, s, s - along])
+    c = col[cell] + np.choose(side, [along, s, s - along, 0 * along])
+    key = r * width + c
+    pos = np.searchsorted(traced, key).clip(0, len(traced) - 1)
+    kept = (along == 0) | (traced[pos] == key)
+    kept_per_cell = np.bincount(cell[kept], minlength=len(size))
+    fan = kept_per_cell > 4
+
+    corners = _cell_corners(row[~fan], col[~fan], size[~fan], width)
+    halves = 0.5 * size[~fan].astype(np.float64) ** 2
+    on_fan = kept & fan[cell]
+    ring_cell, ring_key = cell[on_fan], key[on_fan]
+    new_cell = np.r_[True, ring_cell[1:] != ring_cell[:-1]][:len(ring_cell)]
+    ring_next = np.roll(ring_key, -1)
+    ring_next[np.roll(new_cell, -1)] = ring_key[new_cell]
+    half = size // 2
+    centre_key = (row + half) * width + col + half
+    centres = centre_key[fan]
+    tri_centre = centre_key[ring_cell]
+    cr, cc = tri_centre // width, tri_centre % width
+    ar, ac, br, bc = ring_key // width, ring_key % width, ring_next // width, ring_next % width
+    fan_area = 0.5 * np.abs((ac - cc) * (br - cr) - (ar - cr) * (bc - cc)).astype(np.float64)
+    triangles = np.concatenate([corners[:, [0, 1, 3]], corners[:, [0, 3, 2]],
+                                np.stack([tri_centre, ring_key, ring_next], axis=1)])
+    return triangles, np.concatenate([halves, halves, fan_area]), centres
+
+
+def _beams_and_photons(lookup: _Lookup, triangles: np.ndarray, measure: np.ndarray,
+                       maps: dict[int, IlluminationMap]):
+    """Triangles `triangles (n,3)` (vertex keys) of emission measure
+    `measure (n,)` (sr or m^2) whose three paths landed in one family become
+    beams; the landed corners of the others carry a third of the triangle's
+    flux each, as photons. Returns (beams, photons, flux_landed) as in
+    BandBeams."""
+    land = lookup.landings
+    element, group, landing, count = lookup.pairs(triangles)
+    tri, tri_group = lookup.first_of_each(element[count == 3], group[count == 3])
+    idx = np.stack([lookup.find(tri_group, triangles[tri, k]) for k in range(3)], axis=1)
+    obj = land.obj[idx[:, 0]]
+    xy = land.xy[idx]
+    area = np.abs(_signed_area(xy[:, 0], xy[:, 1], xy[:, 2]))
+    flux = measure[tri, None] * land.weight[idx].mean(axis=1)
+    chart_area = np.array([float(np.prod(np.maximum(maps[o].chart.size, 1e-300))) for o in range(max(maps) + 1)]
+                          if maps else [])
+    good = area > _MIN_AREA_FRACTION * chart_area[obj] if len(obj) else np.zeros(0, dtype=bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        irradiance = flux * (land.scale[idx].mean(axis=1) / area)[:, None]
+
+    # fallback: each landed corner of an incoherent or degenerate triangle
+    # carries a third of that triangle's flux
+    pair = element * max(lookup.groups, 1) + group
+    degenerate = tri[~good] * max(lookup.groups, 1) + tri_group[~good]
+    loose = (count < 3) | np.isin(pair, degenerate)
+    share = np.bincount(landing[loose], weights=measure[element[loose]] / 3.0, minlength=len(land.vertex))
+    holders = np.flatnonzero(share > 0)
+    photon_flux = share[holders, None] * land.weight[holders]
+
     beams, photons = {}, {}
-    flux_landed = np.zeros(3)
-    keys = np.stack([landings.family, landings.obj.astype(np.uint64)], axis=1)
-    groups, group_of = (np.unique(keys, axis=0, return_inverse=True) if len(keys)
-                        else (np.zeros((0, 2), dtype=np.uint64), np.zeros(0, dtype=np.int64)))
-    n_vertices = (end_row - first_row) * source.grid
-    for g in range(len(groups)):
-        members = np.flatnonzero(group_of.reshape(-1) == g)
-        slot = np.full(n_vertices, -1, dtype=np.int64)
-        slot[landings.vertex[members]] = members
-        corner = slot[triangles]
-        landed = corner >= 0
-        coherent = landed.all(axis=1)
-        obj = int(groups[g, 1])
-        chart_area = float(np.prod(np.maximum(maps[obj].chart.size, 1e-300)))
-
-        idx = corner[coherent]
-        xy = landings.xy[idx]
-        e1, e2 = xy[:, 1] - xy[:, 0], xy[:, 2] - xy[:, 0]
-        area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
-        flux = triangle_measure * landings.weight[idx].mean(axis=1)
-        good = area > _MIN_AREA_FRACTION * chart_area
-        scale = landings.scale[idx].mean(axis=1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            irradiance = flux * (scale / area)[:, None]
-        corners_b, irr_b = xy[good], irradiance[good]
-        flux_landed += flux[good].sum(axis=0)
-        old = beams.get(obj)
-        beams[obj] = (corners_b, irr_b) if old is None else (np.concatenate([old[0], corners_b]),
-                                                              np.concatenate([old[1], irr_b]))
-
-        # fallback: each landed corner of an incoherent or degenerate triangle
-        # carries a third of that triangle's flux
-        loose = ~coherent & landed.any(axis=1)
-        degenerate = np.zeros(len(triangles), dtype=bool)
-        degenerate[np.flatnonzero(coherent)[~good]] = True
-        loose |= degenerate
-        per_corner = corner[loose][landed[loose]]
-        if len(per_corner):
-            counts = np.bincount(per_corner, minlength=len(landings.vertex))[members]
-            holders = members[counts > 0]
-            share = counts[counts > 0][:, None] * (triangle_measure / 3.0) * landings.weight[holders]
-            flux_landed += share.sum(axis=0)
-            old = photons.get(obj)
-            new = (landings.xy[holders], share, landings.scale[holders])
-            photons[obj] = new if old is None else tuple(np.concatenate([a, b]) for a, b in zip(old, new))
-    return BandBeams(beams, photons, accel.rays_cast - rays_before, flux_landed)
+    for o in np.unique(obj[good]):
+        sel = good & (obj == o)
+        beams[int(o)] = (xy[sel], irradiance[sel])
+    for o in np.unique(land.obj[holders]):
+        sel = land.obj[holders] == o
+        photons[int(o)] = (land.xy[holders[sel]], photon_flux[sel], land.scale[holders[sel]])
+    return beams, photons, flux[good].sum(axis=0) + photon_flux.sum(axis=0)

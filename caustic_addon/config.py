@@ -38,8 +38,11 @@ Colours are linear RGB, a number (grey) or [r, g, b]. Positions are metres.
   map_scale    millimetres per illumination-map cell, > 0 (the paper's 5
                and 40), or "auto" for the adaptive estimate ["auto"]
   density      "splat" (the paper's bilinear map) | "adaptive" (the k
-               nearest photons) ["splat" with a map_scale, "adaptive" with "auto"]
+               nearest photons) | "beam" (photons on a grid bound beams: no
+               noise) ["splat" with a map_scale, "adaptive" with "auto"]
   k_nearest    photons per adaptive estimate, integer >= 1 [64]
+  beam_refinement  times a beam cell is split where its paths diverge,
+               integer in 0..5 [2]
   emission     "targeted" (only toward the object) | "sphere" (the paper's
                eq. 1, every direction) ["targeted"]
 
@@ -69,13 +72,13 @@ import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Optional
 
 import numpy as np
 
 from . import shapes
-from .scene import (RGB, Camera, Dielectric, Diffuse, Light, Mesh, Object, PointLight, RenderSettings, Scene,
-                    SpotLight, SunLight)
+from .scene import (MAX_BEAM_REFINEMENT, RGB, Camera, Dielectric, Diffuse, Light, Mesh, Object, PointLight,
+                    RenderSettings, Scene, SpotLight, SunLight)
 
 _REQUIRED = object()
 
@@ -104,11 +107,13 @@ def _require(ok: bool) -> None:
         raise ValueError
 
 
-def integer(minimum: int, default=_REQUIRED) -> Field:
+def integer(minimum: int, default=_REQUIRED, maximum: Optional[int] = None) -> Field:
     def parse(value):
-        _require(isinstance(value, int) and not isinstance(value, bool) and value >= minimum)
+        _require(isinstance(value, int) and not isinstance(value, bool) and value >= minimum
+                 and (maximum is None or value <= maximum))
         return value
-    return Field(parse, f"must be an integer >= {minimum}", default)
+    bounds = f">= {minimum}" if maximum is None else f"in {minimum}..{maximum}"
+    return Field(parse, f"must be an integer {bounds}", default)
 
 
 def number(condition: str = "", test: Callable[[float], bool] = lambda x: True, default=_REQUIRED) -> Field:
@@ -195,8 +200,9 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "count": integer(0, 40_000),
         "energy": number(">= 0", _non_negative, 1.0),
         "map_scale": map_scale(None),
-        "density": choice("splat", "adaptive", default=None),
+        "density": choice("splat", "adaptive", "beam", default=None),
         "k_nearest": integer(1, 64),
+        "beam_refinement": integer(0, 2, MAX_BEAM_REFINEMENT),
         "emission": choice("targeted", "sphere", default="targeted"),
     },
     "object": {
@@ -278,6 +284,7 @@ def parse(text: str, name: str = "<config>") -> Config:
     settings = RenderSettings(
         photons=photons["count"], emission=photons["emission"], energy=photons["energy"],
         map_scale=photons["map_scale"], density=density, k_nearest=photons["k_nearest"],
+        beam_refinement=photons["beam_refinement"],
         max_depth=render["max_depth"], spp=render["spp"], seed=render["seed"], threads=render["threads"])
     placement = np.diag(np.append(obj["scale"], 1.0))
     placement[:3, 3] = obj["position"]

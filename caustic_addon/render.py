@@ -161,7 +161,8 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
         rows = max(1, settings.chunk_size // source.grid)
         medium = lamp_medium(accel, source.light)
         jobs += [partial(band_beams, source, first, min(first + rows + 1, source.grid), accel, materials, maps,
-                         settings.max_depth, medium) for first in range(0, source.grid - 1, rows)]
+                         settings.max_depth, medium, settings.beam_refinement)
+                 for first in range(0, source.grid - 1, rows)]
     stats = TransportStats()
     for band in run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass"):
         for obj, (corners, irradiance) in band.beams.items():
@@ -169,8 +170,8 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
         for obj, (xy, flux, scale) in band.photons.items():
             maps[obj].add_photons(xy, flux, scale)
         stats.rays += band.rays
+        stats.emitted += band.paths
         stats.flux_landed = stats.flux_landed + band.flux_landed
-    stats.emitted = sum(s.grid ** 2 for s in sources)
     stats.landed = sum(m.beams for m in maps.values())
     return stats
 

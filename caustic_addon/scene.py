@@ -292,6 +292,10 @@ class Scene:
         return float(max(np.linalg.norm(hi - lo), 1e-12))
 
 
+# Each level of beam refinement can quadruple a diverging cell's paths.
+MAX_BEAM_REFINEMENT = 5
+
+
 @dataclass
 class RenderSettings:
     """What the user tunes. Defaults are the ones the accuracy benchmark chose.
@@ -306,6 +310,8 @@ class RenderSettings:
     density       'splat' (the paper's bilinear map), 'adaptive' (k nearest
                   photons, on the map's grid) or 'beam' (photons on a grid
                   whose neighbours bound beams: no noise; beams.py)
+    beam_refinement  times a beam grid cell is split in four where its
+                  paths diverge (0 for a plain grid)
     max_depth     specular bounces per photon and per eye ray
     spp           eye samples per pixel
     """
@@ -316,6 +322,7 @@ class RenderSettings:
     map_scale: Optional[float] = None
     density: Literal["splat", "adaptive", "beam"] = "adaptive"
     k_nearest: int = 64
+    beam_refinement: int = 2
     max_depth: int = 12
     spp: int = 4
     seed: int = 0
@@ -334,6 +341,8 @@ class RenderSettings:
              "must be a positive number of millimetres"),
             ("density", self.density in ("splat", "adaptive", "beam"), "must be 'splat', 'adaptive' or 'beam'"),
             ("k_nearest", self.k_nearest >= 1, "must be >= 1"),
+            ("beam_refinement", 0 <= self.beam_refinement <= MAX_BEAM_REFINEMENT,
+             f"must be in 0..{MAX_BEAM_REFINEMENT}"),
             ("max_depth", self.max_depth >= 1, "must be >= 1"),
             ("spp", self.spp >= 1, "must be >= 1"),
             ("chunk_size", self.chunk_size >= 1, "must be >= 1"),

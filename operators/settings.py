@@ -16,6 +16,7 @@ def render_settings(props, spp: int | None = None) -> RenderSettings:
         energy=props.energy,
         map_scale=None if props.use_auto_map_scale else props.map_scale,
         density=props.density.lower(),
+        beam_refinement=props.beam_refinement,
         max_depth=props.max_depth,
         spp=props.spp if spp is None else spp,
         threads=max(1, os.cpu_count() or 1),

@@ -49,6 +49,8 @@ class CAUSTIC_PT_photons(_CausticPanel, bpy.types.Panel):
         sub.active = not props.use_auto_map_scale
         sub.prop(props, "map_scale")
         layout.prop(props, "density")
+        if props.density == 'BEAM':
+            layout.prop(props, "beam_refinement")
         layout.prop(props, "max_depth")
 
 

@@ -41,6 +41,11 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
                                         "smooth where they are sparse"),
                ('SPLAT', "Splat", "Each ray spread over the 4 nearest map cells, as in the paper")],
         default='ADAPTIVE')
+    beam_refinement: IntProperty(
+        name="Beam Refinement",
+        description="Times a beam's grid cell is split in four where neighbouring lamp rays part ways (a "
+                    "silhouette, a facet edge, a fold of the caustic). Facetted gems gain most",
+        default=2, min=0, max=5)
     max_depth: IntProperty(
         name="Max Bounces",
         description="Reflections and refractions followed per lamp ray and per eye ray",

@@ -133,8 +133,10 @@ def test_command_line_overrides_the_scene_file(tmp_path):
     (lambda t: t.replace("map_scale = 5.0", "map_scale = 0"), ["photons.map_scale"]),
     (lambda t: t.replace("power = 0.8", "power = 0.8\nstrength = 3.0"), ["lamp.strength", "point lamp"]),
     (lambda t: t.replace("ior = 1.5", "ior = nan"), ["object.ior"]),
+    (lambda t: t.replace("map_scale = 5.0", 'density = "beam"\nbeam_refinement = 9'),
+     ["photons.beam_refinement", "integer in 0..5"]),
 ], ids=["syntax", "unknown-key", "unknown-table", "negative-count", "fractional-count", "string-pixx",
-        "missing-eye", "zero-map-scale", "key-of-another-lamp", "nan-ior"])
+        "missing-eye", "zero-map-scale", "key-of-another-lamp", "nan-ior", "beam-refinement-too-deep"])
 def test_bad_scene_file(tmp_path, edit, fragments):
     scene = write(tmp_path / "scene.toml", edit(SMALL))
     assert_bad_input(run_cli("render", scene, EXAMPLES / "round.obj", "-o", tmp_path / "out.png"), *fragments)
