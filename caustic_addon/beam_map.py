@@ -62,11 +62,15 @@ class BeamMap(IlluminationMap):
     conserved exactly and a beam squeezed to nothing at a fold cannot spike.
     Beams under 2 map cells across (the sharp part of a caustic) go to a grid
     FINE times finer, laid over where 99.9% of their flux lands (at most
-    FINE_LIMIT cells a side); the others to the map's own grid.
+    FINE_LIMIT cells a side); beams COARSE cells across or more (dim, wide
+    light) to a grid COARSE_CELL times coarser; the others to the map's own
+    grid. Each layer spans only its beams' bounding box.
     """
 
     FINE = 8
     FINE_LIMIT = 2048
+    COARSE = 16
+    COARSE_CELL = 4
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
@@ -85,7 +89,8 @@ class BeamMap(IlluminationMap):
         irradiance = np.concatenate([e for _, e in self._beam_parts])
         self._beam_parts = []
         lo, hi = self.chart.origin, self.chart.origin + self.chart.size
-        small = np.ptp(corners, axis=1).max(axis=1) < 2.0 * self.cell
+        size = np.ptp(corners, axis=1).max(axis=1) / self.cell
+        small = size < 2.0
         if small.any():
             centre = corners[small].mean(axis=1)
             e1, e2 = corners[small, 1] - corners[small, 0], corners[small, 2] - corners[small, 0]
@@ -96,8 +101,14 @@ class BeamMap(IlluminationMap):
             fine_lo, fine_hi = bounds[:, 0] - 2.0 * self.cell, bounds[:, 1] + 2.0 * self.cell
             cell = max(self.cell / self.FINE, float((fine_hi - fine_lo).max()) / self.FINE_LIMIT)
             self._layers.append(_Layer.of_beams(fine_lo, fine_hi, cell, corners[small], irradiance[small]))
-        if (~small).any():
-            self._layers.append(_Layer.of_beams(lo, hi, self.cell, corners[~small], irradiance[~small]))
+        large = size >= self.COARSE
+        for chosen, cell in ((~small & ~large, self.cell), (large, self.COARSE_CELL * self.cell)):
+            if chosen.any():
+                # over the chosen beams' bounding box only
+                points = corners[chosen].reshape(-1, 2)
+                box_lo, box_hi = np.maximum(lo, points.min(axis=0)), np.minimum(hi, points.max(axis=0))
+                self._layers.append(_Layer.of_beams(box_lo, box_hi + cell, cell, corners[chosen],
+                                                    irradiance[chosen]))
 
     def prepare(self) -> None:
         super().prepare()

@@ -56,43 +56,50 @@ def _accumulate(acc: np.ndarray, h: int, w: int, corners: np.ndarray, values: np
     sloped = start[:, 1] != end[:, 1]
     start, end, edge_weight = start[sloped], end[sloped], edge_weight[sloped]
 
-    rows, (x0, y0, x1, y1), edge = _split(start, end, axis=1, first=0, last=h - 1, merge_before=False)
-    # pieces left of the grid cover whole rows of it: they gather in column -1
-    cols, (x0, y0, x1, y1), segment = _split(np.stack([x0, y0], 1), np.stack([x1, y1], 1), axis=0,
-                                           first=-1, last=w - 1, merge_before=True)
-    rows, edge = rows[segment], edge[segment]
-    f = np.clip(0.5 * (x0 + x1) - cols, 0.0, 1.0)
-    dy = y1 - y0
-    index = np.concatenate([rows * (w + 2) + cols + 1, rows * (w + 2) + cols + 2])
+    row, x0, x1, dy, edge = _rows(start, end, h)
+    col, xmid, dy, piece = _columns(x0, x1, dy, w)
+    f = xmid - col
+    at = row[piece] * (w + 2) + col + 1
+    index = np.concatenate([at, at + 1])
     for k in range(len(acc)):
-        wk = edge_weight[edge, k] * dy
+        wk = edge_weight[edge[piece], k] * dy
         acc[k] += np.bincount(index, weights=np.concatenate([wk * (1.0 - f), wk * f]), minlength=acc.shape[1])
 
 
-def _split(start: np.ndarray, end: np.ndarray, axis: int, first: int, last: int, merge_before: bool):
-    """Cut segments `start, end (n,2)` at the integer lines x = k (axis 0)
-    or y = k (axis 1), keeping each piece's direction. Only bands `first` to
-    `last` are kept; with `merge_before`, pieces before `first` join band
-    `first` instead of being dropped.
-
-    Returns (band (p,) the piece's band along `axis`; (x0, y0, x1, y1) its
-    ends; owner (p,) the segment it came from)."""
-    a, b = start[:, axis], end[:, axis]
-    lo, hi = np.minimum(a, b), np.maximum(a, b)
+def _bands(lo: np.ndarray, hi: np.ndarray, first: int, last: int):
+    """The integer bands [k, k+1) that spans [lo, hi] (n,) meet, k in
+    [first, last]. Returns (owner (p,) the span of each piece, band (p,))."""
     band_lo = np.maximum(np.floor(lo), first).astype(np.int64)
-    floor_hi = np.floor(hi)
-    band_hi = np.minimum(np.maximum(floor_hi, first) if merge_before else floor_hi, last).astype(np.int64)
+    band_hi = np.minimum(np.floor(hi), last).astype(np.int64)
     count = np.maximum(band_hi - band_lo + 1, 0)
-    owner = np.repeat(np.arange(len(a)), count)
-    band = band_lo[owner] + (np.arange(len(owner)) - np.repeat(np.cumsum(count) - count, count))
-    lo_o = lo[owner]
-    c0 = np.where(band == first, lo_o, np.maximum(lo_o, band)) if merge_before else np.maximum(lo_o, band)
-    c1 = np.minimum(hi[owner], band + 1.0)
-    a_o, span = a[owner], (b - a)[owner]
+    owner = np.repeat(np.arange(len(lo)), count)
+    return owner, band_lo[owner] + (np.arange(len(owner)) - np.repeat(np.cumsum(count) - count, count))
+
+
+def _rows(start: np.ndarray, end: np.ndarray, h: int):
+    """Cut sloped edges `start, end (n,2)` at the lines y = k into pieces in
+    rows 0..h-1 (others are dropped). Returns (row, x0, x1, dy signed along
+    the edge, edge) per piece."""
+    ya, yb = start[:, 1], end[:, 1]
+    lo, hi = np.minimum(ya, yb), np.maximum(ya, yb)
+    slope = (end[:, 0] - start[:, 0]) / (yb - ya)
+    edge, row = _bands(lo, hi, 0, h - 1)
+    y0, y1 = np.maximum(lo[edge], row), np.minimum(hi[edge], row + 1.0)
+    xa, ya, k = start[edge, 0], ya[edge], slope[edge]
+    return row, xa + (y0 - ya) * k, xa + (y1 - ya) * k, (y1 - y0) * np.sign(yb - start[:, 1])[edge], edge
+
+
+def _columns(x0: np.ndarray, x1: np.ndarray, dy: np.ndarray, w: int):
+    """Cut row pieces at the lines x = k into pieces in columns -1..w-1:
+    everything left of the grid joins column -1, where it covers whole rows
+    of it; pieces right of the grid are dropped. Returns (col, xmid clipped
+    to the column, dy share, row piece) per piece."""
+    lo, hi = np.minimum(x0, x1), np.maximum(x0, x1)
+    piece, col = _bands(lo, np.maximum(hi, -1.0), -1, w - 1)
+    lo, hi, dy = lo[piece], hi[piece], dy[piece]
+    c0 = np.where(col == -1, lo, np.maximum(lo, col))
+    c1 = np.minimum(hi, col + 1.0)
+    width = hi - lo
     with np.errstate(divide="ignore", invalid="ignore"):
-        t0 = np.where(span != 0, (c0 - a_o) / span, 0.0)
-        t1 = np.where(span != 0, (c1 - a_o) / span, 1.0)
-    t0, t1 = np.minimum(t0, t1), np.maximum(t0, t1)
-    base, delta = start[owner], (end - start)[owner]
-    p0, p1 = base + t0[:, None] * delta, base + t1[:, None] * delta
-    return band, (p0[:, 0], p0[:, 1], p1[:, 0], p1[:, 1]), owner
+        share = np.where(width > 0, (c1 - c0) / width, 1.0)
+    return col, np.clip(0.5 * (c0 + c1), col, col + 1.0), dy * share, piece

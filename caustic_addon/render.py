@@ -184,8 +184,6 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     pixels = cam.pixx * cam.pixy
     offsets = pixel_offsets(settings.spp, settings.seed)
     samples = pixels * settings.spp
-    for imap in maps.values():
-        imap.prepare()
 
     # each sample stands for a square stratum of its pixel, 1/spp of its area
     half = 0.5 / np.sqrt(settings.spp)
@@ -253,6 +251,11 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
             share = 0.0
         rays_forward = accel.rays_cast
         seconds["photons"] = time.perf_counter() - clock
+
+        clock = time.perf_counter()
+        for imap in maps.values():
+            imap.prepare()
+        seconds["maps"] = time.perf_counter() - clock
 
         clock = time.perf_counter()
         buffers = eye_pass(scene, settings, accel, materials, maps, monitor, share)
