@@ -40,9 +40,9 @@ MIN_BRANCH_WEIGHT = 1e-4
 # A cell whose two triangles' landed areas differ by more than this factor is
 # split (measured on the ball lens: lower factors spend paths for no gain).
 REFINE_RATIO = 8.0
-# Families whose throughput is below this (weak internal reflections) never
-# split a cell: their flux is too small to be worth the paths.
-REFINE_THROUGHPUT = 0.02
+# Families whose throughput is below this (reflections off the outside, weak
+# internal reflections) never split a cell: too little flux for the paths.
+REFINE_THROUGHPUT = 0.2
 # Beams smaller than this fraction of the chart's area squared fall back to photons.
 _MIN_AREA_FRACTION = 1e-16
 _SIGNATURE_PRIME = np.uint64(0x100000001B3)

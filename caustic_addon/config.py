@@ -42,7 +42,7 @@ Colours are linear RGB, a number (grey) or [r, g, b]. Positions are metres.
                noise) ["splat" with a map_scale, "adaptive" with "auto"]
   k_nearest    photons per adaptive estimate, integer >= 1 [64]
   beam_refinement  times a beam cell is split where its paths diverge,
-               integer in 0..5 [2]
+               integer in 0..5 [1]
   emission     "targeted" (only toward the object) | "sphere" (the paper's
                eq. 1, every direction) ["targeted"]
 
@@ -202,7 +202,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "map_scale": map_scale(None),
         "density": choice("splat", "adaptive", "beam", default=None),
         "k_nearest": integer(1, 64),
-        "beam_refinement": integer(0, 2, MAX_BEAM_REFINEMENT),
+        "beam_refinement": integer(0, 1, MAX_BEAM_REFINEMENT),
         "emission": choice("targeted", "sphere", default="targeted"),
     },
     "object": {

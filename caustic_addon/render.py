@@ -122,6 +122,12 @@ def run_chunks(jobs: list[Callable[[], object]], threads: int, monitor: _Monitor
     return results
 
 
+def chunk(total: int, settings: RenderSettings) -> int:
+    """Items per chunk: at most `chunk_size`, and few enough that each thread
+    gets two chunks, so small renders use every core too."""
+    return max(1, min(settings.chunk_size, -(-total // (2 * settings.threads))))
+
+
 def lamp_medium(accel: Accelerator, light: Light) -> int:
     """The closed glass a lamp sits in, where its photons start; MISS for a
     sun (its photons start far upstream) or a lamp in air."""
@@ -137,13 +143,13 @@ def forward_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, mat
                              settings.photons, settings.seed)
 
     def job(emitter, start, medium):
-        stop = min(start + settings.chunk_size, emitter.count)
+        stop = min(start + chunk(emitter.count, settings), emitter.count)
         return trace_photons(accel, materials, maps, emitter.emit(start, stop), settings.max_depth, settings.seed,
                              medium)
 
     mediums = [lamp_medium(accel, e.light) for e in emitters]
     jobs = [partial(job, e, start, medium) for e, medium in zip(emitters, mediums)
-            for start in range(0, e.count, settings.chunk_size)]
+            for start in range(0, e.count, chunk(e.count, settings))]
     stats = TransportStats()
     for chunk_stats in run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass"):
         stats.add(chunk_stats)
@@ -158,7 +164,7 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
     sources = beam_sources(scene.lights, *targets_and_bounds(scene), settings.energy, settings.photons)
     jobs = []
     for source in sources:
-        rows = max(1, settings.chunk_size // source.grid)
+        rows = max(1, chunk(source.grid ** 2, settings) // source.grid)
         medium = lamp_medium(accel, source.light)
         jobs += [partial(band_beams, source, first, min(first + rows + 1, source.grid), accel, materials, maps,
                          settings.max_depth, medium, settings.beam_refinement)
@@ -191,8 +197,10 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     filtered = any(isinstance(imap.chart, PlaneChart) for imap in maps.values())
     camera_medium = int(accel.medium_at(cam.position[None])[0])
 
+    size = chunk(samples, settings)
+
     def job(first):
-        sample = np.arange(first, min(first + settings.chunk_size, samples))
+        sample = np.arange(first, min(first + size, samples))
         pixel = sample // settings.spp
         offset = offsets[sample % settings.spp]
         origins, dirs = eye_rays(cam, pixel, offset)
@@ -204,7 +212,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
         tracer.trace(EyeRays(origins, dirs, weight, pixel, np.full(len(sample), camera_medium), footprint))
         return tracer
 
-    jobs = [partial(job, first) for first in range(0, samples, settings.chunk_size)]
+    jobs = [partial(job, first) for first in range(0, samples, size)]
     buffers = {name: np.zeros((pixels, 3)) for name in PASSES}
     for tracer in run_chunks(jobs, settings.threads, monitor, start, 1.0 - start, "eye pass"):
         for name in PASSES:

@@ -322,7 +322,7 @@ class RenderSettings:
     map_scale: Optional[float] = None
     density: Literal["splat", "adaptive", "beam"] = "adaptive"
     k_nearest: int = 64
-    beam_refinement: int = 2
+    beam_refinement: int = 1
     max_depth: int = 12
     spp: int = 4
     seed: int = 0

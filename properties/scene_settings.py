@@ -45,7 +45,7 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
         name="Beam Refinement",
         description="Times a beam's grid cell is split in four where neighbouring lamp rays part ways (a "
                     "silhouette, a facet edge, a fold of the caustic). Facetted gems gain most",
-        default=2, min=0, max=5)
+        default=1, min=0, max=5)
     max_depth: IntProperty(
         name="Max Bounces",
         description="Reflections and refractions followed per lamp ray and per eye ray",
