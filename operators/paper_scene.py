@@ -12,9 +12,6 @@ from ..caustic_addon import shapes
 from ..caustic_addon.scene import Mesh
 
 COLLECTION = "Paper scene"
-# The paper's lamp energy 10 moved into the lamp: the add-on's Lamp Energy
-# stays 1 and Cycles sees the same light.
-PAPER_ENERGY = 10.0
 # key -> (label, IOR, description)
 INDICES = {
     'WATER': ("Water", shapes.PAPER_INDICES["water"], "Water, n = 1.33"),
@@ -62,10 +59,10 @@ def _material(name: str, kind: str, **inputs):
 class CAUSTIC_OT_add_paper_scene(bpy.types.Operator):
     """Add one of the paper's scenes at the 3D cursor, in a new collection:
     a glass object of the chosen base and index over a 16 m diffuse floor
-    (albedo 0.8), a 100 W point lamp (the paper's 10 W at its lamp energy
-    10) and the paper's 40 degree camera. Nothing already in the file is
-    changed; the new camera becomes the scene's camera only if the scene
-    has none"""
+    (albedo 0.8), a 10 W point lamp (a Paper preset's lamp energy 10 makes
+    it the paper's 100 W) and the paper's 40 degree camera. Nothing already
+    in the file is changed; the new camera becomes the scene's camera only
+    if the scene has none"""
 
     bl_idname = "caustic.add_paper_scene"
     bl_label = "Add Paper Scene"
@@ -115,7 +112,7 @@ class CAUSTIC_OT_add_paper_scene(bpy.types.Operator):
         glass.data.materials.append(_material(f"{label} {ior:g}", 'ShaderNodeBsdfGlass', IOR=ior, Roughness=0.0))
 
         light = bpy.data.lights.new("Lamp", 'POINT')
-        light.energy = shapes.PAPER_LAMP_POWER * PAPER_ENERGY
+        light.energy = shapes.PAPER_LAMP_POWER
         light.shadow_soft_size = 0.0
         add("Lamp", light, cursor + shapes.PAPER_LAMP_POSITION)
         data = bpy.data.cameras.new("Camera")

@@ -14,8 +14,8 @@ from caustic_addon import shapes
 from snapshot import snapshot_file
 
 SHAPES = ("ROUND", "FLAT", "POINTED")
-# W: the paper's 10 W lamp at its lamp energy 10
-LAMP_POWER = 100.0
+# W: the lamp's Power; the Paper presets' lamp energy 10 makes it 100 W
+LAMP_POWER = 10.0
 
 
 @pytest.mark.parametrize("shape", SHAPES)
@@ -124,7 +124,8 @@ def measure_render(shape):
     bpy.ops.caustic.add_paper_scene(shape=shape, raised=True)
     scene = bpy.context.scene
     scenes.set_resolution(160, 120)
-    scene.caustic.photons = 200_000
+    # the paper's lamp energy 10
+    scene.caustic.photons, scene.caustic.energy = 200_000, 10.0
     assert bpy.ops.caustic.render() == {'FINISHED'}
     image = pixels_of("Caustic Render")[..., 0]
 
@@ -139,7 +140,7 @@ def measure_render(shape):
 
     lamp = np.array(shapes.PAPER_LAMP_POSITION)
     distance2 = ((floor - lamp) ** 2).sum(axis=-1)
-    direct = 0.8 / math.pi * LAMP_POWER / (4.0 * math.pi) * lamp[2] / distance2 ** 1.5
+    direct = 0.8 / math.pi * LAMP_POWER * scene.caustic.energy / (4.0 * math.pi) * lamp[2] / distance2 ** 1.5
     ratio = image[seen] / direct[seen]
     area = np.linalg.norm(np.cross(np.gradient(floor, axis=1), np.gradient(floor, axis=0)), axis=-1)[seen]
     weight = np.clip(image[seen] - direct[seen], 0.0, None) * area
