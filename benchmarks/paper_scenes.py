@@ -1,16 +1,9 @@
 """The paper's experiments (section 4) as scenes, presets and caustic measures.
 
-Three transparent objects by the shape of their base, each a smooth closed
-mesh over a diffuse floor facing +z at z = 0, under one point lamp above,
-slightly to the side and behind, so that shadows and caustics fall toward
-the paper's camera, which looks down from in front:
-
-    round    a sphere, radius 0.5 m (the paper's "round base": sphere or droplet)
-    flat     a cylinder, radius 0.5 m, 0.8 m tall (a flat-bottomed glass)
-    pointed  a cone, radius 0.5 m, 1.0 m tall, point down (a gem's pavilion)
-
-An object's `height` is the gap (m) between its lowest point and the floor
-above the 1 mm that keeps the glass off the plane: 0 rests it on the floor.
+The objects, floor, lamp and camera are caustic_addon.shapes' paper layout,
+which the add-on's caustic.add_paper_scene builds too. An object's `height`
+is the gap (m) between its lowest point and the floor above the 1 mm that
+keeps the glass off the plane: 0 rests it on the floor.
 
 The measures read the floor's illumination map at the centres of its cells
 (a grid of floor points as fine as the map), inside the box of cells that
@@ -29,29 +22,25 @@ from caustic_addon import Camera, Dielectric, Diffuse, Mesh, Object, PointLight,
 from caustic_addon.illumination_map import IlluminationMap
 import reference
 
-SHAPES = ("round", "flat", "pointed")
-# The paper's indices of refraction: water, cubic zirconia, diamond.
-INDICES = {"water": 1.33, "cubic zirconia": 1.9, "diamond": 2.41}
+SHAPES = shapes.PAPER_SHAPES
+INDICES = shapes.PAPER_INDICES
 GLASS_IOR = 1.5
-# Lengths in metres; RAISED is the height of the paper's raised position.
-RADIUS = 0.5
-CYLINDER_HEIGHT = 0.8
-CONE_HEIGHT = 1.0
-GAP = 1e-3
-RAISED = 1.0
-# m: wide enough to catch the fan of light a raised cone throws
-FLOOR_SIZE = 16.0
+RADIUS = shapes.PAPER_RADIUS
+CYLINDER_HEIGHT = shapes.PAPER_CYLINDER_HEIGHT
+CONE_HEIGHT = shapes.PAPER_CONE_HEIGHT
+GAP = shapes.PAPER_GAP
+RAISED = shapes.PAPER_RAISED
+FLOOR_SIZE = shapes.PAPER_FLOOR_SIZE
 # m: enough for the caustics of resting objects, for the 5 mm maps
 RESTING_FLOOR = 8.0
 # mm: the cells the shape and height sweeps measure on, over FLOOR_SIZE
 SHAPE_MAP_SCALE = 10.0
-FLOOR_ALBEDO = 0.8
-LAMP_POSITION = (0.8, 0.5, 4.0)
-# W: with the paper's lamp energy 10 the lamp sends 100 W.
-LAMP_POWER = 10.0
-EYE = (0.0, -4.0, 6.5)
-TARGET = (0.0, 0.0, 0.3)
-FOV = 40.0
+FLOOR_ALBEDO = shapes.PAPER_FLOOR_ALBEDO
+LAMP_POSITION = shapes.PAPER_LAMP_POSITION
+LAMP_POWER = shapes.PAPER_LAMP_POWER
+EYE = shapes.PAPER_EYE
+TARGET = shapes.PAPER_TARGET
+FOV = shapes.PAPER_FOV
 GALLERY_PIXELS = (320, 240)
 
 # The paper's experiments: the values each table varies, and the defaults
@@ -71,18 +60,6 @@ PAPER_TABLES = {"ior_round": 1, "ior_flat": 2, "ior_pointed": 3, "photons": 4, "
                 "height": 7}
 
 
-def glass_mesh(shape: str, height: float = 0.0) -> Mesh:
-    """The object of base `shape` (one of SHAPES), its lowest point GAP + height m above the floor."""
-    bottom = GAP + height
-    if shape == "round":
-        return shapes.uv_sphere(RADIUS, (0.0, 0.0, bottom + RADIUS), 128, 64)
-    if shape == "flat":
-        return shapes.cylinder(RADIUS, CYLINDER_HEIGHT, (0.0, 0.0, bottom))
-    if shape == "pointed":
-        return shapes.cone(RADIUS, CONE_HEIGHT, (0.0, 0.0, bottom))
-    raise ValueError(f"shape must be one of {SHAPES}, got {shape!r}")
-
-
 def paper_camera(pixx: int, pixy: int) -> Camera:
     """The paper's pinhole: FOV 40 degrees across pixx x pixy pixels, screen S = 1, in front and above."""
     return Camera.from_paper(FOV, pixx, pixy, 1.0, EYE, TARGET)
@@ -94,7 +71,7 @@ def paper_scene(shape: str, ior: float = GLASS_IOR, height: float = 0.0, pixels:
     `floor` m square, lit by a LAMP_POWER W point lamp."""
     return Scene(
         objects=[Object("Floor", shapes.plane(floor), Diffuse(albedo=FLOOR_ALBEDO)),
-                 Object("Glass", glass_mesh(shape, height), Dielectric(ior))],
+                 Object("Glass", shapes.paper_glass(shape, height), Dielectric(ior))],
         lights=[PointLight(LAMP_POSITION, LAMP_POWER)],
         camera=paper_camera(*pixels),
     )

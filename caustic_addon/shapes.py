@@ -1,7 +1,19 @@
 """Procedural meshes for tests, benchmarks and the paper's experiments: a
 round base (sphere), a flat base (cylinder), a pointed base (cone, point
 down) and the receiver plane. All are closed, wound counter-clockwise seen
-from outside, with smooth corner normals (flat on caps and the plane)."""
+from outside, with smooth corner normals (flat on caps and the plane).
+
+The paper's scenes (section 4) are laid out here too, so that
+benchmarks/paper_scenes.py and the add-on's caustic.add_paper_scene build
+the same geometry: a clear object of base PAPER_SHAPES over a diffuse floor
+facing +z at z = 0, under one point lamp above, slightly to the side and
+behind, so that shadows and caustics fall toward the paper's camera, which
+looks down from in front. Lengths in metres:
+
+    round    a sphere, radius 0.5 (the paper's "round base": sphere or droplet)
+    flat     a cylinder, radius 0.5, 0.8 tall (a flat-bottomed glass)
+    pointed  a cone, radius 0.5, 1.0 tall, point down (a gem's pavilion)
+"""
 
 from __future__ import annotations
 
@@ -89,3 +101,38 @@ def cone(radius: float = 1.0, height: float = 1.5, center=(0.0, 0.0, 0.0), segme
     slant = np.array([height, -radius]) / math.hypot(height, radius)
     normals = np.array([[0.0, 1.0], slant])
     return _revolve(profile, normals, segments, center)
+
+
+PAPER_SHAPES = ("round", "flat", "pointed")
+# The paper's indices of refraction: water, cubic zirconia, diamond.
+PAPER_INDICES = {"water": 1.33, "cubic zirconia": 1.9, "diamond": 2.41}
+PAPER_RADIUS = 0.5
+PAPER_CYLINDER_HEIGHT = 0.8
+PAPER_CONE_HEIGHT = 1.0
+# m between the floor and the object's lowest point at rest: keeps the glass off the plane.
+PAPER_GAP = 1e-3
+# m: the height of the paper's raised position
+PAPER_RAISED = 1.0
+# m: wide enough to catch the fan of light a raised cone throws
+PAPER_FLOOR_SIZE = 16.0
+PAPER_FLOOR_ALBEDO = 0.8
+PAPER_LAMP_POSITION = (0.8, 0.5, 4.0)
+# W: the paper's lamp energy 10 makes it 100 W.
+PAPER_LAMP_POWER = 10.0
+PAPER_EYE = (0.0, -4.0, 6.5)
+PAPER_TARGET = (0.0, 0.0, 0.3)
+# degrees across the image's width
+PAPER_FOV = 40.0
+
+
+def paper_glass(shape: str, height: float = 0.0) -> Mesh:
+    """The paper's object of base `shape` (one of PAPER_SHAPES), centred on
+    the z axis, its lowest point PAPER_GAP + `height` m above z = 0."""
+    bottom = PAPER_GAP + height
+    if shape == "round":
+        return uv_sphere(PAPER_RADIUS, (0.0, 0.0, bottom + PAPER_RADIUS), 128, 64)
+    if shape == "flat":
+        return cylinder(PAPER_RADIUS, PAPER_CYLINDER_HEIGHT, (0.0, 0.0, bottom))
+    if shape == "pointed":
+        return cone(PAPER_RADIUS, PAPER_CONE_HEIGHT, (0.0, 0.0, bottom))
+    raise ValueError(f"shape must be one of {PAPER_SHAPES}, got {shape!r}")

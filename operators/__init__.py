@@ -4,6 +4,7 @@ import bpy
 
 from .bake import CAUSTIC_OT_bake, CAUSTIC_OT_unbake
 from .compare import CAUSTIC_OT_compare_cycles
+from .paper_scene import CAUSTIC_OT_add_paper_scene
 from .presets import CAUSTIC_OT_apply_preset
 from .render import CAUSTIC_OT_render
 
@@ -13,4 +14,5 @@ register, unregister = bpy.utils.register_classes_factory((
     CAUSTIC_OT_unbake,
     CAUSTIC_OT_compare_cycles,
     CAUSTIC_OT_apply_preset,
+    CAUSTIC_OT_add_paper_scene,
 ))

@@ -4,8 +4,20 @@ import math
 
 import bpy
 
+from ..operators.paper_scene import CAUSTIC_OT_add_paper_scene
 from ..operators.presets import CAUSTIC_OT_apply_preset
 from ..operators.render import CAUSTIC_OT_render
+
+
+class CAUSTIC_MT_presets(bpy.types.Menu):
+    bl_label = "Caustics Presets"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.operator_enum(CAUSTIC_OT_apply_preset.bl_idname, "preset")
+        layout.separator()
+        layout.label(text="Add the Paper's Scene")
+        layout.operator_enum(CAUSTIC_OT_add_paper_scene.bl_idname, "shape")
 
 
 class _CausticPanel:
@@ -38,7 +50,7 @@ class CAUSTIC_PT_photons(_CausticPanel, bpy.types.Panel):
 
     def draw(self, context):
         layout, props = self.layout, context.scene.caustic
-        layout.operator_menu_enum(CAUSTIC_OT_apply_preset.bl_idname, "preset", text="Presets", icon='PRESET')
+        layout.menu(CAUSTIC_MT_presets.__name__, text="Presets", icon='PRESET')
         layout.use_property_split = True
         layout.use_property_decorate = False
         layout.prop(props, "photons")
