@@ -141,6 +141,11 @@ def beam_sources(lights: list[Light], targets: list[Sphere], scene_sphere: Spher
                                             start_distance=start_distance))
                 continue
             axis, cos_max = target_cone(light.position, sphere)
+            if cos_max <= -1.0:
+                # a lamp inside the target: two hemispheres, since one grid over
+                # the whole sphere folds its edge onto a single direction
+                per_light += [BeamSource(light, energy, 2, axis=a, cos_max=0.0) for a in (axis, -axis)]
+                continue
             per_light.append(BeamSource(light, energy, 2, axis=axis, cos_max=cos_max))
         for src in per_light:
             src.overlap = per_light
