@@ -171,20 +171,14 @@ def test_tube_cusp_formula_matches_a_float64_ray_computation():
         assert points[0] == pytest.approx([cusp, 0.0], abs=10 * delta ** 2)
 
 
-def test_mirror_tube_nephroid_cusp_lands_where_geometric_optics_puts_it():
-    """Every downward ray from a lamp at height 2.5 >= 2H meets the wall at
-    most once (a chord's drop exceeds the rim's height). The cusp at
-    x_c = -R D / (2D + R) is where the caustic's two folds meet; they close as
-    |y| ~ (x_c - x)^(3/2), so an estimate that resolves a width w sees its
-    peak between x_c and the point where the folds are w apart (from the 2D
-    envelope), here w = 2 map cells."""
-    result = render(mirror_tube(), quick(photons=1_000_000))
-    imap = result.maps["Floor"]
-    cusp = -R * D / (2 * D + R)
-    fold = envelope(math.pi + np.linspace(1e-4, 0.3, 3000))
+def assert_cusp_resolved(imap, cusp: float, fold: np.ndarray) -> None:
+    """The caustic's two folds meet at the cusp (cusp, 0) and close as
+    |y| ~ (cusp - x)^(3/2) toward -x (`fold (n,2)`, float64 points of one
+    fold, leaving the cusp). An estimate that resolves a width w sees its
+    peak along the axis between the cusp and the point where the folds are
+    w apart, here w = 2 map cells; across the axis, on it."""
     w = 2.0 * imap.cell
     merged = fold[np.argmax(np.abs(fold[:, 1]) > 0.5 * w), 0]
-
     x = np.linspace(-0.6, 0.0, 601)
     along = imap.irradiance_at(np.stack([x, np.zeros_like(x)], axis=1))[:, 0]
     peak = x[along.argmax()]
@@ -193,6 +187,40 @@ def test_mirror_tube_nephroid_cusp_lands_where_geometric_optics_puts_it():
     across = imap.irradiance_at(np.stack([np.full_like(y, peak), y], axis=1))[:, 0]
     assert abs(y[across.argmax()]) <= imap.cell
     assert along.max() > 2.0 * along[x > 0.5 * cusp].max()
+
+
+def test_mirror_tube_nephroid_cusp_lands_where_geometric_optics_puts_it():
+    """Every downward ray from the lamp, at height 2.5 >= 2H, meets the wall
+    at most once (a chord's drop exceeds the rim's height); the cusp is at
+    x_c = -R D / (2D + R)."""
+    result = render(mirror_tube(), quick(photons=1_000_000))
+    assert_cusp_resolved(result.maps["Floor"], -R * D / (2 * D + R), envelope(math.pi + np.linspace(1e-4, 0.3, 3000)))
+
+
+def test_parallel_light_in_a_mirror_tube_has_its_cusp_at_half_the_radius():
+    """A sun whose light travels along -x (and down, 0.4 m per metre) over the
+    rim of a tube of height 0.5: the coffee cup's nephroid, cusp at R/2 from
+    the centre along the light's horizontal direction. The fold, in float64:
+    the line of a ray at height b reflected at (-sqrt(R^2 - b^2), b), met by
+    its neighbour."""
+    slope = 0.4
+    sun = SunLight((-1.0, 0.0, -slope), 10.0)
+    scene = Scene([Object("Floor", shapes.plane(3.0), Diffuse(albedo=1.0)),
+                   Object("Tube", shapes.tube(R, 0.5, segments=512), Reflector(TUBE_RHO))], [sun], top_camera(1.5, 8))
+    result = render(scene, quick(photons=1_000_000))
+
+    def lines(b):
+        q = np.stack([-np.sqrt(R * R - b * b), b], axis=1)
+        n = q / R
+        u = np.array([-1.0, 0.0])
+        return q, u - 2.0 * (n @ u)[:, None] * n
+
+    b = np.linspace(1e-4, 0.3, 3000)
+    (q1, r1), (q2, r2) = lines(b), lines(b + 1e-7)
+    ab = np.linalg.solve(np.stack([r1, -r2], axis=-1), (q2 - q1)[..., None])[..., 0]
+    fold = q1 + ab[:, :1] * r1
+    assert fold[0] == pytest.approx([-R / 2, 0.0], abs=1e-6)
+    assert_cusp_resolved(result.maps["Floor"], -R / 2, fold)
 
 
 def test_flux_off_the_tube_is_the_flux_on_its_wall_times_the_reflectance():
