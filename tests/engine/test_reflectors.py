@@ -189,11 +189,13 @@ def assert_cusp_resolved(imap, cusp: float, fold: np.ndarray) -> None:
     assert along.max() > 2.0 * along[x > 0.5 * cusp].max()
 
 
-def test_mirror_tube_nephroid_cusp_lands_where_geometric_optics_puts_it():
+@pytest.mark.parametrize("settings", [dict(photons=1_000_000), dict(photons=100_000, density="beam")],
+                         ids=["photons", "beams"])
+def test_mirror_tube_nephroid_cusp_lands_where_geometric_optics_puts_it(settings):
     """Every downward ray from the lamp, at height 2.5 >= 2H, meets the wall
     at most once (a chord's drop exceeds the rim's height); the cusp is at
     x_c = -R D / (2D + R)."""
-    result = render(mirror_tube(), quick(photons=1_000_000))
+    result = render(mirror_tube(), quick(**settings))
     assert_cusp_resolved(result.maps["Floor"], -R * D / (2 * D + R), envelope(math.pi + np.linspace(1e-4, 0.3, 3000)))
 
 
@@ -223,18 +225,24 @@ def test_parallel_light_in_a_mirror_tube_has_its_cusp_at_half_the_radius():
     assert_cusp_resolved(result.maps["Floor"], -R / 2, fold)
 
 
-def test_flux_off_the_tube_is_the_flux_on_its_wall_times_the_reflectance():
+@pytest.mark.parametrize("density", ["adaptive", "beam"])
+def test_flux_off_the_tube_is_the_flux_on_its_wall_times_the_reflectance(density):
     """Flux reaching the wall: I times the solid angle of directions that
     meet it between z = 0 and H, I sum over phi of [cos theta] between
     tan theta = D(phi)/h and D(phi)/(h - H), D(phi) the distance to the wall.
-    Every such ray lands on the floor after one reflection."""
+    Every such ray lands on the floor after one reflection. Photons: within
+    4/sqrt(landed); beams: each grid triangle cut by the wall's edges is
+    shared out approximately, about sqrt(N) of N triangles, so 1/sqrt(N)."""
     phi = (np.arange(400_000) + 0.5) / 400_000 * 2 * math.pi
     _, _, dist = reflected_lines(phi)
     h, low = HEIGHT, HEIGHT - H
     on_wall = INTENSITY * 2 * math.pi * np.mean(h / np.hypot(h, dist) - low / np.hypot(low, dist))
-    result = render(mirror_tube(), quick(photons=200_000))
+    result = render(mirror_tube(), quick(photons=200_000, density=density))
     landed = result.stats["flux_landed_w"][0]
-    assert landed == pytest.approx(TUBE_RHO * on_wall, rel=4.0 / math.sqrt(result.stats["photons_landed"]))
+    stats = result.stats
+    tolerance = (1.0 / math.sqrt(stats["photons_emitted"]) if density == "beam"
+                 else 4.0 / math.sqrt(stats["photons_landed"]))
+    assert landed == pytest.approx(TUBE_RHO * on_wall, rel=tolerance)
 
 
 # Two parallel mirrors: a corridor of width W and height CORRIDOR_H with a floor
