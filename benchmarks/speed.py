@@ -1,5 +1,7 @@
 """Speed of the engine against raw Embree, on issue 2's scene: a smooth
-65k-triangle glass sphere over a floor, a point lamp, a 640x480 camera.
+65k-triangle glass sphere over a floor, a point lamp, a 640x480 camera; and
+the photon pass with the same sphere as a mirror (a reflector), whose
+throughput per ray should be within 20% of the glass's (issue 7).
 
     .venv/bin/python benchmarks/speed.py [--repeats 3]
 
@@ -23,18 +25,19 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from caustic_addon import (Camera, Dielectric, Diffuse, MapCache, Object, PointLight, RenderSettings,  # noqa: E402
-                           Scene, render, shapes)
+from caustic_addon import (Camera, Dielectric, Diffuse, MapCache, Object, PointLight, Reflector,  # noqa: E402
+                           RenderSettings, Scene, render, shapes)
 from caustic_addon.accel import Accelerator  # noqa: E402
 from caustic_addon.emission import Sphere, sample_cone  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
 
-def benchmark_scene() -> Scene:
+def benchmark_scene(material=None) -> Scene:
+    """The glass sphere scene, or the same sphere of another `material`."""
     return Scene(
         objects=[Object("Floor", shapes.plane(10.0), Diffuse(albedo=0.8)),
-                 Object("Glass", shapes.uv_sphere(1.0, (0, 0, 1.5), 256, 128), Dielectric(1.5))],
+                 Object("Glass", shapes.uv_sphere(1.0, (0, 0, 1.5), 256, 128), material or Dielectric(1.5))],
         lights=[PointLight((0, 0, 6), 1000.0)],
         camera=Camera.look_at((0, -6, 5), (0, 0, 0.5), pixx=640, pixy=480),
     )
@@ -80,7 +83,11 @@ def main() -> None:
     scene = benchmark_scene()
     raw = max(raw_embree_rays_per_second(scene, 2_000_000, 2) for _ in range(args.repeats))
 
-    runs = [render(scene, RenderSettings(photons=args.photons, spp=1)).stats for _ in range(args.repeats)]
+    # glass and mirror runs alternate, so a change in the machine's load hits both
+    runs, mirror_runs = [], []
+    for _ in range(args.repeats):
+        runs.append(render(scene, RenderSettings(photons=args.photons, spp=1)).stats)
+        mirror_runs.append(render(benchmark_scene(Reflector(0.9)), RenderSettings(photons=args.photons, spp=1)).stats)
 
     # a camera move with the map cache: only the eye pass runs again
     cache = MapCache()
@@ -95,6 +102,8 @@ def main() -> None:
     paths_per_s = photon["photons_emitted"] / photon["seconds"]["photons"]
     photon_rays_per_s = photon["rays_photon_pass"] / photon["seconds"]["photons"]
     eye_rays_per_s = eye["rays_eye_pass"] / eye["seconds"]["eye"]
+    mirror = min(mirror_runs, key=lambda s: s["seconds"]["photons"])
+    mirror_rays_per_s = mirror["rays_photon_pass"] / mirror["seconds"]["photons"]
     report = {
         "date": date.today().isoformat(),
         "machine": machine(),
@@ -109,6 +118,12 @@ def main() -> None:
         "eye_pass_rays": eye["rays_eye_pass"],
         "eye_pass_rays_per_s": eye_rays_per_s,
         "eye_pass_fraction_of_raw": eye_rays_per_s / raw,
+        "reflector_photon_pass_s": mirror["seconds"]["photons"],
+        "reflector_photon_paths_per_s": mirror["photons_emitted"] / mirror["seconds"]["photons"],
+        "reflector_photon_pass_rays_per_s": mirror_rays_per_s,
+        "reflector_rays_per_photon": mirror["rays_photon_pass"] / mirror["photons_emitted"],
+        "glass_rays_per_photon": photon["rays_photon_pass"] / photon["photons_emitted"],
+        "reflector_over_glass_rays_per_s": mirror_rays_per_s / photon_rays_per_s,
         "bvh_s": photon["seconds"]["bvh"],
         "rerender_after_camera_move_s": cached_rerender,
     }
@@ -119,6 +134,10 @@ def main() -> None:
     print(f"photon pass               {paths_per_s / 1e6:6.2f} M paths/s, {photon_rays_per_s / 1e6:.2f} M rays/s "
           f"({100 * photon_rays_per_s / raw:.0f}% of raw), {photon['seconds']['photons']:.2f} s for "
           f"{photon['photons_emitted']:,} photons")
+    print(f"photon pass, mirror ball  {report['reflector_photon_paths_per_s'] / 1e6:6.2f} M paths/s, "
+          f"{mirror_rays_per_s / 1e6:.2f} M rays/s ({100 * mirror_rays_per_s / photon_rays_per_s:.0f}% of the glass's "
+          f"per ray; {report['reflector_rays_per_photon']:.2f} rays per photon against "
+          f"{report['glass_rays_per_photon']:.2f})")
     print(f"eye pass 640x480 1 spp    {eye['seconds']['eye']:6.2f} s, {eye_rays_per_s / 1e6:.2f} M rays/s "
           f"({100 * eye_rays_per_s / raw:.0f}% of raw)")
     print(f"BVH build                 {photon['seconds']['bvh']:6.2f} s")

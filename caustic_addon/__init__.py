@@ -1,4 +1,4 @@
-"""Caustics through transparent meshes: a photon pass into illumination maps
+"""Caustics through transparent meshes and off mirrors: a photon pass into illumination maps
 and a Whitted eye pass, on Embree. This package never imports bpy.
 
     from caustic_addon import render, Scene, RenderSettings
@@ -10,10 +10,10 @@ from .cache import MapCache
 from .errors import Cancelled, SceneError
 from .illumination_map import PlaneChart, UVChart
 from .render import RenderResult, render
-from .scene import (Camera, Dielectric, Diffuse, Mesh, Object, PointLight, RenderSettings, Scene, SpotLight,
-                    SunLight)
+from .scene import (Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector, RenderSettings, Scene,
+                    SpotLight, SunLight)
 
 __all__ = [
-    "Camera", "Cancelled", "Dielectric", "Diffuse", "MapCache", "Mesh", "Object", "PlaneChart", "PointLight", "RenderResult",
+    "Camera", "Cancelled", "Dielectric", "Diffuse", "MapCache", "Mesh", "Object", "PlaneChart", "PointLight", "Reflector", "RenderResult",
     "RenderSettings", "Scene", "SceneError", "SpotLight", "SunLight", "UVChart", "render",
 ]

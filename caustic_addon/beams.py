@@ -4,8 +4,10 @@ Photons leave a lamp on a G x G grid laid over its target cone (equal-area:
 Shirley and Chiu's concentric square-to-disc map, then the cone's
 cos(theta) = 1 - rho^2 (1 - cos_max)), or over a sun's target disc. At a
 dielectric each path splits deterministically into its reflected (weight F)
-and refracted (weight 1 - F) branch, so a path's *family* is its sequence of
-(surface, event). Three grid neighbours of the same family that land on the
+and refracted (weight 1 - F) branch; at a reflector it only reflects (weight
+its reflectance). A path's *family* is its sequence of (surface, event), so
+paths that meet the same surfaces in the same order, glass or mirror, make
+beams together. Three grid neighbours of the same family that land on the
 same receiver bound a beam: the grid triangle's flux, spread evenly over the
 triangle the three land on, is irradiance flux / area there (beam tracing,
 Heckbert and Hanrahan 1984; Watt 1990). `beam_map.BeamMap` rasterises the
@@ -145,6 +147,11 @@ def beam_sources(lights: list[Light], targets: list[Sphere], scene_sphere: Spher
                                             start_distance=start_distance))
                 continue
             axis, cos_max = target_cone(light.position, sphere)
+            if cos_max <= -1.0:
+                # a lamp inside the target: two hemispheres, since one grid over
+                # the whole sphere folds its edge onto a single direction
+                per_light += [BeamSource(light, energy, 2, axis=a, cos_max=0.0) for a in (axis, -axis)]
+                continue
             per_light.append(BeamSource(light, energy, 2, axis=axis, cos_max=cos_max))
         for src in per_light:
             src.overlap = per_light
@@ -220,13 +227,13 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
                                    chart.area_scale(local), weight[sel],
                                    weight[sel].max(axis=1) * MIN_BRANCH_WEIGHT / floor[sel]))
 
-        glass = materials.dielectric[hits.obj]
+        bounce = materials.specular_surface[hits.obj]
         origins, dirs, weight, vertex, family, medium, floor, points = (
-            a[glass] for a in (origins, dirs, weight, vertex, family, medium, floor, points))
-        hits = hits.select(glass)
+            a[bounce] for a in (origins, dirs, weight, vertex, family, medium, floor, points))
+        hits = hits.select(bounce)
         if len(vertex) == 0:
             break
-        surface = orient(accel, hits, dirs, points, materials.ior, medium)
+        surface = orient(accel, hits, dirs, points, materials, medium)
         tint = materials.color[hits.obj]
         branches = []
         for event, mirror in ((0, True), (1, False)):
@@ -234,7 +241,7 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
             share = surface.fresnel if mirror else np.where(crossed, 1.0 - surface.fresnel, 0.0)
             new_weight = weight * tint * share[:, None]
             new_medium = np.where(crossed, np.where(surface.entering, hits.obj, MISS), medium)
-            alive = new_weight.max(axis=1) >= floor
+            alive = (new_weight.max(axis=1) >= floor) & (mirror | materials.dielectric[hits.obj])
             branches.append((accel.offset(points, surface.facing, new_dirs)[alive], new_dirs[alive],
                              new_weight[alive], vertex[alive], _mix(family, hits.obj, event)[alive],
                              new_medium[alive], floor[alive]))

@@ -55,13 +55,13 @@ def _seed(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="python -m caustic_addon",
-                     description="Render caustics through a transparent mesh, without Blender.")
+                     description="Render caustics through a transparent mesh or off a mirror, without Blender.")
     commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     cmd = commands.add_parser("render", help="render a scene file and a mesh to an image",
                               description="Render the scene file CONFIG (TOML; see examples/paper.toml) with "
-                                          "the transparent mesh MESH (Wavefront OBJ) to OUT.")
+                                          "the mesh MESH (Wavefront OBJ; glass or a reflector, as object.material says) to OUT.")
     cmd.add_argument("config", metavar="CONFIG", help="scene file, TOML")
-    cmd.add_argument("mesh", metavar="MESH", help="the transparent object, Wavefront OBJ")
+    cmd.add_argument("mesh", metavar="MESH", help="the caster, Wavefront OBJ")
     cmd.add_argument("-o", "--output", metavar="OUT", required=True,
                      help="image to write: .png (8-bit sRGB) or .exr (float32 linear); its folder is created")
     cmd.add_argument("--photons", metavar="N", type=int, help="lamp rays, overriding photons.count")

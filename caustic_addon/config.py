@@ -46,14 +46,17 @@ Colours are linear RGB, a number (grey) or [r, g, b]. Positions are metres.
   emission     "targeted" (only toward the object) | "sphere" (the paper's
                eq. 1, every direction) ["targeted"]
 
-[object]       the transparent mesh: scaled about its origin, then moved
+[object]       the caster: scaled about its origin, then moved
+  material     "glass" (refracts and reflects) | "reflector" (a perfect
+               mirror or polished metal) ["glass"]
   ior          index of refraction > 0: 1.33 water, 1.5 glass, 1.9 cubic
-               zirconia, 2.41 diamond [1.5]
+               zirconia, 2.41 diamond (glass) [1.5]
   position     [x, y, z] where the mesh's origin goes; the paper's object
                height is its z [[0, 0, 0]]
   scale        a number > 0 or [x, y, z] of them [1.0]
-  color        tint at each reflection and refraction, 0..1 [1.0]
-  absorption   Beer-Lambert coefficient inside, per metre, >= 0 [0.0]
+  color        glass: tint at each reflection and refraction; reflector:
+               its reflectance, the same at every angle; 0..1 [1.0]
+  absorption   Beer-Lambert coefficient inside, per metre, >= 0 (glass) [0.0]
 
 [render]
   spp          eye samples per pixel, integer >= 1 [4]
@@ -78,7 +81,7 @@ import numpy as np
 
 from . import shapes
 from .scene import (MAX_BEAM_REFINEMENT, RGB, Camera, Dielectric, Diffuse, Light, Mesh, Object, PointLight,
-                    RenderSettings, Scene, SpotLight, SunLight)
+                    Reflector, RenderSettings, Scene, SpotLight, SunLight)
 
 _REQUIRED = object()
 
@@ -206,6 +209,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "emission": choice("targeted", "sphere", default="targeted"),
     },
     "object": {
+        "material": choice("glass", "reflector", default="glass"),
         "ior": number("> 0", _positive, 1.5),
         "position": vector(default=np.zeros(3)),
         "scale": triple("> 0", _positive, np.ones(3)),
@@ -220,6 +224,12 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "seed": integer(0, 0),
         "threads": integer(1, 2),
     },
+}
+
+# The keys each object material takes.
+OBJECT_KEYS = {
+    "glass": ("material", "ior", "position", "scale", "color", "absorption"),
+    "reflector": ("material", "position", "scale", "color"),
 }
 
 # The keys each lamp type takes.
@@ -240,7 +250,7 @@ class Config:
     camera: Camera
     floor: Object
     lamp: Light
-    material: Dielectric
+    material: Dielectric | Reflector
     placement: np.ndarray
     ambient: RGB
     background: RGB
@@ -293,7 +303,8 @@ def parse(text: str, name: str = "<config>") -> Config:
                                  camera["look_at"], camera["up"]),
         floor=Object("Plane", shapes.plane(plane["size"], (0.0, 0.0, plane["height"])), Diffuse(plane["albedo"])),
         lamp=_lamp(lamp),
-        material=Dielectric(obj["ior"], obj["color"], obj["absorption"]),
+        material=(Reflector(obj["color"]) if obj["material"] == "reflector"
+                  else Dielectric(obj["ior"], obj["color"], obj["absorption"])),
         placement=placement,
         ambient=render["ambient"],
         background=render["background"],
@@ -303,7 +314,7 @@ def parse(text: str, name: str = "<config>") -> Config:
 
 def _table(document: dict, table: str, name: str) -> dict:
     """The checked values of `table`, defaults filled in. A lamp takes only
-    the keys of its type."""
+    the keys of its type, an object those of its material."""
     raw = document.get(table, {})
     if not isinstance(raw, dict):
         raise ConfigError(f"{name}: {table} must be a table, [{table}]")
@@ -311,6 +322,9 @@ def _table(document: dict, table: str, name: str) -> dict:
     if table == "lamp":
         kind = _value(fields["type"], raw, "lamp", "type", name)
         fields, owner = {key: fields[key] for key in LAMP_KEYS[kind]}, f"a {kind} lamp"
+    if table == "object":
+        kind = _value(fields["material"], raw, "object", "material", name)
+        fields, owner = {key: fields[key] for key in OBJECT_KEYS[kind]}, f"a {kind} object"
     for key in raw:
         if key not in fields:
             raise ConfigError(f"{name}: unknown key {table}.{key} (the keys of {owner} are {', '.join(fields)})")

@@ -9,7 +9,7 @@ Two modes:
   intensity times the solid angle of its (u,v) cell, so a uniform lamp stays
   uniform.
 - 'targeted': only into the cones (point, spot) or over the discs (sun) that
-  hold the transparent objects' bounding spheres, on a low-discrepancy
+  hold the casters' (transparent and reflecting objects') bounding spheres, on a low-discrepancy
   sequence. Where cones overlap, a photon's flux is divided by the summed
   sample density of all cones that contain it (the balance heuristic), so the
   expected irradiance equals that of full-sphere emission.

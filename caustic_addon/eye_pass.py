@@ -9,7 +9,8 @@ At an opaque surface: ambient * albedo, plus direct light from each lamp
 (lighting.py), plus caustic irradiance E_c * albedo / pi read from the
 receiver's map. At a dielectric: both the reflected ray (weight F) and the
 refracted ray (weight 1 - F) carry on, each tinted by the glass colour and by
-Beer-Lambert absorption inside, up to `max_depth` bounces. A ray that leaves
+Beer-Lambert absorption inside, up to `max_depth` bounces. At a reflector
+the reflected ray carries on, times the reflectance colour. A ray that leaves
 the scene sees the background.
 """
 
@@ -88,9 +89,9 @@ class EyePass:
             if inside.any():
                 rays.weight[inside] *= beer_lambert(self.materials.absorption[rays.medium[inside]], hits.t[inside])
 
-            glass = self.materials.dielectric[hits.obj]
-            self._shade_opaque(rays.select(~glass), hits.select(~glass), points[~glass])
-            rays = self._split_at_glass(rays.select(glass), hits.select(glass), points[glass])
+            bounce = self.materials.specular_surface[hits.obj]
+            self._shade_opaque(rays.select(~bounce), hits.select(~bounce), points[~bounce])
+            rays = self._split_at_specular(rays.select(bounce), hits.select(bounce), points[bounce])
 
     def _shade_opaque(self, rays: EyeRays, hits, points: np.ndarray) -> None:
         if len(rays.pixel) == 0:
@@ -123,11 +124,12 @@ class EyePass:
             radiance = irradiance * albedo[sel] / math.pi
             self._add("caustic", rays.pixel[sel], rays.weight[sel] * radiance)
 
-    def _split_at_glass(self, rays: EyeRays, hits, points: np.ndarray) -> EyeRays:
-        """The reflected and refracted children of rays at dielectric hits."""
+    def _split_at_specular(self, rays: EyeRays, hits, points: np.ndarray) -> EyeRays:
+        """The reflected children of rays at dielectric and reflector hits,
+        and the refracted children at dielectric hits."""
         if len(rays.pixel) == 0:
             return rays
-        surface = orient(self.accel, hits, rays.dirs, points, self.materials.ior, rays.medium)
+        surface = orient(self.accel, hits, rays.dirs, points, self.materials, rays.medium)
         tint = self.materials.color[hits.obj]
         children = []
         for mirror in (True, False):

@@ -1,6 +1,8 @@
-"""What both passes do where a ray meets a dielectric surface: orient the
-normals, then refract or reflect. Kept in one place so the photon pass and the
-eye pass cannot disagree about the physics."""
+"""What both passes do where a ray meets a specular surface, a dielectric or
+a reflector: orient the normals, then refract or reflect. Kept in one place
+so the photon pass, the beams and the eye pass cannot disagree about the
+physics. A reflector is a surface whose Fresnel reflectance is 1: it always
+reflects, and its colour (applied by the caller) is its reflectance."""
 
 from __future__ import annotations
 
@@ -9,19 +11,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from .accel import Accelerator, Hits
+from .materials import Materials
 from .optics import dot, fresnel_dielectric, reflect, refract
 
 
 @dataclass
 class Interface:
-    """n rays at dielectric hits, oriented.
+    """n rays at specular hits, oriented.
 
     points      (n,3) world hit points
     facing      (n,3) geometric normal on the side the ray comes from
     shading     (n,3) shading normal on that same side
     entering    (n,) bool: the ray goes from outside the object to inside
     eta         (n,) eta_i / eta_t for this crossing
-    fresnel     (n,) unpolarised reflectance; 1 under total internal reflection
+    fresnel     (n,) unpolarised reflectance; 1 under total internal
+                reflection and at reflectors
     """
 
     points: np.ndarray
@@ -33,8 +37,9 @@ class Interface:
 
 
 def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, points: np.ndarray,
-           ior_by_object: np.ndarray, medium: np.ndarray) -> Interface:
-    """Orient the hits' normals against `dirs (n,3)` and evaluate Fresnel.
+           materials: Materials, medium: np.ndarray) -> Interface:
+    """Orient the hits' normals against `dirs (n,3)` and evaluate Fresnel
+    (1 at reflectors, which reflect everything).
 
     Entering or leaving: for a closed mesh, the ray's own state `medium (n,)`
     (the object it is inside, or MISS) decides, since a hit at an edge or a
@@ -52,9 +57,9 @@ def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, points: np.ndarray,
     shading = np.where((dot(shading, facing) < 0.0)[:, None], -shading, shading)
     tipped = dot(dirs, shading) >= 0.0
     shading[tipped] = facing[tipped]
-    ior = ior_by_object[hits.obj]
+    ior = materials.ior[hits.obj]
     eta = np.where(entering, 1.0 / ior, ior)
-    fresnel = fresnel_dielectric(-dot(dirs, shading), eta)
+    fresnel = np.where(materials.reflector[hits.obj], 1.0, fresnel_dielectric(-dot(dirs, shading), eta))
     return Interface(points, facing, shading, entering, eta, fresnel)
 
 

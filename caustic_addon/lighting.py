@@ -8,8 +8,8 @@ incidence and unit vector l toward it:
 the Lambert term (what a Cycles Diffuse BSDF returns) plus an
 energy-normalised Blinn-Phong lobe (Akenine-Moller et al., Real-Time
 Rendering, 4th ed., eq. 9.65 family). A lamp behind the surface gets no
-shadow ray. Dielectrics block shadow rays: their light arrives through the
-illumination maps.
+shadow ray. Dielectrics and reflectors block shadow rays: the light they
+redirect arrives through the illumination maps.
 """
 
 from __future__ import annotations

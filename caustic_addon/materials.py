@@ -14,12 +14,15 @@ from .scene import Object
 class Materials:
     """Indexed by object index (m objects).
 
-    dielectric (m,) bool        receiver (m,) bool
-    ior (m,)                    color (m,3), absorption (m,3) per metre
+    dielectric (m,) bool        reflector (m,) bool        receiver (m,) bool
+    specular_surface (m,) bool  dielectric or reflector: rays scatter there
+    ior (m,)                    color (m,3): glass tint or reflectance
+    absorption (m,3) per metre
     albedo (m,3)                specular (m,3), exponent (m,)
     """
 
     dielectric: np.ndarray
+    reflector: np.ndarray
     receiver: np.ndarray
     ior: np.ndarray
     color: np.ndarray
@@ -38,6 +41,7 @@ class Materials:
 
         return Materials(
             dielectric=np.array([o.is_transparent for o in objects], dtype=bool),
+            reflector=np.array([o.is_reflector for o in objects], dtype=bool),
             receiver=np.array([o.is_receiver for o in objects], dtype=bool),
             ior=column("ior", 1.0),
             color=rgb_column("color", 1.0),
@@ -46,3 +50,7 @@ class Materials:
             specular=rgb_column("specular", 0.0),
             exponent=column("exponent", 1.0),
         )
+
+    @property
+    def specular_surface(self) -> np.ndarray:
+        return self.dielectric | self.reflector

@@ -87,10 +87,10 @@ def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str]) -> d
 
 
 def targets_and_bounds(scene: Scene) -> tuple[list[Sphere], Sphere]:
-    """The transparent objects' bounding spheres, which lamps aim at, and
-    the sphere around the whole scene."""
+    """The casters' (transparent and reflecting objects') bounding spheres,
+    which lamps aim at, and the sphere around the whole scene."""
     lo, hi = scene.bounds()
-    return ([Sphere.around(o.mesh.vertices) for o in scene.transparent],
+    return ([Sphere.around(o.mesh.vertices) for o in scene.casters],
             Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo))))
 
 
@@ -245,7 +245,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         cached = cache.get(key) if cache is not None else None
         if cached is None:
             maps = build_maps(scene, settings, warnings)
-            run_forward = bool(maps) and bool(scene.transparent) and settings.photons > 0
+            run_forward = bool(maps) and bool(scene.casters) and settings.photons > 0
             share = _FORWARD_SHARE if run_forward else 0.0
             photon_stats = TransportStats()
             if run_forward:

@@ -119,7 +119,25 @@ class Diffuse:
         self.specular = rgb(self.specular)
 
 
-Material = Union[Dielectric, Diffuse]
+@dataclass
+class Reflector:
+    """A specular mirror or polished metal: every ray reflects, r = d - 2 (d.n) n
+    about the shading normal, and its colour is multiplied by `color`.
+
+    color         (3,) reflectance, the same at every angle (a metal's
+                  Schlick/F82 rise toward grazing incidence is ignored)
+
+    It is perfectly smooth: the add-on names glossy materials with a
+    roughness above 0 in a warning, as it does rough glass.
+    """
+
+    color: RGB = field(default_factory=lambda: np.full(3, 0.9))
+
+    def __post_init__(self):
+        self.color = rgb(self.color)
+
+
+Material = Union[Dielectric, Diffuse, Reflector]
 
 
 @dataclass
@@ -131,6 +149,15 @@ class Object:
     @property
     def is_transparent(self) -> bool:
         return isinstance(self.material, Dielectric)
+
+    @property
+    def is_reflector(self) -> bool:
+        return isinstance(self.material, Reflector)
+
+    @property
+    def is_caster(self) -> bool:
+        """Casts caustics: a specular surface, transparent or reflecting."""
+        return isinstance(self.material, (Dielectric, Reflector))
 
     @property
     def is_receiver(self) -> bool:
@@ -278,6 +305,11 @@ class Scene:
         return [o for o in self.objects if o.is_transparent]
 
     @property
+    def casters(self) -> list[Object]:
+        """The objects that cast caustics: dielectrics and reflectors."""
+        return [o for o in self.objects if o.is_caster]
+
+    @property
     def receivers(self) -> list[Object]:
         return [o for o in self.objects if o.is_receiver]
 
@@ -301,7 +333,8 @@ class RenderSettings:
     """What the user tunes. Defaults are the ones the accuracy benchmark chose.
 
     photons       lamp rays per lamp (the paper's "jumlah sinar lampu"; it used 40,000)
-    emission      'targeted': only toward transparent objects; 'sphere': the
+    emission      'targeted': only toward the casters (transparent and
+                  reflecting objects); 'sphere': the
                   paper's eq. (1) over the whole sphere of directions
     energy        multiplier on every lamp's power (the paper's lamp energy)
     map_scale     edge of one illumination-map cell in millimetres of world

@@ -1,7 +1,8 @@
 """Procedural meshes for tests, benchmarks and the paper's experiments: a
 round base (sphere), a flat base (cylinder), a pointed base (cone, point
-down) and the receiver plane. All are closed, wound counter-clockwise seen
-from outside, with smooth corner normals (flat on caps and the plane).
+down), the receiver plane, and an open tube (a mirror ring). All but the
+tube are closed; all are wound counter-clockwise seen from outside, with
+smooth corner normals (flat on caps and the plane).
 
 The paper's scenes (section 4) are laid out here too, so that
 benchmarks/paper_scenes.py and the add-on's caustic.add_paper_scene build
@@ -101,6 +102,12 @@ def cone(radius: float = 1.0, height: float = 1.5, center=(0.0, 0.0, 0.0), segme
     slant = np.array([height, -radius]) / math.hypot(height, radius)
     normals = np.array([[0.0, 1.0], slant])
     return _revolve(profile, normals, segments, center)
+
+
+def tube(radius: float = 1.0, height: float = 1.0, center=(0.0, 0.0, 0.0), segments: int = 256) -> Mesh:
+    """An open tube (no caps) about z from center_z to center_z + height,
+    smooth radial normals: a coffee cup's wall, or a ring."""
+    return _revolve(np.array([[radius, height], [radius, 0.0]]), np.array([[1.0, 0.0]]), segments, center)
 
 
 PAPER_SHAPES = ("round", "flat", "pointed")

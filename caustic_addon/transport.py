@@ -1,9 +1,12 @@
-"""The forward pass: photons from the lamps through the dielectrics, onto the
-receivers' illumination maps.
+"""The forward pass: photons from the lamps through the dielectrics and off
+the reflectors, in any order, onto the receivers' illumination maps.
 
 At a dielectric a photon reflects with the Fresnel probability F and refracts
 otherwise, keeping its flux: Russian roulette with the exact probability, so
-the estimate stays unbiased with a single path per photon. Inside a medium
+the estimate stays unbiased with a single path per photon. At a reflector it
+always reflects, r = d - 2 (d.n) n, its flux times the reflectance colour
+(Russian roulette ends the photons it dims below ROULETTE_FRACTION, keeping
+the expected flux). Inside a medium
 its flux falls by Beer-Lambert over each segment. A photon lands in a
 receiver's map only after at least one specular event; the eye pass computes
 direct light exactly, so nothing is counted twice.
@@ -75,14 +78,14 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, Illu
             stats.landed += int(sel.sum())
             stats.flux_landed = stats.flux_landed + flux[sel].sum(axis=0)
 
-        glass = materials.dielectric[hits.obj]
+        bounce = materials.specular_surface[hits.obj]
         origins, dirs, flux, start_flux, medium, points, ids = (
-            a[glass] for a in (origins, dirs, flux, start_flux, medium, points, ids))
-        hits = hits.select(glass)
+            a[bounce] for a in (origins, dirs, flux, start_flux, medium, points, ids))
+        hits = hits.select(bounce)
         if len(flux) == 0:
             break
 
-        surface = orient(accel, hits, dirs, points, materials.ior, medium)
+        surface = orient(accel, hits, dirs, points, materials, medium)
         dirs, crossed = scatter(surface, dirs, hash_uniform(ids, 2 * depth, seed) < surface.fresnel)
         flux *= materials.color[hits.obj]
         medium = np.where(crossed, np.where(surface.entering, hits.obj, MISS), medium)

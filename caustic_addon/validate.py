@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from .errors import SceneError
-from .scene import Dielectric, PointLight, Scene, SpotLight, SunLight
+from .scene import Dielectric, PointLight, Reflector, Scene, SpotLight, SunLight
 
 
 def _finite(name: str, what: str, array) -> None:
@@ -45,6 +45,10 @@ def validate_scene(scene: Scene) -> list[str]:
                 raise SceneError(f"{obj.name}: IOR must be a positive number (got {material.ior})")
             if np.any(material.absorption < 0):
                 raise SceneError(f"{obj.name}: absorption must not be negative")
+        if isinstance(material, Reflector):
+            _finite(obj.name, "its reflectance colour", material.color)
+            if np.any((material.color < 0) | (material.color > 1)):
+                raise SceneError(f"{obj.name}: reflectance colour must be in 0..1 (got {material.color.tolist()})")
 
     for light in scene.lights:
         if isinstance(light, (PointLight, SpotLight)):
@@ -57,6 +61,6 @@ def validate_scene(scene: Scene) -> list[str]:
 
     if not scene.lights:
         warnings.append("the scene has no lamps: only ambient light and the background show")
-    if scene.transparent and not scene.receivers:
+    if scene.casters and not scene.receivers:
         warnings.append("no object receives caustics: the photon pass is skipped")
     return warnings

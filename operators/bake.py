@@ -50,8 +50,8 @@ class CAUSTIC_OT_bake(bpy.types.Operator):
         try:
             read = read_scene(context, with_camera=False)
             settings = render_settings(props, spp=1)
-            if not read.scene.transparent:
-                raise InputError("Nothing to bake: no object is transparent")
+            if not read.scene.casters:
+                raise InputError("Nothing to bake: no object is transparent or a reflector")
         except InputError as exc:
             self.report({'ERROR'}, str(exc))
             return {'CANCELLED'}

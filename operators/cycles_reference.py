@@ -37,10 +37,12 @@ def _cycles_settings(overrides: Overrides, scene, samples: int, time_limit: floa
 
 
 def _shadow_caustics(overrides: Overrides, read: SceneRead) -> None:
-    """Turn MNEE on for the transparent objects (casters), the receivers and the lamps."""
+    """Turn MNEE on for the transparent objects (casters), the receivers and the
+    lamps. Reflectors are neither: MNEE cannot solve for mirrors."""
     for ob in read.scene.objects:
         source = bpy.data.objects[read.sources[ob.name]]
-        overrides.set(source.cycles, "is_caustics_caster" if ob.is_transparent else "is_caustics_receiver", True)
+        if ob.is_transparent or ob.is_receiver:
+            overrides.set(source.cycles, "is_caustics_caster" if ob.is_transparent else "is_caustics_receiver", True)
     for light in read.scene.lights:
         overrides.set(bpy.data.objects[read.sources[light.name]].data.cycles, "is_caustics_light", True)
 

@@ -1,7 +1,8 @@
 """A Blender material read as the engine's: Glass BSDF, or Principled BSDF
-that mostly transmits, is a Dielectric; Principled and Diffuse BSDFs, plain
-viewport colours and anything not understood are Diffuse receivers. What is
-read approximately comes back as a warning naming the material."""
+that mostly transmits, is a Dielectric; Glossy BSDF, or Principled BSDF that
+is mostly metal and smooth, is a Reflector; Principled and Diffuse BSDFs,
+plain viewport colours and anything not understood are Diffuse receivers.
+What is read approximately comes back as a warning naming the material."""
 
 from __future__ import annotations
 
@@ -10,17 +11,25 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from ..caustic_addon import Dielectric, Diffuse
+from ..caustic_addon import Dielectric, Diffuse, Reflector
 
 DEFAULT_ALBEDO = 0.8
 GLASS_NODES = {'ShaderNodeBsdfGlass', 'ShaderNodeBsdfRefraction'}
+# Blender 4.0 merged Anisotropic BSDF into Glossy BSDF; both names still make the node.
+GLOSSY_NODES = {'ShaderNodeBsdfGlossy', 'ShaderNodeBsdfAnisotropic'}
+# A Principled BSDF with Metallic above 0.5 is a mirror up to this Roughness,
+# and diffuse beyond it; either way a warning names it when Roughness > 0.
+MIRROR_ROUGHNESS = 0.2
 
 
 @dataclass
 class Surface:
-    """How a material reads: `transparent` picks which of the two to use."""
+    """How a material reads: `transparent` (glass) or `reflector` (mirror,
+    metal) pick the engine material; neither is a diffuse receiver.
+    `color` is the glass tint or the reflectance."""
 
     transparent: bool
+    reflector: bool = False
     ior: float = 1.5
     color: np.ndarray = field(default_factory=lambda: np.ones(3))
     albedo: np.ndarray = field(default_factory=lambda: np.full(3, DEFAULT_ALBEDO))
@@ -72,6 +81,13 @@ def read_surface(material) -> Surface:
         if _value(shader, "Roughness", what, warnings) > 0.0:
             warnings.append(f"{what}: rough glass is rendered as smooth glass")
         return surface
+    if kind in GLOSSY_NODES:
+        return _mirror(shader, "Color", what, warnings)
+    if kind == 'ShaderNodeBsdfPrincipled' and _value(shader, "Metallic", what, warnings) > 0.5:
+        if _value(shader, "Roughness", what, warnings) <= MIRROR_ROUGHNESS:
+            return _mirror(shader, "Base Color", what, warnings)
+        warnings.append(f"{what}: rough metal (Roughness above {MIRROR_ROUGHNESS}) is rendered as diffuse and "
+                        "casts no caustics")
     if kind == 'ShaderNodeBsdfPrincipled':
         return Surface(transparent=False, albedo=_value(shader, "Base Color", what, warnings), warnings=warnings)
     if kind == 'ShaderNodeBsdfDiffuse':
@@ -81,12 +97,24 @@ def read_surface(material) -> Surface:
                              "with the material's viewport colour"])
 
 
-def engine_material(surface: Surface, settings) -> Dielectric | Diffuse:
+def _mirror(shader, color_input: str, what: str, warnings: list[str]) -> Surface:
+    """A reflector of the shader's colour; its roughness, if any, named in a warning."""
+    color = _value(shader, color_input, what, warnings)
+    roughness = _value(shader, "Roughness", what, warnings)
+    if roughness > 0.0:
+        warnings.append(f"{what}: glossy Roughness {roughness:.3g} is rendered as a perfect mirror")
+    return Surface(transparent=False, reflector=True, color=np.clip(color, 0.0, 1.0), warnings=warnings)
+
+
+def engine_material(surface: Surface, settings) -> Dielectric | Diffuse | Reflector:
     """The engine material for an object of `Object.caustic` `settings` whose material reads as `surface`."""
     role = settings.role
+    if role == 'REFLECTOR' or (role == 'AUTO' and surface.reflector):
+        return Reflector(surface.color if surface.reflector else np.ones(3))
     transparent = role == 'TRANSPARENT' or (role == 'AUTO' and surface.transparent)
     if not transparent:
-        return Diffuse(albedo=surface.albedo if not surface.transparent else DEFAULT_ALBEDO)
+        opaque = not (surface.transparent or surface.reflector)
+        return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO)
     ior = settings.ior if settings.use_ior else (surface.ior if surface.transparent else 1.5)
     color = surface.color if surface.transparent else np.ones(3)
     return Dielectric(ior=ior, color=color, absorption=np.array(settings.absorption[:], dtype=np.float64))

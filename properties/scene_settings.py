@@ -15,7 +15,8 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
     emission: EnumProperty(
         name="Emission",
         description="Where the lamps send their rays",
-        items=[('TARGETED', "Targeted", "Only toward transparent objects, so every lamp ray can make a caustic"),
+        items=[('TARGETED', "Targeted", "Only toward transparent and reflecting objects, so every lamp ray "
+                                        "can make a caustic"),
                ('SPHERE', "Sphere", "Over the whole sphere of directions, as the paper's equation (1)")],
         default='TARGETED')
     energy: FloatProperty(

@@ -34,6 +34,14 @@ def glass_material(name="Glass", ior=1.5):
     return material
 
 
+def glossy_material(name="Mirror", color=(0.9, 0.9, 0.9), roughness=0.0):
+    material = _material(name)
+    shader = _shader(material, 'ShaderNodeBsdfGlossy')
+    shader.inputs['Color'].default_value = (*color, 1.0)
+    shader.inputs['Roughness'].default_value = roughness
+    return material
+
+
 def add_plane(size, material, name="Floor"):
     bpy.ops.mesh.primitive_plane_add(size=size, location=(0.0, 0.0, 0.0))
     plane = bpy.context.object
@@ -88,3 +96,23 @@ def ball_lens_scene(width=160, height=120, photons=100_000, segments=64, rings=3
     set_resolution(width, height)
     scene.caustic.photons = photons
     return dict(floor=floor, ball=ball, lamp=lamp, camera=camera)
+
+
+def ring_scene(width=64, height=48, photons=200_000):
+    """A coffee cup without its coffee: an open Glossy ring (radius 0.5,
+    height 0.3) on a 4 m diffuse floor, a 100 W point lamp inside it at
+    (0.3, 0, 1), seen from above. The ring's nephroid caustic has its cusp at
+    x = -R d / (2d + R) = -0.136 on the floor."""
+    scene = bpy.context.scene
+    floor = add_plane(4.0, diffuse_material())
+    bpy.ops.mesh.primitive_cylinder_add(vertices=256, radius=0.5, depth=0.3, end_fill_type='NOTHING',
+                                        location=(0.0, 0.0, 0.15))
+    ring = bpy.context.object
+    ring.name = "Ring"
+    ring.data.shade_smooth()
+    ring.data.materials.append(glossy_material("Chrome"))
+    lamp = add_point_light((0.3, 0.0, 1.0), 100.0)
+    camera = add_camera((0.0, -0.6, 2.5), target=(0.0, 0.0, 0.0))
+    set_resolution(width, height)
+    scene.caustic.photons = photons
+    return dict(floor=floor, ring=ring, lamp=lamp, camera=camera)

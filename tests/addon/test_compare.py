@@ -60,3 +60,11 @@ def test_compare_restores_every_setting_and_stores_the_images():
     assert props.cycles_seconds > 0 and props.last_seconds > 0
     assert math.isfinite(props.cycles_relative_l2) and props.cycles_relative_l2 > 0
     assert math.isfinite(props.cycles_psnr)
+
+
+def test_compare_says_cycles_cannot_render_a_mirrors_caustic(reports):
+    scenes.ring_scene(32, 24, photons=50_000)
+    bpy.context.scene.caustic.cycles_samples = 4
+    reports()
+    assert bpy.ops.caustic.compare_cycles() == {'FINISHED'}
+    assert "Cycles (MNEE) cannot render caustics cast by reflectors ('Ring')" in reports()

@@ -68,7 +68,7 @@ def test_bake_without_glass_is_refused():
     scenes.add_point_light((0.0, 0.0, 2.0), 100.0)
     bpy.context.view_layer.update()
     before = snapshot_file()
-    with pytest.raises(RuntimeError, match="Nothing to bake: no object is transparent"):
+    with pytest.raises(RuntimeError, match="Nothing to bake: no object is transparent or a reflector"):
         bpy.ops.caustic.bake()
     assert snapshot_file() == before
 

@@ -5,6 +5,7 @@ import os
 
 import bpy
 import numpy as np
+import pytest
 from bpy_extras.object_utils import world_to_camera_view
 from mathutils import Vector
 
@@ -121,3 +122,22 @@ def test_direct_light_on_a_diffuse_floor_matches_cycles(tmp_path):
     ratio = ours[..., :3][inner].mean(axis=0) / reference[..., :3][inner].mean(axis=0)
     print("direct light, caustic render / Cycles per channel:", ratio)
     assert np.all(np.abs(ratio - 1.0) < 0.02)
+
+
+def test_glossy_ring_casts_a_visible_caustic():
+    """The same ring rendered as a mirror (Glossy BSDF, auto) and as a diffuse
+    receiver: direct light, computed exactly, is the same on the floor; the
+    mirror adds its caustic around the cusp at x = -0.136."""
+    parts = scenes.ring_scene()
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    mirror = pixels_of("Caustic Render")[..., :3].mean(axis=2)
+    parts["ring"].caustic.role = 'RECEIVER'
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    matte = pixels_of("Caustic Render")[..., :3].mean(axis=2)
+
+    row, col = pixel_at((-0.136, 0.0, 0.0))
+    patch = np.s_[row - 2:row + 3, col - 2:col + 3]
+    assert mirror[patch].max() > 2.0 * matte[patch].max()
+    far_row, far_col = pixel_at((1.2, 0.8, 0.0))
+    assert mirror[far_row, far_col] == pytest.approx(matte[far_row, far_col], rel=1e-4)
+    assert matte[far_row, far_col] > 0.0

@@ -124,6 +124,32 @@ def test_roles_from_materials_and_overrides(addon):
     assert result.materials["Water"] == "Water"
 
 
+def test_mirrors_and_metals_read_as_reflectors(addon):
+    floor, _ = lamp_scene()
+    shapes = {}
+    for name, material in (
+            ("Chrome", scenes.glossy_material("Chrome", color=(0.9, 0.8, 0.7))),
+            ("Brushed", scenes.glossy_material("Brushed", roughness=0.1)),
+            ("Gold", principled("Gold", **{"Metallic": 1.0, "Roughness": 0.0, "Base Color": (1.0, 0.8, 0.3, 1.0)})),
+            ("Pewter", principled("Pewter", **{"Metallic": 1.0, "Roughness": 0.6})),
+            ("Chalk", scenes.diffuse_material("Chalk"))):
+        shapes[name] = scenes.add_sphere(0.2, (len(shapes) * 0.5 - 1.0, 0.0, 0.5), material, name=name,
+                                         segments=8, rings=4)
+    shapes["Chalk"].caustic.role = 'REFLECTOR'
+    result = read(addon)
+    materials = {o.name: o.material for o in result.scene.objects}
+    Reflector, Diffuse = addon.caustic_addon.Reflector, addon.caustic_addon.Diffuse
+    assert isinstance(materials["Chrome"], Reflector) and np.allclose(materials["Chrome"].color, (0.9, 0.8, 0.7))
+    assert isinstance(materials["Brushed"], Reflector)
+    assert isinstance(materials["Gold"], Reflector) and np.allclose(materials["Gold"].color, (1.0, 0.8, 0.3))
+    assert isinstance(materials["Pewter"], Diffuse) and materials["Pewter"].receiver
+    assert isinstance(materials["Chalk"], Reflector) and np.allclose(materials["Chalk"].color, 1.0)
+    warnings = "\n".join(result.warnings)
+    assert "material 'Brushed': glossy Roughness 0.1 is rendered as a perfect mirror" in warnings
+    assert "material 'Pewter': rough metal (Roughness above 0.2) is rendered as diffuse" in warnings
+    assert "Chrome" not in warnings and "Gold" not in warnings
+
+
 def test_approximations_are_named_in_warnings(addon):
     floor, _ = lamp_scene()
     material = floor.data.materials[0]

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from caustic_addon import SceneError, cli, config, shapes
+from caustic_addon import Reflector, SceneError, cli, config, render, shapes
 from caustic_addon.image_io import read_exr, read_png, srgb_encode, write_image
 from caustic_addon.obj import ObjError, parse_obj, read_obj, write_obj
 
@@ -135,8 +135,11 @@ def test_command_line_overrides_the_scene_file(tmp_path):
     (lambda t: t.replace("ior = 1.5", "ior = nan"), ["object.ior"]),
     (lambda t: t.replace("map_scale = 5.0", 'density = "beam"\nbeam_refinement = 9'),
      ["photons.beam_refinement", "integer in 0..5"]),
+    (lambda t: t.replace("ior = 1.5", 'ior = 1.5\nmaterial = "reflector"'), ["object.ior", "reflector object"]),
+    (lambda t: t.replace("ior = 1.5", 'material = "metal"'), ["object.material", '"reflector"']),
 ], ids=["syntax", "unknown-key", "unknown-table", "negative-count", "fractional-count", "string-pixx",
-        "missing-eye", "zero-map-scale", "key-of-another-lamp", "nan-ior", "beam-refinement-too-deep"])
+        "missing-eye", "zero-map-scale", "key-of-another-lamp", "nan-ior", "beam-refinement-too-deep",
+        "ior-of-a-reflector", "unknown-material"])
 def test_bad_scene_file(tmp_path, edit, fragments):
     scene = write(tmp_path / "scene.toml", edit(SMALL))
     assert_bad_input(run_cli("render", scene, EXAMPLES / "round.obj", "-o", tmp_path / "out.png"), *fragments)
@@ -222,6 +225,24 @@ def test_scene_file_defaults_and_placement():
     placed = scene.objects[1].mesh.vertices
     np.testing.assert_allclose(placed, mesh.vertices * [0.1, 0.2, 0.3] + [0.0, 0.0, 0.02])
     assert scene.objects[1].material.ior == 1.5
+
+
+def test_a_reflector_in_the_scene_file_casts_a_caustic(tmp_path):
+    """A mirror tube of reflectance 0.5 around the lamp's foot: its light
+    lands on the plane (the mirror-tube physics is in test_reflectors.py)."""
+    text = SMALL.replace("ior = 1.5", 'material = "reflector"\ncolor = [0.5, 0.5, 0.25]')
+    cfg = config.parse(text)
+    assert isinstance(cfg.material, Reflector)
+    np.testing.assert_allclose(cfg.material.color, [0.5, 0.5, 0.25])
+    mesh = tmp_path / "tube.obj"
+    write_obj(mesh, shapes.tube(1.0, 0.5, segments=64))
+    out = tmp_path / "tube.exr"
+    done = run_cli("render", write(tmp_path / "scene.toml", text), mesh, "-o", out)
+    assert done.returncode == 0, done.stderr
+    result = render(cfg.scene(shapes.tube(1.0, 0.5, segments=64)), cfg.settings)
+    red, green, blue = result.stats["flux_landed_w"]
+    assert red > 0 and red == pytest.approx(green) and blue == pytest.approx(0.5 * red)
+    assert np.isfinite(read_exr(out)).all()
 
 
 def test_spot_and_sun_lamps():
