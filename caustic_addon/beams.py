@@ -15,6 +15,10 @@ Grid triangles whose three paths disagree (a silhouette, total internal
 reflection on one side, different surfaces) fall back to photons: each
 landed corner carries a third of the triangle's flux into the map's ordinary
 density estimate.
+
+When a material disperses, every wavelength band traces its own grid with
+its own IOR and carries the band's RGB weight (spectrum.py): beams of
+different bands land apart, which is the colour of a dispersive caustic.
 """
 
 from __future__ import annotations
@@ -174,10 +178,12 @@ def _mix(family: np.ndarray, obj: np.ndarray, event: int) -> np.ndarray:
 
 
 def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap], origins: np.ndarray,
-                dirs: np.ndarray, weight: np.ndarray, max_depth: int, start_medium: int = MISS) -> Landings:
+                dirs: np.ndarray, weight: np.ndarray, max_depth: int, start_medium: int = MISS,
+                band: int = 0) -> Landings:
     """Follow every branch of every vertex path, starting inside object
     `start_medium` (MISS: in air), until it lands on a receiver (after at
-    least one specular event), leaves, or fades below MIN_BRANCH_WEIGHT."""
+    least one specular event), leaves, or fades below MIN_BRANCH_WEIGHT.
+    Dielectrics refract with their IOR in wavelength band `band`."""
     vertex = np.arange(len(origins))
     family = np.zeros(len(origins), dtype=np.uint64)
     medium = np.full(len(origins), start_medium, dtype=np.int64)
@@ -212,7 +218,7 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
         hits = hits.select(glass)
         if len(vertex) == 0:
             break
-        surface = orient(accel, hits, dirs, points, materials.ior, medium)
+        surface = orient(accel, hits, dirs, points, materials.ior_bands[hits.obj, band], medium)
         tint = materials.color[hits.obj]
         branches = []
         for event, mirror in ((0, True), (1, False)):
@@ -259,13 +265,15 @@ class BandBeams:
 
 
 def band_beams(source: BeamSource, first_row: int, end_row: int, accel: Accelerator, materials: Materials,
-               maps: dict[int, IlluminationMap], max_depth: int, start_medium: int = MISS) -> BandBeams:
-    """Trace grid rows [first_row, end_row) of `source`, whose paths start
-    inside object `start_medium`, and turn the landed paths into beams
-    (coherent triangles) and fallback photons."""
+               maps: dict[int, IlluminationMap], max_depth: int, start_medium: int = MISS,
+               band: int = 0) -> BandBeams:
+    """Trace grid rows [first_row, end_row) of `source` in wavelength band
+    `band`, whose paths start inside object `start_medium`, and turn the
+    landed paths into beams (coherent triangles) and fallback photons."""
     rays_before = accel.rays_cast
     origins, dirs, weight = source.vertices(first_row, end_row)
-    landings = trace_paths(accel, materials, maps, origins, dirs, weight, max_depth, start_medium)
+    weight *= materials.band_weights[band]
+    landings = trace_paths(accel, materials, maps, origins, dirs, weight, max_depth, start_medium, band)
     triangles = grid_triangles(end_row - first_row, source.grid)
     triangle_measure = 0.5 * source.cell_measure
     beams, photons = {}, {}

@@ -10,7 +10,9 @@ At an opaque surface: ambient * albedo, plus direct light from each lamp
 receiver's map. At a dielectric: both the reflected ray (weight F) and the
 refracted ray (weight 1 - F) carry on, each tinted by the glass colour and by
 Beer-Lambert absorption inside, up to `max_depth` bounces. A ray that leaves
-the scene sees the background.
+the scene sees the background. Eye rays refract with a dispersive glass's
+IOR at 587.6 nm: the caustics it throws are spectral (photon pass), the view
+through it is not.
 """
 
 from __future__ import annotations
@@ -127,7 +129,7 @@ class EyePass:
         """The reflected and refracted children of rays at dielectric hits."""
         if len(rays.pixel) == 0:
             return rays
-        surface = orient(self.accel, hits, rays.dirs, points, self.materials.ior, rays.medium)
+        surface = orient(self.accel, hits, rays.dirs, points, self.materials.ior[hits.obj], rays.medium)
         tint = self.materials.color[hits.obj]
         children = []
         for mirror in (True, False):

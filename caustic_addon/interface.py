@@ -33,8 +33,9 @@ class Interface:
 
 
 def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, points: np.ndarray,
-           ior_by_object: np.ndarray, medium: np.ndarray) -> Interface:
-    """Orient the hits' normals against `dirs (n,3)` and evaluate Fresnel.
+           ior: np.ndarray, medium: np.ndarray) -> Interface:
+    """Orient the hits' normals against `dirs (n,3)` and evaluate Fresnel,
+    with `ior (n,)` the index of each hit's object at the ray's wavelength.
 
     Entering or leaving: for a closed mesh, the ray's own state `medium (n,)`
     (the object it is inside, or MISS) decides, since a hit at an edge or a
@@ -52,7 +53,6 @@ def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, points: np.ndarray,
     shading = np.where((dot(shading, facing) < 0.0)[:, None], -shading, shading)
     tipped = dot(dirs, shading) >= 0.0
     shading[tipped] = facing[tipped]
-    ior = ior_by_object[hits.obj]
     eta = np.where(entering, 1.0 / ior, ior)
     fresnel = fresnel_dielectric(-dot(dirs, shading), eta)
     return Interface(points, facing, shading, entering, eta, fresnel)
