@@ -17,6 +17,7 @@ def render_settings(props, spp: int | None = None) -> RenderSettings:
         map_scale=None if props.use_auto_map_scale else props.map_scale,
         density=props.density.lower(),
         max_depth=props.max_depth,
+        bands=props.bands,
         spp=props.spp if spp is None else spp,
         threads=max(1, os.cpu_count() or 1),
     )

@@ -108,7 +108,7 @@ def test_roles_from_materials_and_overrides(addon):
     forced = scenes.add_sphere(0.3, (-1.0, 0.0, 0.5), scenes.diffuse_material("Chalk"), name="Forced",
                                segments=8, rings=4)
     forced.caustic.role = 'TRANSPARENT'
-    forced.caustic.absorption = (0.5, 1.0, 2.0)
+    forced.caustic.absorption_from, forced.caustic.absorption = 'COEFFICIENT', (0.5, 1.0, 2.0)
     gem = scenes.add_sphere(0.3, (0.0, 1.0, 0.5), scenes.glass_material("Gem"), name="Gem", segments=8, rings=4)
     gem.caustic.use_ior, gem.caustic.ior = True, 2.42
     ignored = scenes.add_sphere(0.3, (0.0, -1.0, 0.5), scenes.glass_material("Other"), name="Ignored",
