@@ -19,6 +19,10 @@ split in four and their new corners traced, up to `levels` times.
 Triangles whose three paths still disagree fall back to photons: each
 landed corner carries a third of the triangle's flux into the map's ordinary
 density estimate.
+
+When a material disperses, every wavelength band traces its own grid with
+its own IOR and carries the band's RGB weight (spectrum.py): beams of
+different bands land apart, which is the colour of a dispersive caustic.
 """
 
 from __future__ import annotations
@@ -194,10 +198,12 @@ def _mix(family: np.ndarray, obj: np.ndarray, event: int) -> np.ndarray:
 
 
 def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap], origins: np.ndarray,
-                dirs: np.ndarray, weight: np.ndarray, max_depth: int, start_medium: int = MISS) -> Landings:
+                dirs: np.ndarray, weight: np.ndarray, max_depth: int, start_medium: int = MISS,
+                band: int = 0) -> Landings:
     """Follow every branch of every vertex path, starting inside object
     `start_medium` (MISS: in air), until it lands on a receiver (after at
-    least one specular event), leaves, or fades below MIN_BRANCH_WEIGHT."""
+    least one specular event), leaves, or fades below MIN_BRANCH_WEIGHT.
+    Dielectrics refract with their IOR in wavelength band `band`."""
     vertex = np.arange(len(origins))
     family = np.zeros(len(origins), dtype=np.uint64)
     medium = np.full(len(origins), start_medium, dtype=np.int64)
@@ -233,7 +239,7 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
         hits = hits.select(bounce)
         if len(vertex) == 0:
             break
-        surface = orient(accel, hits, dirs, points, materials, medium)
+        surface = orient(accel, hits, dirs, points, materials, medium, band)
         tint = materials.color[hits.obj]
         branches = []
         for event, mirror in ((0, True), (1, False)):
@@ -341,11 +347,11 @@ def _diverging(lookup: _Lookup, corners: np.ndarray) -> np.ndarray:
 
 def band_beams(source: BeamSource, first_row: int, end_row: int, accel: Accelerator, materials: Materials,
                maps: dict[int, IlluminationMap], max_depth: int, start_medium: int = MISS,
-               levels: int = 0) -> BandBeams:
-    """Trace grid rows [first_row, end_row) of `source`, whose paths start
-    inside object `start_medium`, splitting cells where their paths diverge
-    (`levels` times at most), and turn the landed paths into beams
-    (coherent triangles) and fallback photons."""
+               levels: int = 0, band: int = 0) -> BandBeams:
+    """Trace grid rows [first_row, end_row) of `source` in wavelength band
+    `band`, whose paths start inside object `start_medium`, splitting cells
+    where their paths diverge (`levels` times at most), and turn the landed
+    paths into beams (coherent triangles) and fallback photons."""
     rays_before = accel.rays_cast
     scale = 1 << levels
     width = (source.grid - 1) * scale + 1
@@ -353,7 +359,8 @@ def band_beams(source: BeamSource, first_row: int, end_row: int, accel: Accelera
 
     def trace(vertex: np.ndarray) -> Landings:
         origins, dirs, weight = source.rays_at(np.stack([vertex // width, vertex % width], axis=1) / scale)
-        landed = trace_paths(accel, materials, maps, origins, dirs, weight, max_depth, start_medium)
+        weight *= materials.band_weights[band]
+        landed = trace_paths(accel, materials, maps, origins, dirs, weight, max_depth, start_medium, band)
         landed.vertex = vertex[landed.vertex]
         return landed
 

@@ -5,6 +5,7 @@ pass. Maps are found by a hash of everything the photon pass reads."""
 from __future__ import annotations
 
 import hashlib
+import math
 import threading
 from collections import OrderedDict
 from dataclasses import fields
@@ -19,7 +20,8 @@ _EYE_ONLY = {"spp", "threads", "chunk_size"}
 
 def photon_pass_key(scene: Scene, settings: RenderSettings) -> str:
     """SHA-1 of the objects in order (name, geometry, material), the lamps
-    and the photon-pass settings: equal keys give equal maps."""
+    and the photon-pass settings: equal keys give equal maps. The band count
+    counts only if a material disperses."""
     digest = hashlib.sha1()
 
     def add(value) -> None:
@@ -41,7 +43,9 @@ def photon_pass_key(scene: Scene, settings: RenderSettings) -> str:
         for name, value in vars(light).items():
             add(name)
             add(value if isinstance(value, np.ndarray) else np.asarray(value))
-    add({f.name: getattr(settings, f.name) for f in fields(settings) if f.name not in _EYE_ONLY})
+    disperses = any(math.isfinite(getattr(o.material, "abbe", math.inf)) for o in scene.objects)
+    ignored = _EYE_ONLY if disperses else _EYE_ONLY | {"bands"}
+    add({f.name: getattr(settings, f.name) for f in fields(settings) if f.name not in ignored})
     return digest.hexdigest()
 
 

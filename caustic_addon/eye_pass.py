@@ -11,7 +11,9 @@ receiver's map. At a dielectric: both the reflected ray (weight F) and the
 refracted ray (weight 1 - F) carry on, each tinted by the glass colour and by
 Beer-Lambert absorption inside, up to `max_depth` bounces. At a reflector
 the reflected ray carries on, times the reflectance colour. A ray that leaves
-the scene sees the background.
+the scene sees the background. Eye rays refract with a dispersive glass's
+IOR at 587.6 nm: the caustics it throws are spectral (photon pass), the view
+through it is not.
 """
 
 from __future__ import annotations

@@ -37,9 +37,11 @@ class Interface:
 
 
 def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, points: np.ndarray,
-           materials: Materials, medium: np.ndarray) -> Interface:
+           materials: Materials, medium: np.ndarray, band=None) -> Interface:
     """Orient the hits' normals against `dirs (n,3)` and evaluate Fresnel
-    (1 at reflectors, which reflect everything).
+    (1 at reflectors, which reflect everything). Dielectrics refract with
+    their IOR in wavelength band `band` (an int, or (n,) per ray), or at
+    587.6 nm (n_d) when it is None.
 
     Entering or leaving: for a closed mesh, the ray's own state `medium (n,)`
     (the object it is inside, or MISS) decides, since a hit at an edge or a
@@ -57,7 +59,7 @@ def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, points: np.ndarray,
     shading = np.where((dot(shading, facing) < 0.0)[:, None], -shading, shading)
     tipped = dot(dirs, shading) >= 0.0
     shading[tipped] = facing[tipped]
-    ior = materials.ior[hits.obj]
+    ior = materials.ior[hits.obj] if band is None else materials.ior_bands[hits.obj, band]
     eta = np.where(entering, 1.0 / ior, ior)
     fresnel = np.where(materials.reflector[hits.obj], 1.0, fresnel_dielectric(-dot(dirs, shading), eta))
     return Interface(points, facing, shading, entering, eta, fresnel)

@@ -81,3 +81,38 @@ def beer_lambert(absorption: np.ndarray, distance: np.ndarray) -> np.ndarray:
     """Transmittance exp(-sigma_a * s) of a path of length `distance (n,)`
     through a medium with absorption coefficient `absorption (n,3)` per metre."""
     return np.exp(-absorption * distance[:, None])
+
+
+# Fraunhofer lines that define the Abbe number (nm): helium d, hydrogen F and C.
+LAMBDA_D, LAMBDA_F, LAMBDA_C = 587.6, 486.1, 656.3
+
+
+def cauchy_ior(ior_d, abbe, wavelength_nm):
+    """Index of refraction at `wavelength_nm` of a glass given by its index
+    n_d at 587.6 nm and its Abbe number V_d, by Cauchy's two-term law
+    (Hecht, Optics, 3.5; Abbe number as in ISO 7944):
+
+        n(lambda) = A + B / lambda^2
+        V_d = (n_d - 1) / (n_F - n_C)   =>   B = (n_d - 1) / (V_d (1/lambda_F^2 - 1/lambda_C^2)),
+                                             A = n_d - B / lambda_d^2
+
+    An infinite Abbe number gives n_d at every wavelength. Broadcasts."""
+    ior_d = np.asarray(ior_d, dtype=np.float64)
+    b = (ior_d - 1.0) / (np.asarray(abbe, dtype=np.float64) * (LAMBDA_F ** -2 - LAMBDA_C ** -2))
+    return ior_d + b * (np.asarray(wavelength_nm, dtype=np.float64) ** -2 - LAMBDA_D ** -2)
+
+
+def absorption_from_color(color, distance: float) -> np.ndarray:
+    """Absorption coefficient sigma_a (3,) per metre of a medium whose
+    transmittance after `distance` metres is `color` (3,) in (0, 1]:
+    exp(-sigma_a d) = color, so sigma_a = -ln(color) / d (Beer-Lambert; the
+    "transmission colour at depth" of other renderers)."""
+    return -np.log(np.asarray(color, dtype=np.float64)) / distance
+
+
+def volume_absorption(color, density: float) -> np.ndarray:
+    """Absorption coefficient (3,) per metre of Blender's Volume Absorption
+    node: sigma_a = density * (1 - color), colour and density clamped at 0
+    (Cycles `svm_node_closure_volume` in kernel/svm/closure.h; EEVEE's
+    gpu_shader_material_volume_absorption.glsl)."""
+    return max(float(density), 0.0) * (1.0 - np.maximum(np.asarray(color, dtype=np.float64), 0.0))

@@ -159,25 +159,27 @@ def forward_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, mat
 
 def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
               maps: dict[int, IlluminationMap], monitor: _Monitor, share: float) -> TransportStats:
-    """Trace every source's grid in bands of rows into beams on `maps`.
-    Neighbouring bands share a row, so every grid triangle is in one band."""
-    sources = beam_sources(scene.lights, *targets_and_bounds(scene), settings.energy, settings.photons)
+    """Trace every source's grid in bands of rows into beams on `maps`, once
+    per wavelength band, with the photon count shared among them.
+    Neighbouring bands of rows share a row, so every grid triangle is in one."""
+    count = materials.band_count
+    sources = beam_sources(scene.lights, *targets_and_bounds(scene), settings.energy, settings.photons // count)
     jobs = []
     for source in sources:
         rows = max(1, chunk(source.grid ** 2, settings) // source.grid)
         medium = lamp_medium(accel, source.light)
         jobs += [partial(band_beams, source, first, min(first + rows + 1, source.grid), accel, materials, maps,
-                         settings.max_depth, medium, settings.beam_refinement)
-                 for first in range(0, source.grid - 1, rows)]
+                         settings.max_depth, medium, settings.beam_refinement, band)
+                 for band in range(count) for first in range(0, source.grid - 1, rows)]
     stats = TransportStats()
-    for band in run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass"):
-        for obj, (corners, irradiance) in band.beams.items():
+    for part in run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass"):
+        for obj, (corners, irradiance) in part.beams.items():
             maps[obj].add_beams(corners, irradiance)
-        for obj, (xy, flux, scale) in band.photons.items():
+        for obj, (xy, flux, scale) in part.photons.items():
             maps[obj].add_photons(xy, flux, scale)
-        stats.rays += band.rays
-        stats.emitted += band.paths
-        stats.flux_landed = stats.flux_landed + band.flux_landed
+        stats.rays += part.rays
+        stats.emitted += part.paths
+        stats.flux_landed = stats.flux_landed + part.flux_landed
     stats.landed = sum(m.beams for m in maps.values())
     return stats
 
@@ -237,7 +239,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
     accel = Accelerator(scene.objects, scene.extent(), settings.threads)
     try:
         warnings += accel.warnings
-        materials = Materials.of(scene.objects)
+        materials = Materials.of(scene.objects, settings.bands)
         seconds["bvh"] = time.perf_counter() - clock
 
         clock = time.perf_counter()

@@ -10,6 +10,12 @@ the expected flux). Inside a medium
 its flux falls by Beer-Lambert over each segment. A photon lands in a
 receiver's map only after at least one specular event; the eye pass computes
 direct light exactly, so nothing is counted twice.
+
+When a material disperses, each photon carries one of K wavelength bands
+(spectrum.photon_band, stratified over its id), refracts with that band's
+IOR, and its flux is multiplied by K times the band's RGB weight: the K
+weights sum to (1,1,1), so the expected flux is unchanged and the photon
+count, and the cost, stay the same.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ from .illumination_map import IlluminationMap
 from .interface import orient, scatter
 from .materials import Materials
 from .optics import beer_lambert
+from .spectrum import photon_band
 
 # Below this fraction of its starting flux (max channel), a photon plays
 # Russian roulette and survives with probability flux / threshold.
@@ -50,7 +57,9 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, Illu
     (MISS: in air), and splat the ones that land into `maps` (keyed by
     receiver object index). Returns what it did."""
     stats = TransportStats(emitted=len(photons.flux))
-    origins, dirs, flux, ids = photons.origins, photons.dirs, photons.flux.copy(), photons.ids
+    origins, dirs, ids = photons.origins, photons.dirs, photons.ids
+    band = photon_band(ids, materials.band_count, seed)
+    flux = photons.flux * (materials.band_count * materials.band_weights[band])
     start_flux = flux.max(axis=1)
     medium = np.full(len(flux), start_medium, dtype=np.int64)
     specular = np.zeros(len(flux), dtype=bool)
@@ -61,8 +70,8 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, Illu
         hits = accel.intersect(origins, dirs, medium)
         stats.rays += len(flux)
         keep = hits.hit
-        origins, dirs, flux, start_flux, medium, specular, ids = (
-            a[keep] for a in (origins, dirs, flux, start_flux, medium, specular, ids))
+        origins, dirs, flux, start_flux, medium, specular, ids, band = (
+            a[keep] for a in (origins, dirs, flux, start_flux, medium, specular, ids, band))
         hits = hits.select(keep)
         points = hits.points
 
@@ -79,13 +88,13 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, Illu
             stats.flux_landed = stats.flux_landed + flux[sel].sum(axis=0)
 
         bounce = materials.specular_surface[hits.obj]
-        origins, dirs, flux, start_flux, medium, points, ids = (
-            a[bounce] for a in (origins, dirs, flux, start_flux, medium, points, ids))
+        origins, dirs, flux, start_flux, medium, points, ids, band = (
+            a[bounce] for a in (origins, dirs, flux, start_flux, medium, points, ids, band))
         hits = hits.select(bounce)
         if len(flux) == 0:
             break
 
-        surface = orient(accel, hits, dirs, points, materials, medium)
+        surface = orient(accel, hits, dirs, points, materials, medium, band)
         dirs, crossed = scatter(surface, dirs, hash_uniform(ids, 2 * depth, seed) < surface.fresnel)
         flux *= materials.color[hits.obj]
         medium = np.where(crossed, np.where(surface.entering, hits.obj, MISS), medium)
@@ -93,8 +102,8 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, Illu
         origins = accel.offset(points, surface.facing, dirs)
 
         flux, alive = _roulette(flux, start_flux, hash_uniform(ids, 2 * depth + 1, seed))
-        origins, dirs, flux, start_flux, medium, specular, ids = (
-            a[alive] for a in (origins, dirs, flux, start_flux, medium, specular, ids))
+        origins, dirs, flux, start_flux, medium, specular, ids, band = (
+            a[alive] for a in (origins, dirs, flux, start_flux, medium, specular, ids, band))
     return stats
 
 

@@ -8,6 +8,8 @@ import math
 import numpy as np
 
 from .errors import SceneError
+from .optics import cauchy_ior
+from .spectrum import VISIBLE_NM
 from .scene import Dielectric, PointLight, Reflector, Scene, SpotLight, SunLight
 
 
@@ -45,6 +47,12 @@ def validate_scene(scene: Scene) -> list[str]:
                 raise SceneError(f"{obj.name}: IOR must be a positive number (got {material.ior})")
             if np.any(material.absorption < 0):
                 raise SceneError(f"{obj.name}: absorption must not be negative")
+            if not material.abbe > 0:
+                raise SceneError(f"{obj.name}: the Abbe number must be > 0, or inf for no dispersion "
+                                 f"(got {material.abbe})")
+            if np.any(cauchy_ior(material.ior, material.abbe, VISIBLE_NM) <= 0):
+                raise SceneError(f"{obj.name}: an Abbe number of {material.abbe} with IOR {material.ior} gives "
+                                 f"an IOR <= 0 in the visible spectrum")
         if isinstance(material, Reflector):
             _finite(obj.name, "its reflectance colour", material.color)
             if np.any((material.color < 0) | (material.color > 1)):

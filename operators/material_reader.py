@@ -1,17 +1,24 @@
 """A Blender material read as the engine's: Glass BSDF, or Principled BSDF
 that mostly transmits, is a Dielectric; Glossy BSDF, or Principled BSDF that
 is mostly metal and smooth, is a Reflector; Principled and Diffuse BSDFs,
-plain viewport colours and anything not understood are Diffuse receivers.
-What is read approximately comes back as a warning naming the material."""
+plain viewport colours and anything not understood are Diffuse receivers. A
+Volume Absorption node on the Volume output gives glass its absorption. What
+is read approximately comes back as a warning naming the material.
+
+No Glass or Principled BSDF has a Dispersion input in Blender 4.2 or 5.2
+(checked with both bpy modules), so dispersion comes only from the object's
+Abbe number (Object.caustic.abbe)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import bpy
 import numpy as np
 
 from ..caustic_addon import Dielectric, Diffuse, Reflector
+from ..caustic_addon.optics import absorption_from_color, volume_absorption
 
 DEFAULT_ALBEDO = 0.8
 GLASS_NODES = {'ShaderNodeBsdfGlass', 'ShaderNodeBsdfRefraction'}
@@ -33,6 +40,7 @@ class Surface:
     ior: float = 1.5
     color: np.ndarray = field(default_factory=lambda: np.ones(3))
     albedo: np.ndarray = field(default_factory=lambda: np.full(3, DEFAULT_ALBEDO))
+    absorption: np.ndarray = field(default_factory=lambda: np.zeros(3))
     warnings: list[str] = field(default_factory=list)
 
 
@@ -45,12 +53,13 @@ def _value(node, name: str, what: str, warnings: list[str]):
     return np.array(value[:3], dtype=np.float64) if hasattr(value, "__len__") else float(value)
 
 
-def _surface_shader(material):
-    """The shader node feeding the material's Cycles output, past reroutes; None if nothing is connected."""
+def _shader(material, output_socket: str):
+    """The shader node feeding the material's Cycles output's `output_socket`
+    ('Surface' or 'Volume'), past reroutes; None if nothing is connected."""
     output = material.node_tree.get_output_node('CYCLES')
     if output is None:
         return None
-    socket = output.inputs['Surface']
+    socket = output.inputs[output_socket]
     while socket.is_linked:
         node = socket.links[0].from_node
         if node.bl_idname != 'NodeReroute':
@@ -67,7 +76,7 @@ def read_surface(material) -> Surface:
     viewport = np.array(material.diffuse_color[:3], dtype=np.float64)
     if material.node_tree is None or not (bpy.app.version >= (5, 0, 0) or material.use_nodes):
         return Surface(transparent=False, albedo=viewport)
-    shader = _surface_shader(material)
+    shader = _shader(material, 'Surface')
     if shader is None:
         return Surface(transparent=False, albedo=viewport,
                        warnings=[f"{what}: no shader reaches its output; its viewport colour is used"])
@@ -77,7 +86,8 @@ def read_surface(material) -> Surface:
                                and _value(shader, "Transmission Weight", what, warnings) > 0.5):
         color_input = "Color" if kind in GLASS_NODES else "Base Color"
         surface = Surface(transparent=True, ior=_value(shader, "IOR", what, warnings),
-                          color=_value(shader, color_input, what, warnings), warnings=warnings)
+                          color=_value(shader, color_input, what, warnings),
+                          absorption=_read_volume(material, what, warnings), warnings=warnings)
         if _value(shader, "Roughness", what, warnings) > 0.0:
             warnings.append(f"{what}: rough glass is rendered as smooth glass")
         return surface
@@ -106,6 +116,22 @@ def _mirror(shader, color_input: str, what: str, warnings: list[str]) -> Surface
     return Surface(transparent=False, reflector=True, color=np.clip(color, 0.0, 1.0), warnings=warnings)
 
 
+def _read_volume(material, what: str, warnings: list[str]) -> np.ndarray:
+    """Absorption (3,) per metre of the material's volume: a Volume
+    Absorption node's density x (1 - colour), as Cycles; none without one."""
+    volume = _shader(material, 'Volume')
+    if volume is None:
+        return np.zeros(3)
+    if volume.bl_idname != 'ShaderNodeVolumeAbsorption':
+        warnings.append(f"{what}: a '{volume.name}' volume is not understood; only Volume Absorption is read, "
+                        "so the glass is clear inside")
+        return np.zeros(3)
+    color = _value(volume, "Color", what, warnings)
+    if np.any(color > 1.0):
+        warnings.append(f"{what}: a Volume Absorption colour above 1 would add light; it is read as 1")
+    return volume_absorption(np.minimum(color, 1.0), _value(volume, "Density", what, warnings))
+
+
 def engine_material(surface: Surface, settings) -> Dielectric | Diffuse | Reflector:
     """The engine material for an object of `Object.caustic` `settings` whose material reads as `surface`."""
     role = settings.role
@@ -117,4 +143,11 @@ def engine_material(surface: Surface, settings) -> Dielectric | Diffuse | Reflec
         return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO)
     ior = settings.ior if settings.use_ior else (surface.ior if surface.transparent else 1.5)
     color = surface.color if surface.transparent else np.ones(3)
-    return Dielectric(ior=ior, color=color, absorption=np.array(settings.absorption[:], dtype=np.float64))
+    if settings.absorption_from == 'COLOR':
+        absorption = absorption_from_color(settings.absorption_color[:], settings.absorption_distance)
+    elif settings.absorption_from == 'COEFFICIENT':
+        absorption = np.array(settings.absorption[:], dtype=np.float64)
+    else:
+        absorption = surface.absorption if surface.transparent else np.zeros(3)
+    return Dielectric(ior=ior, color=color, absorption=absorption,
+                      abbe=settings.abbe if settings.abbe > 0 else math.inf)

@@ -18,6 +18,7 @@ def render_settings(props, spp: int | None = None) -> RenderSettings:
         density=props.density.lower(),
         beam_refinement=props.beam_refinement,
         max_depth=props.max_depth,
+        bands=props.bands,
         spp=props.spp if spp is None else spp,
         threads=max(1, os.cpu_count() or 1),
     )

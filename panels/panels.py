@@ -64,6 +64,7 @@ class CAUSTIC_PT_photons(_CausticPanel, bpy.types.Panel):
         if props.density == 'BEAM':
             layout.prop(props, "beam_refinement")
         layout.prop(props, "max_depth")
+        layout.prop(props, "bands")
 
 
 class CAUSTIC_PT_eye(_CausticPanel, bpy.types.Panel):
@@ -109,7 +110,13 @@ class CAUSTIC_PT_object(_CausticPanel, bpy.types.Panel):
             sub = row.row()
             sub.active = settings.use_ior
             sub.prop(settings, "ior", text="")
-            layout.prop(settings, "absorption")
+            layout.prop(settings, "abbe")
+            layout.prop(settings, "absorption_from")
+            if settings.absorption_from == 'COEFFICIENT':
+                layout.prop(settings, "absorption")
+            elif settings.absorption_from == 'COLOR':
+                layout.prop(settings, "absorption_color")
+                layout.prop(settings, "absorption_distance")
 
 
 class CAUSTIC_PT_compare(_CausticPanel, bpy.types.Panel):

@@ -23,11 +23,33 @@ class CausticObjectSettings(bpy.types.PropertyGroup):
         name="IOR",
         description="Index of refraction: 1.33 water, 1.5 glass, 2.42 diamond",
         default=1.5, min=0.0, soft_min=1.0, soft_max=3.0)
-    absorption: FloatVectorProperty(
+    abbe: FloatProperty(
+        name="Abbe Number",
+        description="Dispersion: the Abbe number V_d of the glass, whose IOR is the one at 587.6 nm "
+                    "(55 diamond, 58 crown glass, 33 cubic zirconia, 56 water; lower disperses more). "
+                    "0: no dispersion",
+        default=0.0, min=0.0, soft_min=10.0, soft_max=100.0)
+    absorption_from: EnumProperty(
         name="Absorption",
+        description="Where the absorption inside a transparent object comes from",
+        items=[('MATERIAL', "Material", "A Volume Absorption node on the material's Volume output "
+                                        "(density x (1 - colour) per metre, as Cycles); clear without one"),
+               ('COLOR', "Colour at Distance", "White light takes this colour after this distance inside"),
+               ('COEFFICIENT', "Coefficient", "Beer-Lambert absorption coefficient per metre")],
+        default='MATERIAL')
+    absorption: FloatVectorProperty(
+        name="Coefficient",
         description="Beer-Lambert absorption coefficient inside a transparent object, per metre, "
                     "for red, green and blue (0: clear)",
         size=3, default=(0.0, 0.0, 0.0), min=0.0, soft_max=10.0)
+    absorption_color: FloatVectorProperty(
+        name="Colour",
+        description="The colour white light takes after Distance inside the object",
+        subtype='COLOR', size=3, default=(1.0, 1.0, 1.0), min=1e-6, max=1.0)
+    absorption_distance: FloatProperty(
+        name="Distance",
+        description="How far inside the object light goes to take the Colour",
+        subtype='DISTANCE', default=0.1, min=1e-6, soft_max=10.0)
 
 
 def register():

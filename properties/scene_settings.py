@@ -51,6 +51,11 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
         name="Max Bounces",
         description="Reflections and refractions followed per lamp ray and per eye ray",
         default=12, min=1, max=64)
+    bands: IntProperty(
+        name="Wavelength Bands",
+        description="Wavelength bands traced when an object disperses (its Abbe number is set); "
+                    "each lamp ray carries one, so more bands cost no more rays",
+        default=6, min=1, max=64, soft_max=16)
     spp: IntProperty(
         name="Samples",
         description="Eye rays per pixel (anti-aliasing)",

@@ -141,3 +141,35 @@ def test_glossy_ring_casts_a_visible_caustic():
     far_row, far_col = pixel_at((1.2, 0.8, 0.0))
     assert mirror[far_row, far_col] == pytest.approx(matte[far_row, far_col], rel=1e-4)
     assert matte[far_row, far_col] > 0.0
+
+
+def caustic_across_x(xs):
+    """Render, and return the image's RGB at floor points (x, 0, 0) for `xs`."""
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    image = pixels_of("Caustic Render")
+    return np.array([image[pixel_at((x, 0.0, 0.0))][:3] for x in xs])
+
+
+def test_dispersion_colours_the_caustic_rim():
+    """The floor is short of the paraxial focus, so the caustic is a spot
+    near the axis inside the ring where marginal rays cross. Blue, refracted
+    more, focuses nearer the glass and gathers into the centre; red is left
+    spread out to the rim. Without dispersion every pixel is grey (R = B to
+    rounding: one band is traced). Seen from low down across the caustic."""
+    parts = scenes.ball_lens_scene(160, 120, photons=1_000_000)
+    bpy.context.scene.caustic.spp = 1
+    scenes.add_camera((0.0, -2.0, 0.3), target=(0.0, 0.0, 0.0), lens=100.0)
+    xs = np.linspace(-0.08, 0.08, 33)
+    plain = caustic_across_x(xs)
+    lit = plain[:, 1] > 0.05 * plain[:, 1].max()
+    assert lit.sum() >= 9
+    np.testing.assert_allclose(plain[lit, 0], plain[lit, 2], rtol=1e-5)
+
+    parts["ball"].caustic.abbe = 10.0
+    spectral = caustic_across_x(xs)
+    rim = lit & (np.abs(xs) > 0.6 * np.abs(xs[lit]).max())
+    centre = lit & (np.abs(xs) < 0.2 * np.abs(xs[lit]).max())
+    red_to_blue = {name: spectral[where, 0].sum() / spectral[where, 2].sum()
+                   for name, where in (("rim", rim), ("centre", centre))}
+    print("red / blue:", red_to_blue)
+    assert red_to_blue["centre"] < 0.8 and red_to_blue["rim"] > 1.5

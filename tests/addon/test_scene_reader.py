@@ -108,7 +108,7 @@ def test_roles_from_materials_and_overrides(addon):
     forced = scenes.add_sphere(0.3, (-1.0, 0.0, 0.5), scenes.diffuse_material("Chalk"), name="Forced",
                                segments=8, rings=4)
     forced.caustic.role = 'TRANSPARENT'
-    forced.caustic.absorption = (0.5, 1.0, 2.0)
+    forced.caustic.absorption_from, forced.caustic.absorption = 'COEFFICIENT', (0.5, 1.0, 2.0)
     gem = scenes.add_sphere(0.3, (0.0, 1.0, 0.5), scenes.glass_material("Gem"), name="Gem", segments=8, rings=4)
     gem.caustic.use_ior, gem.caustic.ior = True, 2.42
     ignored = scenes.add_sphere(0.3, (0.0, -1.0, 0.5), scenes.glass_material("Other"), name="Ignored",
@@ -217,3 +217,46 @@ def test_camera_at_the_render_resolution(addon):
     assert result.fov == pytest.approx(2.0 * math.atan(camera.data.sensor_height / (2.0 * 50.0)))
     assert result.sensor_fit == 'VERTICAL' and result.shift_x == pytest.approx(0.1)
     assert np.allclose(result.matrix, np.array(camera.matrix_world), atol=1e-6)
+
+
+def volume(material, kind='ShaderNodeVolumeAbsorption', **inputs):
+    """Connect a new volume shader of `kind` to `material`'s Volume output."""
+    nodes = material.node_tree.nodes
+    node = nodes.new(kind)
+    for socket, value in inputs.items():
+        node.inputs[socket].default_value = value
+    output = next(n for n in nodes if n.bl_idname == 'ShaderNodeOutputMaterial')
+    material.node_tree.links.new(node.outputs[0], output.inputs['Volume'])
+    return node
+
+
+def test_no_blender_glass_has_a_dispersion_input():
+    """Checked on 4.2 and 5.2: dispersion comes from Object.caustic.abbe
+    alone. If Blender adds the input, material_reader should read it."""
+    for kind in ('ShaderNodeBsdfGlass', 'ShaderNodeBsdfPrincipled', 'ShaderNodeBsdfRefraction'):
+        node = scenes.glass_material().node_tree.nodes.new(kind)
+        assert "Dispersion" not in node.inputs
+
+
+def test_volume_absorption_abbe_and_colour_at_distance(addon, reports):
+    lamp_scene()
+    tinted = scenes.glass_material("Tinted")
+    volume(tinted, Color=(0.5, 0.8, 1.0, 1.0), Density=2.0)
+    scenes.add_sphere(0.3, (1.0, 0.0, 0.5), tinted, name="Tinted", segments=8, rings=4)
+    gem = scenes.add_sphere(0.3, (-1.0, 0.0, 0.5), scenes.glass_material("Gem", ior=2.42), name="Gem",
+                            segments=8, rings=4)
+    gem.caustic.abbe = 55.0
+    gem.caustic.absorption_from = 'COLOR'
+    gem.caustic.absorption_color, gem.caustic.absorption_distance = (0.9, 0.6, 0.3), 0.05
+    smoke = scenes.glass_material("Smoky")
+    volume(smoke, 'ShaderNodeVolumePrincipled')
+    scenes.add_sphere(0.3, (0.0, 1.0, 0.5), smoke, name="Smoky", segments=8, rings=4)
+    result = read(addon)
+    names = {o.name: o.material for o in result.scene.objects}
+    # Cycles: sigma_a = density * (1 - colour) per metre
+    np.testing.assert_allclose(names["Tinted"].absorption, (1.0, 0.4, 0.0), rtol=1e-6)
+    assert names["Tinted"].abbe == math.inf
+    assert names["Gem"].abbe == 55.0 and names["Gem"].ior == pytest.approx(2.42)
+    np.testing.assert_allclose(np.exp(-names["Gem"].absorption * 0.05), (0.9, 0.6, 0.3), rtol=1e-6)
+    np.testing.assert_allclose(names["Smoky"].absorption, 0.0)
+    assert any("material 'Smoky': a 'Principled Volume' volume is not understood" in w for w in result.warnings)

@@ -137,9 +137,19 @@ def test_command_line_overrides_the_scene_file(tmp_path):
      ["photons.beam_refinement", "integer in 0..5"]),
     (lambda t: t.replace("ior = 1.5", 'ior = 1.5\nmaterial = "reflector"'), ["object.ior", "reflector object"]),
     (lambda t: t.replace("ior = 1.5", 'material = "metal"'), ["object.material", '"reflector"']),
+    (lambda t: t.replace("ior = 1.5", "ior = 1.5\nabbe = 0"), ["object.abbe", "> 0", "inf for no dispersion"]),
+    (lambda t: t.replace("ior = 1.5", "ior = 1.5\nabbe = nan"), ["object.abbe"]),
+    (lambda t: t.replace("ior = 1.5", "ior = 1.5\nabsorption_color = [0.5, 0, 1]"), ["object.absorption_color",
+                                                                                  "in (0, 1]"]),
+    (lambda t: t.replace("ior = 1.5", "ior = 1.5\nabsorption_color = 0.5\nabsorption_distance = -1"),
+     ["object.absorption_distance", "> 0"]),
+    (lambda t: t.replace("ior = 1.5", "ior = 1.5\nabsorption_color = 0.5\nabsorption = 1.0"),
+     ["object.absorption and object.absorption_color"]),
+    (lambda t: t.replace("map_scale = 5.0", "map_scale = 5.0\nbands = 65"), ["photons.bands", "1..64"]),
 ], ids=["syntax", "unknown-key", "unknown-table", "negative-count", "fractional-count", "string-pixx",
         "missing-eye", "zero-map-scale", "key-of-another-lamp", "nan-ior", "beam-refinement-too-deep",
-        "ior-of-a-reflector", "unknown-material"])
+        "ior-of-a-reflector", "unknown-material", "zero-abbe", "nan-abbe", "black-absorption-color",
+        "negative-absorption-distance", "two-absorptions", "too-many-bands"])
 def test_bad_scene_file(tmp_path, edit, fragments):
     scene = write(tmp_path / "scene.toml", edit(SMALL))
     assert_bad_input(run_cli("render", scene, EXAMPLES / "round.obj", "-o", tmp_path / "out.png"), *fragments)
@@ -225,6 +235,15 @@ def test_scene_file_defaults_and_placement():
     placed = scene.objects[1].mesh.vertices
     np.testing.assert_allclose(placed, mesh.vertices * [0.1, 0.2, 0.3] + [0.0, 0.0, 0.02])
     assert scene.objects[1].material.ior == 1.5
+    assert scene.objects[1].material.abbe == math.inf and cfg.settings.bands == 6
+
+
+def test_scene_file_dispersion_and_absorption_colour():
+    text = SMALL.replace("ior = 1.5", "ior = 2.42\nabbe = 55\nabsorption_color = [0.9, 0.5, 0.25]\n"
+                                      "absorption_distance = 0.02").replace("map_scale = 5.0", "map_scale = 5.0\nbands = 4")
+    cfg = config.parse(text)
+    assert cfg.material.abbe == 55.0 and cfg.settings.bands == 4
+    np.testing.assert_allclose(np.exp(-cfg.material.absorption * 0.02), [0.9, 0.5, 0.25], rtol=1e-12)
 
 
 def test_a_reflector_in_the_scene_file_casts_a_caustic(tmp_path):

@@ -154,3 +154,8 @@ def test_a_camera_move_reuses_the_illumination_maps():
     scene.objects[1].material = Dielectric(1.33)
     assert not render(scene, quick(photons=50_000), cache=cache).stats["photon_pass_cached"]
     assert not render(scene, quick(photons=60_000), cache=cache).stats["photon_pass_cached"]
+    # the band count matters only once a material disperses
+    assert render(scene, quick(photons=60_000, bands=3), cache=cache).stats["photon_pass_cached"]
+    scene.objects[1].material = Dielectric(1.33, abbe=55.7)
+    assert not render(scene, quick(photons=60_000, bands=3), cache=cache).stats["photon_pass_cached"]
+    assert not render(scene, quick(photons=60_000, bands=4), cache=cache).stats["photon_pass_cached"]
