@@ -40,7 +40,7 @@ def engine_methods(max_photons: float) -> dict[str, tuple[dict, list[int]]]:
     estimate compared. Beams need far fewer paths, so they sweep lower
     counts (of the grid before refinement)."""
     photons = [int(c) for c in 10 ** np.arange(4, np.log10(max_photons) + 0.01, 0.5)]
-    beams = [int(c) for c in 10 ** np.arange(2.5, 4.51, 0.5)]
+    beams = [int(c) for c in 10 ** np.arange(2.5, 5.01, 0.5)]
     methods = {"beam": (dict(density="beam"), beams),
                "beam, plain grid": (dict(density="beam", beam_refinement=0), beams)}
     methods.update({f"adaptive k={k}": (dict(density="adaptive", k_nearest=k), photons) for k in (16, 64, 256)})

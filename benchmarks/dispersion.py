@@ -91,7 +91,7 @@ def white_point() -> dict:
         return Scene([Object("Floor", shapes.plane(8.0), Diffuse(albedo=1.0)),
                       Object("Glass", shapes.uv_sphere(1.0, (0, 0, 1.5), 128, 64), Dielectric(1.5, abbe=abbe))],
                      [SunLight((0, 0, -1), 1000.0)], top_camera(2.0, 8))
-    settings = RenderSettings(photons=1_000_000, spp=1)
+    settings = RenderSettings(photons=1_000_000, spp=1, density="adaptive")
     plain = np.array(render(ball(math.inf), settings).stats["flux_landed_w"])
     spectral = np.array(render(ball(1e12), settings).stats["flux_landed_w"])
     return {"flux_landed_plain_w": plain.round(4).tolist(), "flux_landed_spectral_w": spectral.round(4).tolist(),
@@ -106,7 +106,7 @@ def picture() -> str:
                    Object("Glass", shapes.uv_sphere(1.0, (0, 0, 1.45), 256, 128), Dielectric(1.5, abbe=15.0))],
                   [SunLight((0, 0, -1), 1000.0)],
                   Camera.look_at((0, -2.2, 1.0), (0, 0, 0), pixx=480, pixy=270, fov=math.radians(12.0)))
-    result = render(scene, RenderSettings(photons=4_000_000, spp=4, k_nearest=256))
+    result = render(scene, RenderSettings(photons=4_000_000, spp=4, k_nearest=256, density="adaptive"))
     caustic = result.passes["caustic"]
     image = np.ones(caustic.shape[:2] + (4,), dtype=np.float32)
     luminance = caustic @ np.array([0.2126, 0.7152, 0.0722])

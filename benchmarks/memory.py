@@ -48,7 +48,7 @@ def peak_rss_mb() -> float:
 def measure(photons: int) -> dict:
     """One render in this process; what it cost."""
     scene = ball_lens_scene()
-    settings = RenderSettings(photons=photons, spp=1)
+    settings = RenderSettings(photons=photons, spp=1, density="adaptive")
     before = peak_rss_mb()
     start = time.perf_counter()
     result = render(scene, settings)

@@ -261,7 +261,7 @@ def complexity(sizes: tuple[int, ...], photons: int, repeats: int) -> dict:
     rows = []
     for size in sizes:
         scene = complexity_scene(size)
-        runs = [render(scene, RenderSettings(photons=photons, spp=1, energy=ENERGY)).stats for _ in range(repeats)]
+        runs = [render(scene, RenderSettings(photons=photons, spp=1, energy=ENERGY, density="adaptive")).stats for _ in range(repeats)]
         best = {stage: min(r["seconds"][stage] for r in runs) for stage in ("bvh", "photons", "eye")}
         rows.append({"triangles": len(scene.objects[1].mesh.triangles), **best, "total": sum(best.values()),
                      "rays_photon_pass": runs[0]["rays_photon_pass"], "rays_eye_pass": runs[0]["rays_eye_pass"]})

@@ -200,7 +200,7 @@ def direct_radiance_shadowing_all(accel, lights, energy, points, shading, facing
 def shadow_rays_behind(repeats: int) -> dict:
     """A second lamp under the floor: every floor point faces away from it."""
     scene = ball_scene([PointLight((0.0, 0.0, -2.0), 1000.0)])
-    settings = RenderSettings(photons=20_000, spp=4)
+    settings = RenderSettings(photons=20_000, spp=4, density="adaptive")
     on = timed(scene, settings, repeats)
     with patched(eye_pass, "direct_radiance", direct_radiance_shadowing_all):
         off = timed(scene, settings, repeats)
@@ -227,7 +227,7 @@ def shade_opaque_and_reflect(self, rays, hits, points):
 
 def no_recursion_at_diffuse(repeats: int) -> dict:
     scene = ball_scene()
-    settings = RenderSettings(photons=20_000, spp=4)
+    settings = RenderSettings(photons=20_000, spp=4, density="adaptive")
     on = timed(scene, settings, repeats)
     with patched(eye_pass.EyePass, "_shade_opaque", shade_opaque_and_reflect):
         off = timed(scene, settings, repeats)
@@ -244,7 +244,7 @@ def russian_roulette(repeats: int) -> dict:
                  Object("Gem", shapes.paper_glass("pointed"), Dielectric(2.41, color=(0.3, 0.3, 0.3)))],
         lights=[PointLight(shapes.PAPER_LAMP_POSITION, 100.0)],
         camera=Camera.from_paper(shapes.PAPER_FOV, *PIXELS, 1.0, shapes.PAPER_EYE, shapes.PAPER_TARGET))
-    settings = RenderSettings(photons=500_000, spp=1)
+    settings = RenderSettings(photons=500_000, spp=1, density="adaptive")
     on = timed(scene, settings, repeats)
     with patched(transport, "_roulette", lambda flux, start, xi: (flux, flux.max(axis=1) > 0.0)):
         off = timed(scene, settings, repeats)
@@ -272,7 +272,7 @@ def one_embree_scene(repeats: int) -> dict:
             accel.rays_cast += own.rays_cast
             own.close()
 
-    settings = RenderSettings(photons=100_000, spp=1)
+    settings = RenderSettings(photons=100_000, spp=1, density="adaptive")
     on = timed(scene, settings, repeats)
     with patched(render_module, "eye_pass", eye_pass_own_bvh):
         off = timed(scene, settings, repeats)
@@ -286,7 +286,7 @@ def map_cache(repeats: int) -> dict:
     moved = ball_scene()
     moved.camera = Camera.look_at((2.0, -4.5, 3.0), (0.0, 0.3, 0.0), pixx=PIXELS[0], pixy=PIXELS[1],
                                   fov=ball_lens.FOV)
-    settings = RenderSettings(photons=1_000_000, spp=1)
+    settings = RenderSettings(photons=1_000_000, spp=1, density="adaptive")
     cache = MapCache()
     render(scene, settings, cache=cache)
     on = timed(moved, settings, repeats, cache=cache)

@@ -86,15 +86,15 @@ def main() -> None:
     # glass and mirror runs alternate, so a change in the machine's load hits both
     runs, mirror_runs = [], []
     for _ in range(args.repeats):
-        runs.append(render(scene, RenderSettings(photons=args.photons, spp=1)).stats)
-        mirror_runs.append(render(benchmark_scene(Reflector(0.9)), RenderSettings(photons=args.photons, spp=1)).stats)
+        runs.append(render(scene, RenderSettings(photons=args.photons, spp=1, density="adaptive")).stats)
+        mirror_runs.append(render(benchmark_scene(Reflector(0.9)), RenderSettings(photons=args.photons, spp=1, density="adaptive")).stats)
 
     # a camera move with the map cache: only the eye pass runs again
     cache = MapCache()
-    render(scene, RenderSettings(photons=args.photons, spp=1), cache=cache)
+    render(scene, RenderSettings(photons=args.photons, spp=1, density="adaptive"), cache=cache)
     scene.camera.matrix[0, 3] += 0.5
     clock = time.perf_counter()
-    render(scene, RenderSettings(photons=args.photons, spp=1), cache=cache)
+    render(scene, RenderSettings(photons=args.photons, spp=1, density="adaptive"), cache=cache)
     cached_rerender = time.perf_counter() - clock
     photon = min(runs, key=lambda s: s["seconds"]["photons"])
     eye = min(runs, key=lambda s: s["seconds"]["eye"])

@@ -357,11 +357,11 @@ class RenderSettings:
                   (spectrum.py); one band, and no cost, when none does
     """
 
-    photons: int = 1_000_000
+    photons: int = 40_000
     emission: Literal["targeted", "sphere"] = "targeted"
     energy: float = 1.0
     map_scale: Optional[float] = None
-    density: Literal["splat", "adaptive", "beam"] = "adaptive"
+    density: Literal["splat", "adaptive", "beam"] = "beam"
     k_nearest: int = 64
     beam_refinement: int = 1
     max_depth: int = 12

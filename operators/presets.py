@@ -17,9 +17,9 @@ def _paper(energy: int, map_scale: int) -> tuple[str, str, dict]:
 
 # key -> (label, description, Scene.caustic values)
 PRESETS = {
-    'DEFAULT': ("Default", "1,000,000 lamp rays, adaptive density, automatic map scale, Cycles brightness",
-                dict(photons=1_000_000, emission='TARGETED', energy=1.0, use_auto_map_scale=True,
-                     density='ADAPTIVE')),
+    'DEFAULT': ("Default", "40,000 lamp rays as beams, automatic map scale, Cycles brightness",
+                dict(photons=40_000, emission='TARGETED', energy=1.0, use_auto_map_scale=True,
+                     density='BEAM', beam_refinement=1)),
     **{f'PAPER_{energy}_{scale}': _paper(energy, scale) for energy in (10, 20) for scale in (5, 40)},
 }
 

@@ -11,7 +11,7 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
         name="Lamp Rays",
         description="Photons traced from each lamp, the paper's \"number of lamp rays\" (it used 40,000). "
                     "More rays give smoother caustics and take longer",
-        default=1_000_000, min=0, soft_max=20_000_000)
+        default=40_000, min=0, soft_max=20_000_000)
     emission: EnumProperty(
         name="Emission",
         description="Where the lamps send their rays",
@@ -41,7 +41,7 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
                ('ADAPTIVE', "Adaptive", "Average over the nearest 64 lamp rays: sharp where they are dense, "
                                         "smooth where they are sparse"),
                ('SPLAT', "Splat", "Each ray spread over the 4 nearest map cells, as in the paper")],
-        default='ADAPTIVE')
+        default='BEAM')
     beam_refinement: IntProperty(
         name="Beam Refinement",
         description="Times a beam's grid cell is split in four where neighbouring lamp rays part ways (a "

@@ -95,6 +95,7 @@ def ball_lens_scene(width=160, height=120, photons=100_000, segments=64, rings=3
     camera = add_camera((0.0, -4.5, 3.5), target=(0.0, 0.3, 0.0))
     set_resolution(width, height)
     scene.caustic.photons = photons
+    scene.caustic.density = 'ADAPTIVE'
     return dict(floor=floor, ball=ball, lamp=lamp, camera=camera)
 
 
@@ -115,4 +116,5 @@ def ring_scene(width=64, height=48, photons=200_000):
     camera = add_camera((0.0, -0.6, 2.5), target=(0.0, 0.0, 0.0))
     set_resolution(width, height)
     scene.caustic.photons = photons
+    scene.caustic.density = 'ADAPTIVE'
     return dict(floor=floor, ring=ring, lamp=lamp, camera=camera)

@@ -89,7 +89,7 @@ def test_baked_caustic_renders_like_the_caustic_pass(addon, tmp_path, floor_kind
     lamp = scenes.add_point_light((-1.5, 0.6, 3.0), 1000.0)
     scenes.add_camera((3.5, -2.5, 2.5), target=(0.5, -0.2, 0.0))
     scenes.set_resolution(64, 48)
-    bpy.context.scene.caustic.photons = 200_000
+    bpy.context.scene.caustic.photons, bpy.context.scene.caustic.density = 200_000, 'ADAPTIVE'
     assert bpy.ops.caustic.bake() == {'FINISHED'}
     chart_input = 'ShaderNodeUVMap' if floor_kind == "bent" else 'ShaderNodeNewGeometry'
     assert any(node.bl_idname == chart_input for node in bpy.data.node_groups[0].nodes)

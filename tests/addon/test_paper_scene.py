@@ -125,7 +125,7 @@ def measure_render(shape):
     scene = bpy.context.scene
     scenes.set_resolution(160, 120)
     # the paper's lamp energy 10
-    scene.caustic.photons, scene.caustic.energy = 200_000, 10.0
+    scene.caustic.photons, scene.caustic.energy, scene.caustic.density = 200_000, 10.0, 'ADAPTIVE'
     assert bpy.ops.caustic.render() == {'FINISHED'}
     image = pixels_of("Caustic Render")[..., 0]
 

@@ -788,7 +788,7 @@ def slab_scene(thickness: float) -> Scene:
 def slab_transmission(thickness: float, photons: int = 100_000):
     """(transmitted fraction of the flux on the slab, its binomial standard
     error, the render's warnings)."""
-    result = render(slab_scene(thickness), RenderSettings(photons=photons, spp=1, map_resolution_limit=64))
+    result = render(slab_scene(thickness), RenderSettings(photons=photons, spp=1, map_resolution_limit=64, density="adaptive"))
     transmitted = result.stats["flux_landed_w"][0] / 4.0  # sun of 1 W/m^2 on 4 m^2
     on_slab = photons * 4.0 / (2.0 * math.pi)  # photons fill the 2 x 2 slab's bounding disc, radius sqrt 2
     return transmitted, math.sqrt(transmitted * (1 - transmitted) / on_slab), result.warnings
