@@ -34,7 +34,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from caustic_addon import (Camera, Dielectric, Diffuse, Object, RenderSettings, Scene, SunLight,  # noqa: E402
                            render, shapes)
 from caustic_addon.image_io import write_image  # noqa: E402
-from caustic_addon.optics import absorption_from_color  # noqa: E402
+import slab  # noqa: E402
 from speed import benchmark_scene, machine  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -68,20 +68,7 @@ def top_camera(half_width: float, pixels: int) -> Camera:
 
 
 def slab_error() -> dict:
-    thickness, ior, color = 0.2, 1.5, np.array([0.8, 0.5, 0.2])
-    glass = Dielectric(ior, absorption=absorption_from_color(color, thickness))
-    scene = Scene([Object("Floor", shapes.plane(6.0), Diffuse(albedo=1.0)),
-                   Object("Slab", shapes.cylinder(2.0, thickness, (0, 0, 1.0)), glass)],
-                  [SunLight((0, 0, -1), 1000.0)], top_camera(1.0, 8))
-    result = render(scene, RenderSettings(photons=1_000_000, density="splat", map_scale=50.0, spp=1))
-    floor = result.maps["Floor"]
-    h, w = floor.shape
-    cols, rows = np.meshgrid(np.arange(w), np.arange(h))
-    xy = floor.chart.origin + floor.cell * (np.stack([cols.ravel(), rows.ravel()], axis=1) + 0.5)
-    inner = (np.abs(floor.chart.world(xy)[:, :2]) < 1.0).all(axis=1)
-    measured = floor.irradiance().reshape(h * w, 3)[inner].mean(axis=0)
-    fresnel = ((ior - 1) / (ior + 1)) ** 2
-    exact = 1000.0 * (1 - fresnel) ** 2 * color / (1 - fresnel ** 2 * color ** 2)
+    measured, exact = slab.measured_irradiance(1_000_000), slab.exact_irradiance()
     return {"measured_w_m2": measured.round(3).tolist(), "exact_w_m2": exact.round(3).tolist(),
             "relative_error": (measured / exact - 1).round(5).tolist()}
 

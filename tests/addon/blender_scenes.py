@@ -1,6 +1,7 @@
 """Test scenes built with bpy: a diffuse plane, a smooth glass sphere, lamps and a camera."""
 
 import bpy
+import numpy as np
 from mathutils import Vector
 
 
@@ -118,3 +119,12 @@ def ring_scene(width=64, height=48, photons=200_000):
     scene.caustic.photons = photons
     scene.caustic.density = 'ADAPTIVE'
     return dict(floor=floor, ring=ring, lamp=lamp, camera=camera)
+
+
+def pixels_of(name):
+    """(h, w, 4) float32 pixels of image `name`, row 0 at the top."""
+    image = bpy.data.images[name]
+    w, h = image.size
+    pixels = np.empty(w * h * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    return pixels.reshape(h, w, 4)[::-1]

@@ -92,14 +92,6 @@ def test_a_custom_ior_that_is_not_positive_is_refused(ior):
     assert snapshot_file() == before
 
 
-def pixels_of(name):
-    image = bpy.data.images[name]
-    w, h = image.size
-    pixels = np.empty(w * h * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    return pixels.reshape(h, w, 4)[::-1]  # row 0 at the top
-
-
 def floor_under_pixels(scene):
     """(eye (3,), dirs (h,w,3) world, floor (h,w,3)): each pixel centre's
     ray from the scene camera and where it meets the plane z = 0."""
@@ -127,7 +119,7 @@ def measure_render(shape):
     # the paper's lamp energy 10
     scene.caustic.photons, scene.caustic.energy, scene.caustic.density = 200_000, 10.0, 'ADAPTIVE'
     assert bpy.ops.caustic.render() == {'FINISHED'}
-    image = pixels_of("Caustic Render")[..., 0]
+    image = scenes.pixels_of("Caustic Render")[..., 0]
 
     eye, dirs, floor = floor_under_pixels(scene)
     glass = bpy.data.objects[shape.title()]

@@ -12,14 +12,6 @@ from mathutils import Vector
 import blender_scenes as scenes
 
 
-def pixels_of(name):
-    image = bpy.data.images[name]
-    w, h = image.size
-    pixels = np.empty(w * h * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    return pixels.reshape(h, w, 4)[::-1]  # row 0 at the top
-
-
 def pixel_at(point):
     """(row from the top, column) of the pixel the scene camera sees `point` in."""
     scene = bpy.context.scene
@@ -38,7 +30,7 @@ def line_clears_sphere(start, end, centre, radius):
 def test_caustic_under_the_ball_and_dark_shadow_ring():
     parts = scenes.ball_lens_scene(160, 120, photons=100_000)
     assert bpy.ops.caustic.render() == {'FINISHED'}
-    image = pixels_of("Caustic Render")
+    image = scenes.pixels_of("Caustic Render")
     assert image.shape == (120, 160, 4)
 
     ball, lamp, camera = parts["ball"], parts["lamp"], parts["camera"]
@@ -109,7 +101,7 @@ def test_direct_light_on_a_diffuse_floor_matches_cycles(tmp_path):
     scenes.set_resolution(64, 48)
     bpy.context.scene.caustic.spp = 16
     assert bpy.ops.caustic.render() == {'FINISHED'}
-    ours = pixels_of("Caustic Render")
+    ours = scenes.pixels_of("Caustic Render")
     reference = cycles_render(str(tmp_path), samples=64)
 
     # The floor's inner pixels: fully covered in Cycles, and their neighbours too.
@@ -130,10 +122,10 @@ def test_glossy_ring_casts_a_visible_caustic():
     mirror adds its caustic around the cusp at x = -0.136."""
     parts = scenes.ring_scene()
     assert bpy.ops.caustic.render() == {'FINISHED'}
-    mirror = pixels_of("Caustic Render")[..., :3].mean(axis=2)
+    mirror = scenes.pixels_of("Caustic Render")[..., :3].mean(axis=2)
     parts["ring"].caustic.role = 'RECEIVER'
     assert bpy.ops.caustic.render() == {'FINISHED'}
-    matte = pixels_of("Caustic Render")[..., :3].mean(axis=2)
+    matte = scenes.pixels_of("Caustic Render")[..., :3].mean(axis=2)
 
     row, col = pixel_at((-0.136, 0.0, 0.0))
     patch = np.s_[row - 2:row + 3, col - 2:col + 3]
@@ -146,7 +138,7 @@ def test_glossy_ring_casts_a_visible_caustic():
 def caustic_across_x(xs):
     """Render, and return the image's RGB at floor points (x, 0, 0) for `xs`."""
     assert bpy.ops.caustic.render() == {'FINISHED'}
-    image = pixels_of("Caustic Render")
+    image = scenes.pixels_of("Caustic Render")
     return np.array([image[pixel_at((x, 0.0, 0.0))][:3] for x in xs])
 
 

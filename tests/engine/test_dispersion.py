@@ -12,6 +12,7 @@ from caustic_addon.optics import (LAMBDA_C, LAMBDA_D, LAMBDA_F, absorption_from_
 from caustic_addon.scene import SunLight
 from caustic_addon.spectrum import XYZ_TO_REC709, bands, cie_xyz, photon_band
 from caustic_addon.illumination_map import IlluminationMap
+import slab
 from scenes import ball_lens, quick, shadow_radius, top_camera, unobstructed_irradiance
 
 
@@ -165,34 +166,12 @@ def test_blue_focuses_closer_to_the_lens_than_red(density, paths, tolerance):
 
 
 def test_coloured_glass_slab_is_beer_lambert_exact():
-    """A slab of thickness L under a vertical sun S, with absorption set as
-    the colour c after distance L (so exp(-sigma L) = c). The photon pass
-    plays Fresnel roulette at both faces, so the floor receives the sum over
-    internal round trips:
-        E = S (1 - F)^2 c / (1 - F^2 c^2),  F = ((n - 1)/(n + 1))^2.
-    Photons reaching a cell land with probability about (1 - F)^2, so the
-    estimate's relative noise is sqrt((1 - p) / (p N)) for N photons aimed
-    at the measured square; the tolerance is 4 of that."""
-    thickness, ior, color = 0.2, 1.5, np.array([0.8, 0.5, 0.2])
-    glass = Dielectric(ior, absorption=absorption_from_color(color, thickness))
-    scene = Scene(objects=[Object("Floor", shapes.plane(6.0), Diffuse(albedo=1.0)),
-                           Object("Slab", shapes.cylinder(2.0, thickness, (0, 0, 1.0)), glass)],
-                  lights=[SunLight((0, 0, -1), 1000.0)], camera=top_camera(1.0, 8))
+    """benchmarks/slab.py: a slab whose absorption is the colour c at its
+    thickness gives the floor S (1 - F)^2 c / (1 - F^2 c^2), to 4 standard
+    deviations of the photon noise."""
     photons = 400_000
-    result = render(scene, RenderSettings(photons=photons, density="splat", map_scale=50.0, spp=1))
-    floor = result.maps["Floor"]
-    h, w = floor.shape
-    cols, rows = np.meshgrid(np.arange(w), np.arange(h))
-    xy = floor.chart.origin + floor.cell * (np.stack([cols.ravel(), rows.ravel()], axis=1) + 0.5)
-    inner = (np.abs(floor.chart.world(xy)[:, :2]) < 1.0).all(axis=1)
-    measured = floor.irradiance().reshape(h * w, 3)[inner].mean(axis=0)
-
-    fresnel = ((ior - 1) / (ior + 1)) ** 2
-    expected = 1000.0 * (1 - fresnel) ** 2 * color / (1 - fresnel ** 2 * color ** 2)
-    radius = math.hypot(2.0, 0.5 * thickness)  # the sun's disc: the slab's bounding sphere
-    aimed = photons * 4.0 / (math.pi * radius ** 2)
-    p = (1 - fresnel) ** 2
-    np.testing.assert_allclose(measured, expected, rtol=4 * math.sqrt((1 - p) / (p * aimed)))
+    np.testing.assert_allclose(slab.measured_irradiance(photons), slab.exact_irradiance(),
+                               rtol=4 * slab.relative_noise(photons))
 
 
 @pytest.mark.parametrize("abbe, why", [(0.0, "Abbe number must be > 0"), (-5.0, "Abbe number must be > 0"),
