@@ -2,7 +2,7 @@
 and a Whitted eye pass, on Embree. This package never imports bpy.
 
     from caustic_addon import render, Scene, RenderSettings
-    result = render(scene, RenderSettings(photons=1_000_000))
+    result = render(scene, RenderSettings(photons=40_000))  # beams, the default
     result.image  # (pixy, pixx, 4) float32, linear
 """
 
