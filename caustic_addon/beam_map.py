@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .illumination_map import IlluminationMap, bilinear_sample, rect_means, summed_area_table
-from .raster import rasterise_triangles
+from .raster import rasterise_triangles, signed_areas
 
 
 @dataclass
@@ -93,8 +93,7 @@ class BeamMap(IlluminationMap):
         small = size < 2.0
         if small.any():
             centre = corners[small].mean(axis=1)
-            e1, e2 = corners[small, 1] - corners[small, 0], corners[small, 2] - corners[small, 0]
-            flux = irradiance[small].sum(axis=1) * 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+            flux = irradiance[small].sum(axis=1) * np.abs(signed_areas(corners[small]))
             bounds = np.array([_weighted_quantiles(centre[:, a], flux, (5e-4, 1 - 5e-4)) for a in (0, 1)])
             small[small] = ((centre >= bounds[:, 0]) & (centre <= bounds[:, 1])).all(axis=1)
             # a small beam reaches at most 2 map cells from its centre

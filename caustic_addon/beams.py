@@ -39,6 +39,7 @@ from .illumination_map import IlluminationMap
 from .interface import orient, scatter
 from .materials import Materials
 from .optics import beer_lambert
+from .raster import signed_areas
 from .scene import Light, SunLight
 
 # Branches below this fraction of their vertex's starting weight stop.
@@ -172,7 +173,8 @@ def beam_sources(lights: list[Light], targets: list[Sphere], scene_sphere: Spher
 class Landings:
     """Where a band's vertex paths landed on receivers.
 
-    vertex (n,) grid index within the band, family (n,) uint64 signature,
+    vertex (n,) the path's index among those traced (band_beams makes it a
+    grid key), family (n,) uint64 signature,
     obj (n,) receiver object index, xy (n,2) chart metres, scale (n,) chart
     area per world area, weight (n,3) the path's starting weight times its
     Fresnel, tint and absorption factors, throughput (n,) that product of
@@ -278,12 +280,14 @@ class BandBeams:
 class _Lookup:
     """Landings indexed by grid vertex and by family group.
 
-    Vertices are keys on a grid 2^levels times finer than the source's, key = row * width + col; a group is one (family, receiver)."""
+    Vertices are keys on a grid 2^levels times finer than the source's,
+    key = row * width + col; a group is one (family, receiver), and a pair
+    (element, group) is numbered element * stride + group."""
 
     def __init__(self, landings: Landings, keys: int):
         self.landings, self.keys = landings, keys
         self.group = row_ids(np.stack([landings.family, landings.obj.astype(np.uint64)], axis=1))
-        self.groups = int(self.group.max(initial=-1)) + 1
+        self.stride = max(int(self.group.max(initial=-1)) + 1, 1)
         combo = self.group * keys + landings.vertex
         self._combo_order = np.argsort(combo)
         self._combo = combo[self._combo_order]
@@ -307,19 +311,14 @@ class _Lookup:
         offset = np.arange(len(element)) - np.repeat(np.cumsum(found) - found, found)
         landing = self._vertex_order[np.repeat(start, found) + offset]
         group = self.group[landing]
-        _, inverse, count = np.unique(element * max(self.groups, 1) + group, return_inverse=True,
+        _, inverse, count = np.unique(element * self.stride + group, return_inverse=True,
                                       return_counts=True)
         return element, group, landing, count[inverse.reshape(-1)]
 
     def first_of_each(self, element: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The distinct (element, group) pairs among rows of `pairs`."""
-        _, first = np.unique(element * max(self.groups, 1) + group, return_index=True)
+        _, first = np.unique(element * self.stride + group, return_index=True)
         return element[first], group[first]
-
-
-def _signed_area(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-    e1, e2 = b - a, c - a
-    return 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
 
 
 def _cell_corners(row: np.ndarray, col: np.ndarray, size: np.ndarray, width: int) -> np.ndarray:
@@ -331,15 +330,16 @@ def _cell_corners(row: np.ndarray, col: np.ndarray, size: np.ndarray, width: int
 def _diverging(lookup: _Lookup, corners: np.ndarray) -> np.ndarray:
     """(n,) bool: cells whose paths diverge. Some but not all of a cell's
     corners land in a family of throughput at least REFINE_THROUGHPUT (a
-    silhouette, total internal reflection), or its two triangles land with opposite orientation (a
-    fold of the caustic crosses it) or areas more than REFINE_RATIO apart."""
+    silhouette, total internal reflection), or its two triangles land with
+    opposite orientation (a fold of the caustic crosses it) or areas more
+    than REFINE_RATIO apart."""
     element, group, landing, count = lookup.pairs(corners)
     split = np.zeros(len(corners), dtype=bool)
     split[element[(count < 4) & (lookup.landings.throughput[landing] >= REFINE_THROUGHPUT)]] = True
     cell, group = lookup.first_of_each(element[count == 4], group[count == 4])
     xy = [lookup.landings.xy[lookup.find(group, corners[cell, k])] for k in range(4)]
-    a = _signed_area(xy[0], xy[1], xy[3])
-    b = _signed_area(xy[0], xy[3], xy[2])
+    a = signed_areas(np.stack([xy[0], xy[1], xy[3]], axis=1))
+    b = signed_areas(np.stack([xy[0], xy[3], xy[2]], axis=1))
     small, large = np.minimum(np.abs(a), np.abs(b)), np.maximum(np.abs(a), np.abs(b))
     split[cell[(a * b <= 0.0) | (large > REFINE_RATIO * small)]] = True
     return split
@@ -444,18 +444,19 @@ def _beams_and_photons(lookup: _Lookup, triangles: np.ndarray, measure: np.ndarr
     idx = np.stack([lookup.find(tri_group, triangles[tri, k]) for k in range(3)], axis=1)
     obj = land.obj[idx[:, 0]]
     xy = land.xy[idx]
-    area = np.abs(_signed_area(xy[:, 0], xy[:, 1], xy[:, 2]))
+    area = np.abs(signed_areas(xy))
     flux = measure[tri, None] * land.weight[idx].mean(axis=1)
-    chart_area = np.array([float(np.prod(np.maximum(maps[o].chart.size, 1e-300))) for o in range(max(maps) + 1)]
-                          if maps else [])
-    good = area > _MIN_AREA_FRACTION * chart_area[obj] if len(obj) else np.zeros(0, dtype=bool)
+    chart_area = np.zeros(max(maps, default=-1) + 1)
+    for index, imap in maps.items():
+        chart_area[index] = np.prod(np.maximum(imap.chart.size, 1e-300))
+    good = area > _MIN_AREA_FRACTION * chart_area[obj]
     with np.errstate(divide="ignore", invalid="ignore"):
         irradiance = flux * (land.scale[idx].mean(axis=1) / area)[:, None]
 
     # fallback: each landed corner of an incoherent or degenerate triangle
     # carries a third of that triangle's flux
-    pair = element * max(lookup.groups, 1) + group
-    degenerate = tri[~good] * max(lookup.groups, 1) + tri_group[~good]
+    pair = element * lookup.stride + group
+    degenerate = tri[~good] * lookup.stride + tri_group[~good]
     loose = (count < 3) | np.isin(pair, degenerate)
     share = np.bincount(landing[loose], weights=measure[element[loose]] / 3.0, minlength=len(land.vertex))
     holders = np.flatnonzero(share > 0)

@@ -25,6 +25,13 @@ import numpy as np
 _BATCH = 1 << 15
 
 
+def signed_areas(corners: np.ndarray) -> np.ndarray:
+    """(m,) areas of 2D triangles `corners (m,3,2)`, positive when
+    counter-clockwise (y up)."""
+    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    return 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+
+
 def rasterise_triangles(shape: tuple[int, int], corners: np.ndarray, values: np.ndarray) -> np.ndarray:
     """(h,w,c) grid holding, in each cell, the sum over triangles of
     `values (m,c)` times the triangle's area inside the cell.
@@ -45,10 +52,8 @@ def rasterise_triangles(shape: tuple[int, int], corners: np.ndarray, values: np.
 
 def _accumulate(acc: np.ndarray, h: int, w: int, corners: np.ndarray, values: np.ndarray) -> None:
     """Add the triangles' edge pieces to the accumulation buffer `acc (c, h (w+2))`."""
-    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
-    winding = np.sign(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
     # a counter-clockwise (y up) triangle accumulates minus its coverage
-    weight = -winding[:, None] * values
+    weight = -np.sign(signed_areas(corners))[:, None] * values
 
     start = corners.reshape(-1, 2)
     end = corners[:, [1, 2, 0]].reshape(-1, 2)

@@ -142,14 +142,15 @@ def forward_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, mat
     emitters = make_emitters(scene.lights, *targets_and_bounds(scene), settings.emission, settings.energy,
                              settings.photons, settings.seed)
 
-    def job(emitter, start, medium):
-        stop = min(start + chunk(emitter.count, settings), emitter.count)
+    def job(emitter, start, stop, medium):
         return trace_photons(accel, materials, maps, emitter.emit(start, stop), settings.max_depth, settings.seed,
                              medium)
 
-    mediums = [lamp_medium(accel, e.light) for e in emitters]
-    jobs = [partial(job, e, start, medium) for e, medium in zip(emitters, mediums)
-            for start in range(0, e.count, chunk(e.count, settings))]
+    jobs = []
+    for emitter in emitters:
+        size, medium = chunk(emitter.count, settings), lamp_medium(accel, emitter.light)
+        jobs += [partial(job, emitter, start, min(start + size, emitter.count), medium)
+                 for start in range(0, emitter.count, size)]
     stats = TransportStats()
     for chunk_stats in run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass"):
         stats.add(chunk_stats)

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from caustic_addon import render
+from caustic_addon import Scene, render
 from caustic_addon.beams import concentric_disc
 from metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
@@ -107,3 +107,14 @@ def test_refinement_moves_light_from_fallback_photons_into_beams_on_a_facetted_g
     plain_share, plain_total, _ = render_gem(paths, 0)
     assert refined_share[0] < 0.85 * plain_share[0]
     np.testing.assert_allclose(refined_total, plain_total, rtol=0.02)
+
+
+def test_beams_land_on_a_receiver_listed_after_the_glass():
+    """Beam mode once looked up every object index below the last receiver
+    as a map, and failed when a non-receiver came first. The object order
+    must not change the light."""
+    scene = ball_lens(pixels=8)
+    reversed_scene = Scene(objects=scene.objects[::-1], lights=scene.lights, camera=scene.camera)
+    first = render(scene, quick(photons=4_000, density="beam")).stats["flux_landed_w"]
+    second = render(reversed_scene, quick(photons=4_000, density="beam")).stats["flux_landed_w"]
+    np.testing.assert_allclose(second, first, rtol=1e-9)
