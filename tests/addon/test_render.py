@@ -27,8 +27,11 @@ def line_clears_sphere(start, end, centre, radius):
     return np.linalg.norm(start + t * d - centre) > radius
 
 
-def test_caustic_under_the_ball_and_dark_shadow_ring():
-    parts = scenes.ball_lens_scene(160, 120, photons=100_000)
+@pytest.mark.parametrize("density, photons", [('ADAPTIVE', 100_000), ('BEAM', 40_000)],
+                         ids=["adaptive", "beam-the-default"])
+def test_caustic_under_the_ball_and_dark_shadow_ring(density, photons):
+    parts = scenes.ball_lens_scene(160, 120, photons=photons)
+    bpy.context.scene.caustic.density = density
     assert bpy.ops.caustic.render() == {'FINISHED'}
     image = scenes.pixels_of("Caustic Render")
     assert image.shape == (120, 160, 4)
