@@ -7,20 +7,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .illumination_map import IlluminationMap, bilinear_sample, rect_means, summed_area_table
+from .illumination_map import IlluminationMap, bilinear_sample, channel_tables, rect_means
 from .raster import rasterise_triangles, signed_areas
 
 
 @dataclass
 class _Layer:
-    """A grid of irradiance `values (h,w,3)` W/m^2, each cell the exact mean
+    """A grid of irradiance `values (h,w,c)` W/m^2, each cell the exact mean
     over it, cells of edge `cell` m from chart corner `origin (2,)` (x, y),
-    and its summed-area table."""
+    and its summed-area tables (c, h+1, w+1). One channel (c = 1) holds
+    white light."""
 
     origin: np.ndarray
     cell: float
     values: np.ndarray
-    table: np.ndarray
+    tables: np.ndarray
 
     @staticmethod
     def of_beams(lo: np.ndarray, hi: np.ndarray, cell: float, corners: np.ndarray,
@@ -28,24 +29,32 @@ class _Layer:
         """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2,
         rasterised over the chart box [lo, hi]; parts outside it are dropped."""
         shape = tuple(np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)[::-1])
-        values = rasterise_triangles(shape, (corners - lo) / cell, irradiance)
-        return _Layer(lo, cell, values, summed_area_table(values))
+        if (irradiance == irradiance[:, :1]).all():
+            irradiance = irradiance[:, :1]
+        values = np.ascontiguousarray(rasterise_triangles(shape, (corners - lo) / cell, irradiance))
+        return _Layer(lo, cell, values, channel_tables(values))
 
     def _rc(self, xy: np.ndarray) -> np.ndarray:
         """(n,2) continuous (row, col), cell centres at integers."""
         return (xy[:, ::-1] - self.origin[::-1]) / self.cell - 0.5
 
     def at(self, xy: np.ndarray) -> np.ndarray:
-        """(n,3) W/m^2 at chart points `xy (n,2)`, bilinear between cell
+        """(n,c) W/m^2 at chart points `xy (n,2)`, bilinear between cell
         centres; zero off the layer."""
         rc = self._rc(xy)
         inside = ((rc >= -0.5) & (rc <= np.array(self.values.shape[:2]) - 0.5)).all(axis=1)
-        out = np.zeros((len(xy), 3))
+        out = np.zeros((len(xy), self.values.shape[2]))
         out[inside] = bilinear_sample(self.values, rc[inside])
         return out
 
     def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-        return rect_means(self.table, self.origin[::-1], self.cell, lo, hi)
+        """(n,c) mean W/m^2 over chart rectangles [lo, hi] ((n,2) each); only
+        those that meet the layer are looked up."""
+        end = self.origin + self.cell * np.array(self.values.shape[1::-1])
+        meets = np.flatnonzero(((hi > self.origin) & (lo < end)).all(axis=1))
+        out = np.zeros((len(lo), self.values.shape[2]))
+        out[meets] = rect_means(self.tables, self.origin[::-1], self.cell, lo[meets], hi[meets])
+        return out
 
 
 def _weighted_quantiles(values: np.ndarray, weights: np.ndarray, q) -> np.ndarray:

@@ -25,6 +25,7 @@ from typing import Optional
 import numpy as np
 
 from .accel import Accelerator, MISS
+from .camera import eye_rays
 from .illumination_map import IlluminationMap, PlaneChart
 from .interface import orient, scatter
 from .lighting import direct_radiance
@@ -41,19 +42,19 @@ MIN_WEIGHT = 1e-4
 class EyeRays:
     """n eye rays in flight: origins (n,3), dirs (n,3), weight (n,3)
     throughput, pixel (n,) flat pixel index, medium (n,) object inside or
-    MISS. Camera rays also carry `footprint (n,4,2,3)`: the origin and
-    direction of the rays through the corners of their pixel stratum."""
+    MISS. Camera rays also carry `offset (n,2)`, where in its pixel each
+    passes, which places the corners of its pixel stratum."""
 
     origins: np.ndarray
     dirs: np.ndarray
     weight: np.ndarray
     pixel: np.ndarray
     medium: np.ndarray
-    footprint: Optional[np.ndarray] = None
+    offset: Optional[np.ndarray] = None
 
     def select(self, mask: np.ndarray) -> "EyeRays":
         return EyeRays(self.origins[mask], self.dirs[mask], self.weight[mask], self.pixel[mask], self.medium[mask],
-                       None if self.footprint is None else self.footprint[mask])
+                       None if self.offset is None else self.offset[mask])
 
     @staticmethod
     def concat(parts: list["EyeRays"]) -> "EyeRays":
@@ -63,12 +64,15 @@ class EyeRays:
 
 class EyePass:
     """Shades eye rays of the flat pixels [first_pixel, end_pixel) into pass
-    buffers, each (end_pixel - first_pixel, 3)."""
+    buffers, each (end_pixel - first_pixel, 3). Each camera ray stands for a
+    square stratum of its pixel, `stratum` pixels wide."""
 
     def __init__(self, accel: Accelerator, scene: Scene, materials: Materials,
-                 maps: dict[int, IlluminationMap], energy: float, max_depth: int, first_pixel: int, end_pixel: int):
+                 maps: dict[int, IlluminationMap], energy: float, max_depth: int, stratum: float,
+                 first_pixel: int, end_pixel: int):
         self.accel, self.scene, self.materials, self.maps = accel, scene, materials, maps
         self.energy, self.max_depth = energy, max_depth
+        self.corners = 0.5 * stratum * np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
         self.first_pixel, self.end_pixel = int(first_pixel), int(end_pixel)
         self.far = 4.0 * scene.extent() + float(np.abs(scene.camera.position).max())
         self.buffers = {name: np.zeros((self.end_pixel - self.first_pixel, 3)) for name in PASSES}
@@ -119,12 +123,18 @@ class EyePass:
             xy = imap.chart.coords(local, hits.u[sel], hits.v[sel], points[sel])
             irradiance = np.empty((len(xy), 3))
             spread = np.zeros(len(xy), dtype=bool)
-            if rays.footprint is not None and isinstance(imap.chart, PlaneChart):
-                lo, hi, spread = imap.chart.footprint(rays.footprint[sel])
+            if rays.offset is not None and isinstance(imap.chart, PlaneChart):
+                lo, hi, spread = imap.chart.footprint(self._corner_rays(rays.pixel[sel], rays.offset[sel]))
                 irradiance[spread] = imap.mean_over(lo[spread], hi[spread])
             irradiance[~spread] = imap.irradiance_at(xy[~spread])
             radiance = irradiance * albedo[sel] / math.pi
             self._add("caustic", rays.pixel[sel], rays.weight[sel] * radiance)
+
+    def _corner_rays(self, pixel: np.ndarray, offset: np.ndarray) -> np.ndarray:
+        """(n,4,2,3) origins and directions of the camera rays through the
+        corners of the pixel strata at `offset (n,2)` in `pixel (n,)`."""
+        return np.stack([np.stack(eye_rays(self.scene.camera, pixel, offset + c), axis=1) for c in self.corners],
+                        axis=1)
 
     def _split_at_specular(self, rays: EyeRays, hits, points: np.ndarray) -> EyeRays:
         """The reflected children of rays at dielectric and reflector hits,

@@ -20,7 +20,7 @@ from .camera import eye_rays, pixel_offsets
 from .emission import Sphere, make_emitters
 from .errors import Cancelled
 from .eye_pass import PASSES, EyePass, EyeRays
-from .illumination_map import IlluminationMap, MapEstimate, PlaneChart, auto_cell_size, make_chart
+from .illumination_map import IlluminationMap, MapEstimate, auto_cell_size, make_chart
 from .materials import Materials
 from .scene import Light, RenderSettings, Scene, SunLight
 from .transport import TransportStats, trace_photons
@@ -194,12 +194,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     offsets = pixel_offsets(settings.spp, settings.seed)
     samples = pixels * settings.spp
 
-    # each sample stands for a square stratum of its pixel, 1/spp of its area
-    half = 0.5 / np.sqrt(settings.spp)
-    corners = np.array([[-half, -half], [half, -half], [half, half], [-half, half]])
-    filtered = any(isinstance(imap.chart, PlaneChart) for imap in maps.values())
     camera_medium = int(accel.medium_at(cam.position[None])[0])
-
     size = chunk(samples, settings)
 
     def job(first):
@@ -207,12 +202,11 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
         pixel = sample // settings.spp
         offset = offsets[sample % settings.spp]
         origins, dirs = eye_rays(cam, pixel, offset)
-        footprint = (np.stack([np.stack(eye_rays(cam, pixel, offset + c), axis=1) for c in corners], axis=1)
-                     if filtered else None)
         weight = np.full((len(sample), 3), 1.0 / settings.spp)
+        # each sample stands for a square stratum of its pixel, 1/spp of its area
         tracer = EyePass(accel, scene, materials, maps, settings.energy, settings.max_depth,
-                         pixel[0], pixel[-1] + 1)
-        tracer.trace(EyeRays(origins, dirs, weight, pixel, np.full(len(sample), camera_medium), footprint))
+                         1.0 / np.sqrt(settings.spp), pixel[0], pixel[-1] + 1)
+        tracer.trace(EyeRays(origins, dirs, weight, pixel, np.full(len(sample), camera_medium), offset))
         return tracer
 
     jobs = [partial(job, first) for first in range(0, samples, size)]
