@@ -28,7 +28,7 @@ EPSILON_FRACTION = 2e-6
 # passed, at most this many times per ray and call (see Accelerator.intersect).
 _MAX_SKIPS = 4
 # Triangles per closed dielectric probed for walls thinner than epsilon.
-_THICKNESS_PROBES = 1 << 16
+_THICKNESS_PROBES = 1 << 13
 # Directions that `medium_at` looks along, and vote over: fixed, and unlikely
 # to line up with a mesh's edges.
 _PROBE_DIRS = normalize(np.array([[0.2672, 0.5345, 0.8018], [-0.7071, 0.1104, -0.6984], [0.5774, -0.8083, 0.1155]]))

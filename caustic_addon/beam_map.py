@@ -3,6 +3,7 @@ coverage, plus the ordinary density estimate of the fallback photons."""
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -13,7 +14,7 @@ from .raster import rasterise_triangles, signed_areas
 
 @dataclass
 class _Layer:
-    """A grid of irradiance `values (h,w,c)` W/m^2, each cell the exact mean
+    """A grid of irradiance `values (c,h,w)` W/m^2, each cell the exact mean
     over it, cells of edge `cell` m from chart corner `origin (2,)` (x, y),
     and its summed-area tables (c, h+1, w+1). One channel (c = 1) holds
     white light."""
@@ -31,7 +32,7 @@ class _Layer:
         shape = tuple(np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)[::-1])
         if (irradiance == irradiance[:, :1]).all():
             irradiance = irradiance[:, :1]
-        values = np.ascontiguousarray(rasterise_triangles(shape, (corners - lo) / cell, irradiance))
+        values = np.ascontiguousarray(rasterise_triangles(shape, (corners - lo) / cell, irradiance).transpose(2, 0, 1))
         return _Layer(lo, cell, values, channel_tables(values))
 
     def _rc(self, xy: np.ndarray) -> np.ndarray:
@@ -42,17 +43,17 @@ class _Layer:
         """(n,c) W/m^2 at chart points `xy (n,2)`, bilinear between cell
         centres; zero off the layer."""
         rc = self._rc(xy)
-        inside = ((rc >= -0.5) & (rc <= np.array(self.values.shape[:2]) - 0.5)).all(axis=1)
-        out = np.zeros((len(xy), self.values.shape[2]))
+        inside = ((rc >= -0.5) & (rc <= np.array(self.values.shape[1:]) - 0.5)).all(axis=1)
+        out = np.zeros((len(xy), len(self.values)))
         out[inside] = bilinear_sample(self.values, rc[inside])
         return out
 
     def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """(n,c) mean W/m^2 over chart rectangles [lo, hi] ((n,2) each); only
         those that meet the layer are looked up."""
-        end = self.origin + self.cell * np.array(self.values.shape[1::-1])
+        end = self.origin + self.cell * np.array(self.values.shape[:0:-1])
         meets = np.flatnonzero(((hi > self.origin) & (lo < end)).all(axis=1))
-        out = np.zeros((len(lo), self.values.shape[2]))
+        out = np.zeros((len(lo), len(self.values)))
         out[meets] = rect_means(self.tables, self.origin[::-1], self.cell, lo[meets], hi[meets])
         return out
 
@@ -93,13 +94,16 @@ class BeamMap(IlluminationMap):
             self._beam_parts.append((corners, irradiance))
             self.beams += len(corners)
 
-    def _rasterise_beams(self) -> None:
+    def _layer_specs(self) -> list[tuple]:
+        """The pending beams sorted into layers: `_Layer.of_beams` arguments
+        for each."""
         corners = np.concatenate([c for c, _ in self._beam_parts])
         irradiance = np.concatenate([e for _, e in self._beam_parts])
         self._beam_parts = []
         lo, hi = self.chart.origin, self.chart.origin + self.chart.size
         size = np.ptp(corners, axis=1).max(axis=1) / self.cell
         small = size < 2.0
+        specs = []
         if small.any():
             centre = corners[small].mean(axis=1)
             flux = irradiance[small].sum(axis=1) * np.abs(signed_areas(corners[small]))
@@ -108,21 +112,24 @@ class BeamMap(IlluminationMap):
             # a small beam reaches at most 2 map cells from its centre
             fine_lo, fine_hi = bounds[:, 0] - 2.0 * self.cell, bounds[:, 1] + 2.0 * self.cell
             cell = max(self.cell / self.FINE, float((fine_hi - fine_lo).max()) / self.FINE_LIMIT)
-            self._layers.append(_Layer.of_beams(fine_lo, fine_hi, cell, corners[small], irradiance[small]))
+            specs.append((fine_lo, fine_hi, cell, corners[small], irradiance[small]))
         large = size >= self.COARSE
         for chosen, cell in ((~small & ~large, self.cell), (large, self.COARSE_CELL * self.cell)):
             if chosen.any():
                 # over the chosen beams' bounding box only
                 points = corners[chosen].reshape(-1, 2)
                 box_lo, box_hi = np.maximum(lo, points.min(axis=0)), np.minimum(hi, points.max(axis=0))
-                self._layers.append(_Layer.of_beams(box_lo, box_hi + cell, cell, corners[chosen],
-                                                    irradiance[chosen]))
+                specs.append((box_lo, box_hi + cell, cell, corners[chosen], irradiance[chosen]))
+        return specs
 
-    def prepare(self) -> None:
+    def prepare(self, threads: int = 1) -> None:
+        """Rasterise the pending beams, a layer per thread, and prepare the
+        fallback photons' map."""
         super().prepare()
         with self._lock:
             if self._beam_parts:
-                self._rasterise_beams()
+                with ThreadPoolExecutor(threads) as pool:
+                    self._layers += pool.map(lambda spec: _Layer.of_beams(*spec), self._layer_specs())
 
     def irradiance_at(self, xy: np.ndarray) -> np.ndarray:
         return super().irradiance_at(xy) + sum(layer.at(xy) for layer in self._layers)

@@ -163,11 +163,14 @@ def make_chart(obj: Object, planarity_tolerance: float = 1e-6) -> Optional[Chart
     return None
 
 
-def bilinear_splat(shape: tuple[int, int], rc: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """(h,w,c) grid of `values (n,c)` spread bilinearly to the 4 cells nearest
-    each continuous (row, col) position `rc (n,2)` (cell centres at integers).
-    Weights reaching past the border fold onto the edge cells."""
-    h, w = shape
+def bilinear_splat(planes: np.ndarray, rc: np.ndarray, values: np.ndarray) -> None:
+    """Add `values (n,c)` to `planes (c,h,w)`, each spread bilinearly to the
+    4 cells nearest its continuous (row, col) position `rc (n,2)` (cell
+    centres at integers). Weights reaching past the border fold onto the
+    edge cells. Sums per cell come from one bincount per channel, over the
+    whole grid for a batch about as large as it, else over only the cells
+    the batch touches."""
+    h, w = planes.shape[1:]
     base = np.floor(rc).astype(np.int64)
     frac = rc - base
     index, weight = [], []
@@ -178,27 +181,27 @@ def bilinear_splat(shape: tuple[int, int], rc: np.ndarray, values: np.ndarray) -
             weight.append(wi * (frac[:, 1] if dj else 1.0 - frac[:, 1]))
             index.append(row * w + np.clip(base[:, 1] + dj, 0, w - 1))
     index, weight = np.concatenate(index), np.concatenate(weight)
-    grid = np.empty((h * w, values.shape[1]))
-    for c in range(values.shape[1]):
-        grid[:, c] = np.bincount(index, weights=weight * np.tile(values[:, c], 4), minlength=h * w)
-    return grid.reshape(h, w, -1)
+    cells, size = slice(None), h * w
+    if len(index) < h * w // 16:
+        cells, index = np.unique(index, return_inverse=True)
+        size = len(cells)
+    for plane, value in zip(planes.reshape(len(planes), h * w), values.T):
+        plane[cells] += np.bincount(index, weights=weight * np.tile(value, 4), minlength=size)
 
 
-def bilinear_sample(grid: np.ndarray, rc: np.ndarray) -> np.ndarray:
-    """(n,c) values of `grid (h,w,c)` interpolated bilinearly at continuous
+def bilinear_sample(planes: np.ndarray, rc: np.ndarray) -> np.ndarray:
+    """(n,c) values of `planes (c,h,w)` interpolated bilinearly at continuous
     (row, col) positions `rc (n,2)` (cell centres at integers), clamped to
-    the outermost centres. The four neighbours come in one `take` from the
-    flattened grid (several times faster than fancy indexing)."""
-    h, w = grid.shape[:2]
+    the outermost centres."""
+    h, w = planes.shape[1:]
     rc = np.clip(rc, 0.0, [h - 1, w - 1])
     base = np.minimum(np.floor(rc).astype(np.int64), [max(h - 2, 0), max(w - 2, 0)])
     frac = rc - base
     down, right = (w if h > 1 else 0), (1 if w > 1 else 0)
     index = (base[:, 0] * w + base[:, 1])[:, None] + [0, right, down, down + right]
-    near = np.take(grid.reshape(h * w, -1), index, axis=0)
     fy, fx = frac[:, 0], frac[:, 1]
     weights = np.stack([(1 - fy) * (1 - fx), (1 - fy) * fx, fy * (1 - fx), fy * fx], axis=1)
-    return np.einsum("nk,nkc->nc", weights, near)
+    return np.stack([np.einsum("nk,nk->n", weights, np.take(plane, index)) for plane in planes], axis=1)
 
 
 def rect_means(tables: np.ndarray, origin_rc: np.ndarray, cell: float, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -257,13 +260,13 @@ def summed_area_table(grid: np.ndarray) -> np.ndarray:
     return table
 
 
-def channel_tables(grid: np.ndarray) -> np.ndarray:
-    """Summed-area tables (c, h+1, w+1), one per channel of `grid (h,w,c)`,
+def channel_tables(planes: np.ndarray) -> np.ndarray:
+    """Summed-area tables (c, h+1, w+1), one per channel of `planes (c,h,w)`,
     or one for all when the channels are equal (white light): the look-ups
     return that one column, which broadcasts."""
-    if all(np.array_equal(grid[..., 0], grid[..., k]) for k in range(1, grid.shape[2])):
-        grid = grid[..., :1]
-    return np.stack([summed_area_table(grid[..., k]) for k in range(grid.shape[2])])
+    if all(np.array_equal(planes[0], plane) for plane in planes[1:]):
+        planes = planes[:1]
+    return np.stack([summed_area_table(plane) for plane in planes])
 
 
 def rgb(values: np.ndarray) -> np.ndarray:
@@ -291,8 +294,8 @@ class IlluminationMap:
     def __init__(self, name: str, chart: Chart, cell: float, estimate: MapEstimate):
         self.name, self.chart, self.cell, self.estimate = name, chart, cell, estimate
         self.shape = (max(1, int(math.ceil(chart.size[1] / cell))), max(1, int(math.ceil(chart.size[0] / cell))))
-        self._flux = np.zeros(self.shape + (3,))
-        self._count = np.zeros(self.shape)
+        # photon count (plane 0) and flux W (planes 1..3) landed per cell
+        self._cells = np.zeros((4,) + self.shape)
         self.photons = 0
         self._pending: list[tuple[np.ndarray, np.ndarray]] = []
         self._pending_count = 0
@@ -327,21 +330,22 @@ class IlluminationMap:
     def flux(self) -> np.ndarray:
         """(h,w,3) W landed in each cell."""
         self.prepare()
-        return self._flux
+        return np.moveaxis(self._cells[1:], 0, -1)
 
     @property
     def count(self) -> np.ndarray:
         """(h,w) photons landed in each cell (bilinear shares)."""
         self.prepare()
-        return self._count
+        return self._cells[0]
 
-    def prepare(self) -> None:
+    def prepare(self, threads: int = 1) -> None:
         """Splat what is pending and build the look-up tables, so that
-        concurrent reads need no lock."""
+        concurrent reads need no lock. It is one job here; `threads` is for
+        maps with more to build."""
         with self._lock:
             self._flush()
             if self._tables is None:
-                self._tables = (summed_area_table(self._count)[None], channel_tables(self._flux))
+                self._tables = (summed_area_table(self._cells[0])[None], channel_tables(self._cells[1:]))
 
     def _flush(self) -> None:
         """Splat the pending photons (the paper's figure 2)."""
@@ -350,15 +354,13 @@ class IlluminationMap:
         xy = np.concatenate([p[0] for p in self._pending])
         flux = np.concatenate([p[1] for p in self._pending])
         self._pending, self._pending_count = [], 0
-        grid = bilinear_splat(self.shape, self._cell_coords(xy), np.c_[np.ones(len(xy)), flux])
-        self._count += grid[..., 0]
-        self._flux += grid[..., 1:]
+        bilinear_splat(self._cells, self._cell_coords(xy), np.c_[np.ones(len(xy)), flux])
 
     def irradiance_at(self, xy: np.ndarray) -> np.ndarray:
         """Caustic irradiance (n,3) W/m^2 at chart coordinates `xy (n,2)`."""
         self.prepare()
         if self.estimate.k_nearest is None:
-            out = bilinear_sample(self._flux / self.cell ** 2, self._cell_coords(xy))
+            out = bilinear_sample(self._cells[1:], self._cell_coords(xy)) / self.cell ** 2
         else:
             out = self._adaptive(xy)
         outside = ((xy < self.chart.origin) | (xy > self.chart.origin + self.chart.size)).any(axis=1)

@@ -259,7 +259,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
 
         clock = time.perf_counter()
         for imap in maps.values():
-            imap.prepare()
+            imap.prepare(settings.threads)
         seconds["maps"] = time.perf_counter() - clock
 
         clock = time.perf_counter()

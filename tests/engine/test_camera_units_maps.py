@@ -8,7 +8,8 @@ import pytest
 
 from caustic_addon import Camera, SpotLight
 from caustic_addon.camera import eye_rays
-from caustic_addon.illumination_map import IlluminationMap, MapEstimate, PlaneChart
+from caustic_addon.illumination_map import (IlluminationMap, MapEstimate, PlaneChart, bilinear_splat, channel_tables,
+                                            moment_rectangles, rect_means, rgb)
 from caustic_addon.units import spot_attenuation
 
 
@@ -84,3 +85,65 @@ def test_map_scale_sets_the_cell_and_the_paper_scheme_splats_to_four_cells():
     imap.prepare()
     np.testing.assert_allclose(imap.count[4:6, 4:6], 0.25)
     assert imap.count.sum() == pytest.approx(1.0)
+
+
+def test_a_footprint_stands_as_the_rectangle_of_its_mean_and_spread():
+    """A sheared pixel footprint becomes the rectangle with its pixel-space
+    mean and variance along each axis (checked by sampling the bilinear
+    patch), narrower than its bounding box; an axis-aligned one is itself."""
+    quad = np.array([[[0.0, 0.0], [1.0, 0.1], [1.3, 2.2], [0.2, 2.0]]])
+    lo, hi = moment_rectangles(quad)
+    s, t = np.random.default_rng(1).random((2, 400_000, 1))
+    p = (1 - s) * (1 - t) * quad[0, 0] + s * (1 - t) * quad[0, 1] + s * t * quad[0, 2] + (1 - s) * t * quad[0, 3]
+    np.testing.assert_allclose(0.5 * (lo + hi)[0], p.mean(axis=0), atol=3e-3)
+    np.testing.assert_allclose((hi - lo)[0] ** 2 / 12.0, p.var(axis=0), rtol=1e-2)
+    assert np.all(hi - lo < np.ptp(quad[0], axis=0))
+    box = np.array([[[1.0, 2.0], [4.0, 2.0], [4.0, 3.0], [1.0, 3.0]]])
+    np.testing.assert_allclose(np.concatenate(moment_rectangles(box)), [[1.0, 2.0], [4.0, 3.0]])
+
+
+def exact_rect_means(grid: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Means of the cell-constant `grid (h,w,c)` (unit cells from 0) over
+    rectangles: each cell weighted by its overlap, per axis, with the box."""
+    h, w = grid.shape[:2]
+    over_y = np.clip(np.minimum(hi[:, 1:], np.arange(1, h + 1)) - np.maximum(lo[:, 1:], np.arange(h)), 0, None)
+    over_x = np.clip(np.minimum(hi[:, :1], np.arange(1, w + 1)) - np.maximum(lo[:, :1], np.arange(w)), 0, None)
+    return np.einsum("ni,nj,ijc->nc", over_y, over_x, grid) / ((hi - lo).prod(axis=1))[:, None]
+
+
+@pytest.mark.parametrize("channels", [3, 1])
+def test_rectangle_means_of_a_grid_are_exact(channels):
+    """Means over rectangles that straddle cells and the grid's edge, from
+    summed-area tables, match the exact overlap-weighted sums; white light
+    keeps one table for all three channels."""
+    rng = np.random.default_rng(2)
+    grid = np.repeat(rng.random((7, 9, channels)), 3 // channels, axis=2)
+    lo = rng.random((500, 2)) * [10.0, 8.0] - 0.5
+    hi = lo + 0.05 + rng.random((500, 2)) * 3.0
+    tables = channel_tables(np.moveaxis(grid, -1, 0))
+    assert len(tables) == channels
+    ours = rgb(rect_means(tables, np.zeros(2), 1.0, lo, hi))
+    inside = np.clip(lo, 0, [9, 7]), np.clip(hi, 0, [9, 7])
+    covered = (inside[1] - inside[0]).prod(axis=1) / (hi - lo).prod(axis=1)
+    np.testing.assert_allclose(ours, exact_rect_means(grid, lo, hi), rtol=1e-9, atol=1e-12)
+    assert covered.min() < 0.5  # some rectangles reach off the grid
+
+
+@pytest.mark.parametrize("photons", [10, 100_000])
+def test_few_or_many_photons_splat_the_same_as_one_at_a_time(photons):
+    """A small batch sums over the cells it touches, a large one over the
+    whole grid; both equal adding each photon's four shares in turn."""
+    rng = np.random.default_rng(3)
+    rc = rng.random((photons, 2)) * [60, 40] - 1.0
+    values = rng.random((photons, 2))
+    planes = np.zeros((2, 60, 40))
+    bilinear_splat(planes, rc, values)
+    expected = np.zeros((2, 60, 40))
+    base = np.floor(rc).astype(int)
+    for di in (0, 1):
+        for dj in (0, 1):
+            share = np.abs(1 - di - (rc[:, 0] - base[:, 0])) * np.abs(1 - dj - (rc[:, 1] - base[:, 1]))
+            rows, cols = np.clip(base[:, 0] + di, 0, 59), np.clip(base[:, 1] + dj, 0, 39)
+            for c in range(2):
+                np.add.at(expected[c], (rows, cols), share * values[:, c])
+    np.testing.assert_allclose(planes, expected, rtol=1e-10, atol=1e-12)
