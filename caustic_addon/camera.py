@@ -58,3 +58,31 @@ def eye_rays(camera: Camera, pixels: np.ndarray, offsets: np.ndarray) -> tuple[n
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     origins = eye + dirs * (camera.clip_start / (dirs @ forward))[:, None]
     return origins, dirs
+
+
+def ray_differentials(camera: Camera, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """How the camera rays with unit directions `dirs (n,3)`, as `eye_rays`
+    makes them, change per pixel step right (+x) and down (+y): (d_origins
+    (n,2,3), d_dirs (n,2,3)), world units per pixel (Igehy 1999, "Tracing
+    ray differentials").
+
+    Perspective: d = D / |D| with D = sx p X + sy p Y - Z (X, Y, Z the
+    camera's axes, p the pixel size at unit distance), so dD = p X per step
+    right and -p Y per step down, and dd = (dD - d (d.dD)) / |D|, where
+    |D| = 1 / (d.F) (F = -Z, forward). The origin o = e + d c / (d.F) (c the
+    clip start) moves by c (dd (d.F) - d (dd.F)) / (d.F)^2.
+    Orthographic: d = F throughout, and o moves by p X and -p Y."""
+    viewfac = _viewfac(camera)
+    rot = camera.matrix[:3, :3]
+    forward = -rot[:, 2]
+    steps = np.stack([rot[:, 0], -rot[:, 1]])
+    if camera.kind == "ORTHO":
+        d_origins = np.broadcast_to(steps * (camera.ortho_scale / viewfac), (len(dirs), 2, 3))
+        return d_origins, np.zeros((len(dirs), 2, 3))
+    pixsize = 2.0 * math.tan(0.5 * camera.fov) / viewfac
+    along = dirs @ forward
+    d_big = pixsize * steps[None]
+    d_dirs = (d_big - dirs[:, None] * (d_big @ dirs[..., None])) * along[:, None, None]
+    d_origins = camera.clip_start * (d_dirs * along[:, None, None]
+                                     - dirs[:, None] * (d_dirs @ forward)[..., None]) / (along ** 2)[:, None, None]
+    return d_origins, d_dirs

@@ -20,12 +20,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
 from .accel import Accelerator, MISS
-from .camera import eye_rays
+from .camera import ray_differentials
 from .illumination_map import IlluminationMap, PlaneChart
 from .interface import orient, scatter
 from .lighting import direct_radiance
@@ -42,19 +41,19 @@ MIN_WEIGHT = 1e-4
 class EyeRays:
     """n eye rays in flight: origins (n,3), dirs (n,3), weight (n,3)
     throughput, pixel (n,) flat pixel index, medium (n,) object inside or
-    MISS. Camera rays also carry `offset (n,2)`, where in its pixel each
-    passes, which places the corners of its pixel stratum."""
+    MISS. `primary`: these are camera rays, each through its own pixel
+    stratum."""
 
     origins: np.ndarray
     dirs: np.ndarray
     weight: np.ndarray
     pixel: np.ndarray
     medium: np.ndarray
-    offset: Optional[np.ndarray] = None
+    primary: bool = False
 
     def select(self, mask: np.ndarray) -> "EyeRays":
         return EyeRays(self.origins[mask], self.dirs[mask], self.weight[mask], self.pixel[mask], self.medium[mask],
-                       None if self.offset is None else self.offset[mask])
+                       self.primary)
 
     @staticmethod
     def concat(parts: list["EyeRays"]) -> "EyeRays":
@@ -71,8 +70,7 @@ class EyePass:
                  maps: dict[int, IlluminationMap], energy: float, max_depth: int, stratum: float,
                  first_pixel: int, end_pixel: int):
         self.accel, self.scene, self.materials, self.maps = accel, scene, materials, maps
-        self.energy, self.max_depth = energy, max_depth
-        self.corners = 0.5 * stratum * np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+        self.energy, self.max_depth, self.stratum = energy, max_depth, stratum
         self.first_pixel, self.end_pixel = int(first_pixel), int(end_pixel)
         self.far = 4.0 * scene.extent() + float(np.abs(scene.camera.position).max())
         self.buffers = {name: np.zeros((self.end_pixel - self.first_pixel, 3)) for name in PASSES}
@@ -123,18 +121,14 @@ class EyePass:
             xy = imap.chart.coords(local, hits.u[sel], hits.v[sel], points[sel])
             irradiance = np.empty((len(xy), 3))
             spread = np.zeros(len(xy), dtype=bool)
-            if rays.offset is not None and isinstance(imap.chart, PlaneChart):
-                lo, hi, spread = imap.chart.footprint(self._corner_rays(rays.pixel[sel], rays.offset[sel]))
+            if rays.primary and isinstance(imap.chart, PlaneChart):
+                dirs = rays.dirs[sel]
+                lo, hi, spread = imap.chart.footprint(rays.origins[sel], dirs,
+                                                      *ray_differentials(self.scene.camera, dirs), self.stratum)
                 irradiance[spread] = imap.mean_over(lo[spread], hi[spread])
             irradiance[~spread] = imap.irradiance_at(xy[~spread])
             radiance = irradiance * albedo[sel] / math.pi
             self._add("caustic", rays.pixel[sel], rays.weight[sel] * radiance)
-
-    def _corner_rays(self, pixel: np.ndarray, offset: np.ndarray) -> np.ndarray:
-        """(n,4,2,3) origins and directions of the camera rays through the
-        corners of the pixel strata at `offset (n,2)` in `pixel (n,)`."""
-        return np.stack([np.stack(eye_rays(self.scene.camera, pixel, offset + c), axis=1) for c in self.corners],
-                        axis=1)
 
     def _split_at_specular(self, rays: EyeRays, hits, points: np.ndarray) -> EyeRays:
         """The reflected children of rays at dielectric and reflector hits,

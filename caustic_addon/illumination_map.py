@@ -79,17 +79,34 @@ class PlaneChart(Chart):
     def area_scale(self, prim):
         return np.ones(len(prim))
 
-    def footprint(self, rays: np.ndarray):
-        """The rectangle that stands for the quadrilateral where corner rays
-        `rays (m,4,2,3)` (origin, direction, in order around a pixel stratum)
-        meet the plane: (lo (m,2), hi (m,2), ok (m,) bool); not ok where a
-        corner ray misses the plane. See `moment_rectangles`."""
-        origins, dirs = rays[:, :, 0], rays[:, :, 1]
+    def footprint(self, origins: np.ndarray, dirs: np.ndarray, d_origins: np.ndarray, d_dirs: np.ndarray,
+                  stratum: float):
+        """The chart rectangle that stands for the footprint of a pixel
+        stratum, `stratum` pixels wide, around each ray `origins, dirs
+        (n,3)` whose change per pixel step is `d_origins, d_dirs (n,2,3)`
+        (camera.ray_differentials): (lo (n,2), hi (n,2), ok (n,) bool); not
+        ok where the ray misses the plane.
+
+        To first order the footprint is the parallelogram that J, the chart
+        point's derivative per pixel step (2x2), spans around the hit, and a
+        pixel is the mean over its square, uniform in pixel space. The
+        rectangle with the same centre and, along each chart axis, the same
+        variance (J_x^2 + J_y^2) stratum^2 / 12 keeps that mean to second
+        order along each axis; the parallelogram's bounding box is wider
+        where it is sheared (off the image's centre lines) and blurs a
+        caustic's fold. The hit moves by dp = do + s dd - d (N.(do + s dd))
+        / (N.d), s the distance along the ray (Igehy 1999)."""
+        along = dirs @ self.normal
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = ((self.point - origins) @ self.normal) / (dirs @ self.normal)
-        ok = np.all(np.isfinite(t) & (t > 0), axis=1)
-        local = self._local((origins + np.where(ok[:, None], t, 0.0)[..., None] * dirs).reshape(-1, 3))
-        return (*moment_rectangles(local.reshape(len(rays), -1, 2)), ok)
+            s = ((self.point - origins) @ self.normal) / along
+        ok = np.isfinite(s) & (s > 0)
+        s, along = np.where(ok, s, 0.0), np.where(ok, along, 1.0)
+        moved = d_origins + s[:, None, None] * d_dirs
+        d_points = moved - dirs[:, None] * ((moved @ self.normal) / along[:, None])[..., None]
+        jacobian = np.stack([d_points @ self.axis_x, d_points @ self.axis_y], axis=-1)
+        half = 0.5 * stratum * np.sqrt((jacobian ** 2).sum(axis=1))
+        centre = self._local(origins + s[:, None] * dirs)
+        return centre - half, centre + half, ok
 
     def world(self, xy: np.ndarray) -> np.ndarray:
         """(n,3) world points of chart coordinates `xy (n,2)`."""
@@ -118,30 +135,6 @@ class UVChart(Chart):
 
     def area_scale(self, prim):
         return self._area_scale[prim]
-
-
-def moment_rectangles(quads: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Axis-aligned rectangles (lo (m,2), hi (m,2)) with the mean and the
-    variance along x and along y of the bilinear patches spanned by corners
-    `quads (m,4,2)` (in order around, at (s, t) = (0,0), (1,0), (1,1),
-    (0,1)), under uniform s and t.
-
-    A pixel stratum's footprint on a receiver is such a patch, up to the
-    perspective's second-order terms, and a pixel is the box-filtered mean
-    over its own square, that is, uniform in s and t. The mean over this
-    rectangle matches that up to second order in x and in y, where the
-    footprint's bounding box is larger (a sheared footprint) and off-centre
-    (perspective), and blurs or shifts a caustic's fold.
-
-    With P = m + b s' + c t' + d s' t' (s' = s - 1/2, t' = t - 1/2), the
-    variance is b^2/12 + c^2/12 + d^2/144 per axis, so the half-width is
-    sqrt(b^2/4 + c^2/4 + d^2/48)."""
-    p0, p1, p2, p3 = quads[:, 0], quads[:, 1], quads[:, 2], quads[:, 3]
-    mean = 0.25 * (p0 + p1 + p2 + p3)
-    d = p0 - p1 + p2 - p3
-    b, c = p1 - p0 + 0.5 * d, p3 - p0 + 0.5 * d
-    half = np.sqrt(0.25 * (b * b + c * c) + d * d / 48.0)
-    return mean - half, mean + half
 
 
 def make_chart(obj: Object, planarity_tolerance: float = 1e-6) -> Optional[Chart]:

@@ -206,7 +206,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
         # each sample stands for a square stratum of its pixel, 1/spp of its area
         tracer = EyePass(accel, scene, materials, maps, settings.energy, settings.max_depth,
                          1.0 / np.sqrt(settings.spp), pixel[0], pixel[-1] + 1)
-        tracer.trace(EyeRays(origins, dirs, weight, pixel, np.full(len(sample), camera_medium), offset))
+        tracer.trace(EyeRays(origins, dirs, weight, pixel, np.full(len(sample), camera_medium), primary=True))
         return tracer
 
     jobs = [partial(job, first) for first in range(0, samples, size)]

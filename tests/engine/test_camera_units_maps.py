@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from caustic_addon import Camera, SpotLight
-from caustic_addon.camera import eye_rays
+from caustic_addon.camera import eye_rays, ray_differentials
 from caustic_addon.illumination_map import (IlluminationMap, MapEstimate, PlaneChart, bilinear_splat, channel_tables,
-                                            moment_rectangles, rect_means, rgb)
+                                            rect_means, rgb)
 from caustic_addon.units import spot_attenuation
 
 
@@ -87,19 +87,45 @@ def test_map_scale_sets_the_cell_and_the_paper_scheme_splats_to_four_cells():
     assert imap.count.sum() == pytest.approx(1.0)
 
 
-def test_a_footprint_stands_as_the_rectangle_of_its_mean_and_spread():
-    """A sheared pixel footprint becomes the rectangle with its pixel-space
-    mean and variance along each axis (checked by sampling the bilinear
-    patch), narrower than its bounding box; an axis-aligned one is itself."""
-    quad = np.array([[[0.0, 0.0], [1.0, 0.1], [1.3, 2.2], [0.2, 2.0]]])
-    lo, hi = moment_rectangles(quad)
-    s, t = np.random.default_rng(1).random((2, 400_000, 1))
-    p = (1 - s) * (1 - t) * quad[0, 0] + s * (1 - t) * quad[0, 1] + s * t * quad[0, 2] + (1 - s) * t * quad[0, 3]
-    np.testing.assert_allclose(0.5 * (lo + hi)[0], p.mean(axis=0), atol=3e-3)
-    np.testing.assert_allclose((hi - lo)[0] ** 2 / 12.0, p.var(axis=0), rtol=1e-2)
-    assert np.all(hi - lo < np.ptp(quad[0], axis=0))
-    box = np.array([[[1.0, 2.0], [4.0, 2.0], [4.0, 3.0], [1.0, 3.0]]])
-    np.testing.assert_allclose(np.concatenate(moment_rectangles(box)), [[1.0, 2.0], [4.0, 3.0]])
+def tilted_camera(kind: str = "PERSP") -> Camera:
+    """A camera 5 m from the origin, 2.5 m up, looking down past it."""
+    return Camera.look_at((0.0, -5.0, 2.5), (0.0, 0.3, 0.0), pixx=320, pixy=240, fov=math.radians(30),
+                          kind=kind, ortho_scale=6.0, clip_start=0.1)
+
+
+@pytest.mark.parametrize("kind", ["PERSP", "ORTHO"])
+def test_ray_differentials_are_the_derivatives_of_eye_rays(kind):
+    cam = tilted_camera(kind)
+    rng = np.random.default_rng(4)
+    pixels, offsets = rng.integers(0, 320 * 240, 200), rng.random((200, 2))
+    _, dirs = eye_rays(cam, pixels, offsets)
+    d_origins, d_dirs = ray_differentials(cam, dirs)
+    for axis in (0, 1):
+        step = np.zeros(2)
+        step[axis] = 1e-5
+        (o1, d1), (o0, d0) = eye_rays(cam, pixels, offsets + step), eye_rays(cam, pixels, offsets - step)
+        np.testing.assert_allclose(d_origins[:, axis], (o1 - o0) / 2e-5, atol=1e-8)
+        np.testing.assert_allclose(d_dirs[:, axis], (d1 - d0) / 2e-5, atol=1e-8)
+
+
+def test_a_pixel_footprint_stands_as_the_rectangle_of_its_mean_and_spread():
+    """The rectangle a pixel's caustic is averaged over has the centre and,
+    along each axis, the variance of where rays spread evenly over the pixel
+    meet the floor (to 1%), and is narrower than those points' bounding box
+    where the footprint is sheared, at the image's corner."""
+    cam = tilted_camera()
+    floor = square_map(MapEstimate(None), size=8.0).chart
+    pixel = np.array([5])
+    origins, dirs = eye_rays(cam, pixel, np.array([[0.5, 0.5]]))
+    lo, hi, ok = floor.footprint(origins, dirs, *ray_differentials(cam, dirs), 1.0)
+    assert ok.all()
+    ticks = (np.arange(64) + 0.5) / 64
+    spread = np.stack(np.meshgrid(ticks, ticks), axis=-1).reshape(-1, 2)
+    o, d = eye_rays(cam, np.repeat(pixel, len(spread)), spread)
+    hits = floor._local(o - (o[:, 2] / d[:, 2])[:, None] * d)
+    np.testing.assert_allclose(0.5 * (lo + hi)[0], hits.mean(axis=0), atol=1e-3 * np.ptp(hits, axis=0).max())
+    np.testing.assert_allclose((hi - lo)[0] ** 2 / 12.0, hits.var(axis=0), rtol=1e-2)
+    assert (hi - lo)[0, 0] < 0.97 * np.ptp(hits[:, 0])
 
 
 def exact_rect_means(grid: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
