@@ -70,8 +70,8 @@ def triangle_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     oriented by the right-hand rule on their winding. Degenerate triangles get
     a zero normal and zero area."""
     cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    double_area = np.linalg.norm(cross, axis=1)
-    return normalize(cross), 0.5 * double_area
+    double_area = np.sqrt(np.einsum("ij,ij->i", cross, cross))
+    return cross / np.where(double_area > 0, double_area, 1.0)[:, None], 0.5 * double_area
 
 
 def signed_volume(corners: np.ndarray) -> float:
@@ -86,12 +86,17 @@ def open_edge_count(triangles: np.ndarray, vertices: np.ndarray) -> int:
     read as closed; triangles that repeat a vertex, and copies of a
     triangle, are left out."""
     weld = row_ids(np.round(vertices, 9))
-    tris = weld[triangles]
-    tris = tris[(tris[:, 0] != tris[:, 1]) & (tris[:, 1] != tris[:, 2]) & (tris[:, 2] != tris[:, 0])]
-    tris = np.sort(tris, axis=1)
-    tris = tris[np.unique(row_ids(tris), return_index=True)[1]]
-    edges = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
-    _, counts = np.unique(edges[:, 0] * (int(weld.max(initial=0)) + 1) + edges[:, 1], return_counts=True)
+    a, b, c = np.sort(weld[triangles], axis=1).T
+    # sorted, a triangle that repeats a vertex repeats it in neighbours
+    proper = (a != b) & (b != c)
+    a, b, c = a[proper], b[proper], c[proper]
+    n = int(weld.max(initial=0)) + 1
+    # a triangle's sorted corners as one number, up to 2^21 vertices
+    keys = (a * n + b) * n + c if n < 1 << 21 else row_ids(np.stack([a, b, c], axis=1))
+    first = np.unique(keys, return_index=True)[1]
+    a, b, c = a[first], b[first], c[first]
+    # with a <= b <= c each edge is already (low, high)
+    _, counts = np.unique(np.concatenate([a * n + b, b * n + c, a * n + c]), return_counts=True)
     return int(np.count_nonzero(counts != 2))
 
 
@@ -134,13 +139,13 @@ class Accelerator:
         self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
         self._embree = rtcore_scene.EmbreeScene()
 
-        all_corners, face_normals, corner_normals, owners, offsets = [], [], [], [], [0]
+        all_corners, face_normals, corner_normals, areas, owners, offsets = [], [], [], [], [], [0]
         self.closed = np.zeros(len(objects), dtype=bool)
         for index, obj in enumerate(objects):
             mesh = obj.mesh
             TriangleMesh(self._embree, mesh.vertices.astype(np.float32), mesh.triangles.astype(np.int32))
             corners = mesh.corners
-            normals, _ = triangle_normals(corners)
+            normals, area = triangle_normals(corners)
             sign = 1.0
             if obj.is_transparent:
                 self.closed[index] = open_edge_count(obj.mesh.triangles, obj.mesh.vertices) == 0
@@ -152,12 +157,13 @@ class Accelerator:
                 shading = mesh.corner_normals * sign
             all_corners.append(corners)
             face_normals.append(normals)
+            areas.append(area)
             corner_normals.append(shading)
             owners.append(np.full(len(normals), index, dtype=np.int64))
             offsets.append(offsets[-1] + len(normals))
 
         self.corners = np.concatenate(all_corners) if all_corners else np.zeros((0, 3, 3))
-        self.min_barycentric = self._min_barycentric(self.corners)
+        self.min_barycentric = self._min_barycentric(self.corners, np.concatenate(areas) if areas else np.zeros(0))
         self.face_normal = np.concatenate(face_normals) if face_normals else np.zeros((0, 3))
         self.corner_normal = np.concatenate(corner_normals) if corner_normals else np.zeros((0, 3, 3))
         self.owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
@@ -166,10 +172,10 @@ class Accelerator:
             self._warn_if_thin(index)
         self.rays_cast = 0  # counts the passes' rays, not the probes'
 
-    def _min_barycentric(self, corners: np.ndarray) -> np.ndarray:
+    def _min_barycentric(self, corners: np.ndarray, area: np.ndarray) -> np.ndarray:
         """(N,3) epsilon / altitude onto each corner's opposite edge, where
-        altitude = 2 area / edge length; at most 0.3 (tiny triangles)."""
-        _, area = triangle_normals(corners)
+        altitude = 2 area / edge length; at most 0.3 (tiny triangles).
+        `area (N,)` of each triangle."""
         opposite = np.linalg.norm(np.roll(corners, -1, axis=1) - np.roll(corners, 1, axis=1), axis=2)
         with np.errstate(divide="ignore", invalid="ignore"):
             fraction = self.epsilon * opposite / (2.0 * area[:, None])

@@ -80,9 +80,9 @@ def ray_differentials(camera: Camera, dirs: np.ndarray) -> tuple[np.ndarray, np.
         d_origins = np.broadcast_to(steps * (camera.ortho_scale / viewfac), (len(dirs), 2, 3))
         return d_origins, np.zeros((len(dirs), 2, 3))
     pixsize = 2.0 * math.tan(0.5 * camera.fov) / viewfac
-    along = dirs @ forward
-    d_big = pixsize * steps[None]
-    d_dirs = (d_big - dirs[:, None] * (d_big @ dirs[..., None])) * along[:, None, None]
-    d_origins = camera.clip_start * (d_dirs * along[:, None, None]
-                                     - dirs[:, None] * (d_dirs @ forward)[..., None]) / (along ** 2)[:, None, None]
+    along = (dirs @ forward)[:, None, None]
+    d_big = pixsize * steps
+    d_dirs = (d_big - dirs[:, None] * (dirs @ d_big.T)[..., None]) * along
+    d_forward = (d_dirs.reshape(-1, 3) @ forward).reshape(-1, 2, 1)
+    d_origins = camera.clip_start * (d_dirs * along - dirs[:, None] * d_forward) / along ** 2
     return d_origins, d_dirs

@@ -101,9 +101,10 @@ class PlaneChart(Chart):
             s = ((self.point - origins) @ self.normal) / along
         ok = np.isfinite(s) & (s > 0)
         s, along = np.where(ok, s, 0.0), np.where(ok, along, 1.0)
-        moved = d_origins + s[:, None, None] * d_dirs
-        d_points = moved - dirs[:, None] * ((moved @ self.normal) / along[:, None])[..., None]
-        jacobian = np.stack([d_points @ self.axis_x, d_points @ self.axis_y], axis=-1)
+        moved = (d_origins + s[:, None, None] * d_dirs).reshape(-1, 3)
+        across = np.repeat(dirs / along[:, None], 2, axis=0)
+        d_points = moved - across * (moved @ self.normal)[:, None]
+        jacobian = (d_points @ np.stack([self.axis_x, self.axis_y], axis=1)).reshape(-1, 2, 2)
         half = 0.5 * stratum * np.sqrt((jacobian ** 2).sum(axis=1))
         centre = self._local(origins + s[:, None] * dirs)
         return centre - half, centre + half, ok
