@@ -122,10 +122,11 @@ def run_chunks(jobs: list[Callable[[], object]], threads: int, monitor: _Monitor
     return results
 
 
-def chunk(total: int, settings: RenderSettings) -> int:
+def chunk(total: int, settings: RenderSettings, per_thread: int = 2) -> int:
     """Items per chunk: at most `chunk_size`, and few enough that each thread
-    gets two chunks, so small renders use every core too."""
-    return max(1, min(settings.chunk_size, -(-total // (2 * settings.threads))))
+    gets `per_thread` chunks, so small renders use every core too. Two let
+    one chunk trace in Embree while the other shades in numpy."""
+    return max(1, min(settings.chunk_size, -(-total // (per_thread * settings.threads))))
 
 
 def lamp_medium(accel: Accelerator, light: Light) -> int:
@@ -167,7 +168,10 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
     sources = beam_sources(scene.lights, *targets_and_bounds(scene), settings.energy, settings.photons // count)
     jobs = []
     for source in sources:
-        rows = max(1, chunk(source.grid ** 2, settings) // source.grid)
+        # one band of rows per thread: a band's cost is mostly numpy work per
+        # bounce and refinement level, whatever its paths, so fewer bands are
+        # faster (measured on the ball lens: 0.19 s against 0.29 s for two)
+        rows = max(1, chunk(source.grid ** 2, settings, per_thread=1) // source.grid)
         medium = lamp_medium(accel, source.light)
         jobs += [partial(band_beams, source, first, min(first + rows + 1, source.grid), accel, materials, maps,
                          settings.max_depth, medium, settings.beam_refinement, band)
