@@ -42,9 +42,9 @@ REPEATS = 3
 def engine_methods(max_photons: float) -> dict[str, tuple[dict, list[int]]]:
     """Name -> (RenderSettings fields, photon counts) of each density
     estimate compared. Beams need far fewer paths, so they sweep lower
-    counts (of the grid before refinement), in quarter decades."""
+    counts (of the grid before refinement), in eighth decades."""
     photons = [int(c) for c in 10 ** np.arange(4, np.log10(max_photons) + 0.01, 0.5)]
-    beams = [int(c) for c in 10 ** np.arange(2.5, 5.01, 0.25)]
+    beams = [int(c) for c in 10 ** np.arange(2.5, 5.01, 0.125)]
     methods = {"beam": (dict(density="beam"), beams),
                "beam, plain grid": (dict(density="beam", beam_refinement=0), beams)}
     methods.update({f"adaptive k={k}": (dict(density="adaptive", k_nearest=k), photons) for k in (16, 64, 256)})
