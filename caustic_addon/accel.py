@@ -184,8 +184,9 @@ class Accelerator:
     def _warn_if_thin(self, index: int) -> None:
         """Warn when closed object `index` has a wall thinner than epsilon:
         a ray offset off one side would start beyond the other. Probes from
-        up to _THICKNESS_PROBES face centres, half an epsilon inside, along
-        the inward normal."""
+        up to _THICKNESS_PROBES face centres, evenly spread over the mesh,
+        half an epsilon inside, along the inward normal; on a larger mesh a
+        thin wall of only a few faces can go unprobed."""
         first, end = self.prim_offset[index], self.prim_offset[index + 1]
         prim = np.unique(np.linspace(first, end - 1, min(end - first, _THICKNESS_PROBES)).astype(np.int64))
         prim = prim[np.linalg.norm(self.face_normal[prim], axis=1) > 0.0]

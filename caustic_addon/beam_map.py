@@ -32,7 +32,7 @@ class _Layer:
         shape = tuple(np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)[::-1])
         if (irradiance == irradiance[:, :1]).all():
             irradiance = irradiance[:, :1]
-        values = np.ascontiguousarray(rasterise_triangles(shape, (corners - lo) / cell, irradiance).transpose(2, 0, 1))
+        values = np.ascontiguousarray(rasterise_triangles(shape, (corners - lo) / cell, irradiance))
         return _Layer(lo, cell, values, channel_tables(values))
 
     def _rc(self, xy: np.ndarray) -> np.ndarray:
@@ -82,8 +82,9 @@ class BeamMap(IlluminationMap):
     COARSE = 16
     COARSE_CELL = 4
 
-    def __init__(self, *args, **kwargs):
+    def __init__(self, *args, threads: int = 1, **kwargs):
         super().__init__(*args, **kwargs)
+        self.threads = threads
         self._beam_parts: list[tuple[np.ndarray, np.ndarray]] = []
         self._layers: list[_Layer] = []
         self.beams = 0
@@ -94,9 +95,9 @@ class BeamMap(IlluminationMap):
             self._beam_parts.append((corners, irradiance))
             self.beams += len(corners)
 
-    def _layer_specs(self) -> list[tuple]:
-        """The pending beams sorted into layers: `_Layer.of_beams` arguments
-        for each."""
+    def _take_layer_specs(self) -> list[tuple]:
+        """Takes the pending beams and sorts them into layers: returns the
+        `_Layer.of_beams` arguments of each."""
         corners = np.concatenate([c for c, _ in self._beam_parts])
         irradiance = np.concatenate([e for _, e in self._beam_parts])
         self._beam_parts = []
@@ -122,14 +123,15 @@ class BeamMap(IlluminationMap):
                 specs.append((box_lo, box_hi + cell, cell, corners[chosen], irradiance[chosen]))
         return specs
 
-    def prepare(self, threads: int = 1) -> None:
-        """Rasterise the pending beams, a layer per thread, and prepare the
-        fallback photons' map."""
+    def prepare(self) -> None:
+        """Rasterise the pending beams, a layer per thread (of `threads`),
+        and prepare the fallback photons' map."""
         super().prepare()
         with self._lock:
             if self._beam_parts:
-                with ThreadPoolExecutor(threads) as pool:
-                    self._layers += pool.map(lambda spec: _Layer.of_beams(*spec), self._layer_specs())
+                specs = self._take_layer_specs()
+                with ThreadPoolExecutor(max(1, min(self.threads, len(specs)))) as pool:
+                    self._layers += pool.map(lambda spec: _Layer.of_beams(*spec), specs)
 
     def irradiance_at(self, xy: np.ndarray) -> np.ndarray:
         return super().irradiance_at(xy) + sum(layer.at(xy) for layer in self._layers)

@@ -80,7 +80,7 @@ class PlaneChart(Chart):
         return np.ones(len(prim))
 
     def footprint(self, origins: np.ndarray, dirs: np.ndarray, d_origins: np.ndarray, d_dirs: np.ndarray,
-                  stratum: float):
+                  stratum: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The chart rectangle that stands for the footprint of a pixel
         stratum, `stratum` pixels wide, around each ray `origins, dirs
         (n,3)` whose change per pixel step is `d_origins, d_dirs (n,2,3)`
@@ -158,12 +158,14 @@ def make_chart(obj: Object, planarity_tolerance: float = 1e-6) -> Optional[Chart
 
 
 def bilinear_splat(planes: np.ndarray, rc: np.ndarray, values: np.ndarray) -> None:
-    """Add `values (n,c)` to `planes (c,h,w)`, each spread bilinearly to the
-    4 cells nearest its continuous (row, col) position `rc (n,2)` (cell
-    centres at integers). Weights reaching past the border fold onto the
-    edge cells. Sums per cell come from one bincount per channel, over the
-    whole grid for a batch about as large as it, else over only the cells
-    the batch touches."""
+    """Add `values (n,c)` to C-contiguous `planes (c,h,w)`, each spread
+    bilinearly to the 4 cells nearest its continuous (row, col) position
+    `rc (n,2)` (cell centres at integers). Weights reaching past the border
+    fold onto the edge cells. Sums per cell come from one bincount per
+    channel: over only the cells the batch touches when it has fewer than
+    h w / 64 photons, else over the whole grid."""
+    if not planes.flags.c_contiguous:
+        raise ValueError("bilinear_splat adds through a flat view: planes must be C-contiguous")
     h, w = planes.shape[1:]
     base = np.floor(rc).astype(np.int64)
     frac = rc - base
@@ -245,8 +247,8 @@ def _box_sums(tables: np.ndarray, i: np.ndarray, j: np.ndarray, r: np.ndarray) -
 def summed_area_table(grid: np.ndarray) -> np.ndarray:
     """Summed-area table (h+1, w+1) of `grid (h, w)`, zero-padded. Rows are
     summed down one at a time, each a contiguous vector add: numpy's cumsum
-    along axis 0 strides a row apart per element and is several times
-    slower."""
+    along axis 0 strides a row apart per element (1024 x 1024: 5.7 ms
+    against 18 ms)."""
     table = np.zeros((grid.shape[0] + 1, grid.shape[1] + 1))
     np.cumsum(grid, axis=1, out=table[1:, 1:])
     for row in range(2, len(table)):
@@ -263,7 +265,7 @@ def channel_tables(planes: np.ndarray) -> np.ndarray:
     return np.stack([summed_area_table(plane) for plane in planes])
 
 
-def rgb(values: np.ndarray) -> np.ndarray:
+def as_rgb(values: np.ndarray) -> np.ndarray:
     """(n,3) of look-up results (n,1) (one table for all channels) or (n,3)."""
     return values if values.shape[1] == 3 else np.repeat(values, 3, axis=1)
 
@@ -332,14 +334,16 @@ class IlluminationMap:
         self.prepare()
         return self._cells[0]
 
-    def prepare(self, threads: int = 1) -> None:
+    def prepare(self) -> None:
         """Splat what is pending and build the look-up tables, so that
-        concurrent reads need no lock. It is one job here; `threads` is for
-        maps with more to build."""
+        concurrent reads need no lock. The count's table serves only the
+        adaptive estimate."""
         with self._lock:
             self._flush()
             if self._tables is None:
-                self._tables = (summed_area_table(self._cells[0])[None], channel_tables(self._cells[1:]))
+                adaptive = self.estimate.k_nearest is not None
+                self._tables = (summed_area_table(self._cells[0])[None] if adaptive else None,
+                                channel_tables(self._cells[1:]))
 
     def _flush(self) -> None:
         """Splat the pending photons (the paper's figure 2)."""
@@ -370,11 +374,12 @@ class IlluminationMap:
 
     def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """Mean caustic irradiance (n,3) W/m^2 over chart rectangles [lo, hi]
-        (each (n,2)): what a pixel whose footprint they bound should show.
-        The adaptive window is at least as large as the rectangle."""
+        (each (n,2)): what a pixel whose footprint they stand for
+        (`PlaneChart.footprint`) should show. The adaptive window is at
+        least as large as the rectangle."""
         self.prepare()
         if self.estimate.k_nearest is None:
-            return rgb(rect_means(self._tables[1], self.origin_rc, self.cell, lo, hi)) / self.cell ** 2
+            return as_rgb(rect_means(self._tables[1], self.origin_rc, self.cell, lo, hi)) / self.cell ** 2
         half = 0.5 * (hi - lo).max(axis=1) / self.cell
         return self._adaptive(0.5 * (lo + hi), np.ceil(half - 0.5).astype(np.int64))
 
@@ -404,7 +409,7 @@ class IlluminationMap:
         flux = _box_sums(flux_table, i, j, radius)
         rows = np.minimum(i + radius + 1, h) - np.maximum(i - radius, 0)
         cols = np.minimum(j + radius + 1, w) - np.maximum(j - radius, 0)
-        return rgb(flux) / (rows * cols * self.cell ** 2)[:, None]
+        return as_rgb(flux) / (rows * cols * self.cell ** 2)[:, None]
 
 
 def auto_cell_size(chart: Chart, limit: int) -> float:

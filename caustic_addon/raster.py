@@ -33,7 +33,7 @@ def signed_areas(corners: np.ndarray) -> np.ndarray:
 
 
 def rasterise_triangles(shape: tuple[int, int], corners: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """(h,w,c) grid holding, in each cell, the sum over triangles of
+    """(c,h,w) planes holding, in each cell, the sum over triangles of
     `values (m,c)` times the triangle's area inside the cell.
 
     shape    (h, w) rows and columns; cell (r, c) spans x in [c, c+1], y in
@@ -47,7 +47,7 @@ def rasterise_triangles(shape: tuple[int, int], corners: np.ndarray, values: np.
     acc = np.zeros((values.shape[1], h * (w + 2)))
     for first in range(0, len(corners), _BATCH):
         _accumulate(acc, h, w, corners[first:first + _BATCH], values[first:first + _BATCH])
-    return np.cumsum(acc.reshape(-1, h, w + 2), axis=2)[:, :, 1:w + 1].transpose(1, 2, 0)
+    return np.cumsum(acc.reshape(-1, h, w + 2), axis=2)[:, :, 1:w + 1]
 
 
 def _accumulate(acc: np.ndarray, h: int, w: int, corners: np.ndarray, values: np.ndarray) -> None:

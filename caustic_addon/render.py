@@ -66,7 +66,6 @@ class _Monitor:
 def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str]) -> dict[int, IlluminationMap]:
     """An empty illumination map for each receiver that can hold one."""
     estimate = MapEstimate(settings.k_nearest if settings.density in ("adaptive", "beam") else None)
-    kind = BeamMap if settings.density == "beam" else IlluminationMap
     limit = settings.map_resolution_limit
     maps = {}
     for index, obj in enumerate(scene.objects):
@@ -82,7 +81,8 @@ def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str]) -> d
             warnings.append(f"'{obj.name}': a map scale of {cell * 1000:.4g} mm needs more than {limit} cells "
                             f"across; using {coarser * 1000:.4g} mm")
             cell = coarser
-        maps[index] = kind(obj.name, chart, cell, estimate)
+        maps[index] = (BeamMap(obj.name, chart, cell, estimate, threads=settings.threads)
+                       if settings.density == "beam" else IlluminationMap(obj.name, chart, cell, estimate))
     return maps
 
 
@@ -122,11 +122,11 @@ def run_chunks(jobs: list[Callable[[], object]], threads: int, monitor: _Monitor
     return results
 
 
-def chunk(total: int, settings: RenderSettings, per_thread: int = 2) -> int:
+def chunk(total: int, settings: RenderSettings) -> int:
     """Items per chunk: at most `chunk_size`, and few enough that each thread
-    gets `per_thread` chunks, so small renders use every core too. Two let
-    one chunk trace in Embree while the other shades in numpy."""
-    return max(1, min(settings.chunk_size, -(-total // (per_thread * settings.threads))))
+    gets two chunks, so small renders use every core too: one chunk traces
+    in Embree while the other shades in numpy."""
+    return max(1, min(settings.chunk_size, -(-total // (2 * settings.threads))))
 
 
 def lamp_medium(accel: Accelerator, light: Light) -> int:
@@ -168,10 +168,11 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
     sources = beam_sources(scene.lights, *targets_and_bounds(scene), settings.energy, settings.photons // count)
     jobs = []
     for source in sources:
-        # one band of rows per thread: a band's cost is mostly numpy work per
-        # bounce and refinement level, whatever its paths, so fewer bands are
-        # faster (measured on the ball lens: 0.19 s against 0.29 s for two)
-        rows = max(1, chunk(source.grid ** 2, settings, per_thread=1) // source.grid)
+        # one band of rows per thread, of at most `chunk_size` points: a
+        # band's cost is mostly numpy work per bounce and refinement level,
+        # whatever its paths, so fewer bands are faster (measured on the ball
+        # lens: 0.19 s against 0.29 s for two per thread)
+        rows = max(1, min(settings.chunk_size // source.grid, -(-(source.grid - 1) // settings.threads)))
         medium = lamp_medium(accel, source.light)
         jobs += [partial(band_beams, source, first, min(first + rows + 1, source.grid), accel, materials, maps,
                          settings.max_depth, medium, settings.beam_refinement, band)
@@ -263,7 +264,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
 
         clock = time.perf_counter()
         for imap in maps.values():
-            imap.prepare(settings.threads)
+            imap.prepare()
         seconds["maps"] = time.perf_counter() - clock
 
         clock = time.perf_counter()

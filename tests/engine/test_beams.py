@@ -6,7 +6,10 @@ import numpy as np
 import pytest
 
 from caustic_addon import Scene, render
+from caustic_addon.beam_map import BeamMap
 from caustic_addon.beams import concentric_disc
+from caustic_addon.illumination_map import MapEstimate, PlaneChart
+from caustic_addon.raster import signed_areas
 from metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
 
@@ -118,3 +121,40 @@ def test_beams_land_on_a_receiver_listed_after_the_glass():
     first = render(scene, quick(photons=4_000, density="beam")).stats["flux_landed_w"]
     second = render(reversed_scene, quick(photons=4_000, density="beam")).stats["flux_landed_w"]
     np.testing.assert_allclose(second, first, rtol=1e-9)
+
+
+def layered_beam_map(threads: int) -> tuple[BeamMap, np.ndarray, np.ndarray]:
+    """A 4 m square floor of 5 cm cells holding, on one side, one beam wide
+    enough for the coarse layer and, on the other, beams of the map's size
+    and beams for the fine layer, in both windings and colours. Returns the
+    map, and the beams' corners (m,3,2) in its chart and irradiance (m,3)."""
+    verts = np.array([[0, 0, 0], [4, 0, 0], [4, 4, 0], [0, 4, 0]], dtype=float)
+    chart = PlaneChart(np.array([2.0, 2.0, 0.0]), np.array([0.0, 0.0, 1.0]), verts)
+    imap = BeamMap("floor", chart, 0.05, MapEstimate(16), threads=threads)
+    rng = np.random.default_rng(5)
+    wide = np.array([[[0.2, 0.2], [1.8, 0.3], [0.4, 3.6]]])
+    medium = rng.uniform(2.4, 3.4, (40, 1, 2)) + rng.uniform(-0.15, 0.15, (40, 3, 2))
+    small = rng.uniform(2.4, 3.4, (400, 1, 2)) + rng.uniform(-0.03, 0.03, (400, 3, 2))
+    corners = np.concatenate([wide, medium, small])
+    irradiance = rng.uniform(0.5, 2.0, (len(corners), 3))
+    imap.add_beams(corners + chart.origin, irradiance)
+    return imap, corners + chart.origin, irradiance
+
+
+def test_a_beam_map_keeps_every_beams_flux_in_its_layers():
+    """Over the whole floor the map holds every beam's flux (irradiance x
+    area), with beams in all three layers; inside the wide beam, away from
+    the others, it reads that beam's irradiance exactly; two threads
+    rasterise the same map as one."""
+    imap, corners, irradiance = layered_beam_map(threads=2)
+    flux = (irradiance * np.abs(signed_areas(corners))[:, None]).sum(axis=0)
+    lo, hi = imap.chart.origin, imap.chart.origin + imap.chart.size
+    np.testing.assert_allclose(imap.mean_over(lo[None], hi[None])[0] * 16.0, flux, rtol=1e-12)
+    assert len(imap._layers) == 3
+    inside = np.array([[0.5, 1.0], [0.6, 1.1]]) + imap.chart.origin
+    np.testing.assert_allclose(imap.mean_over(inside[:1], inside[1:])[0], irradiance[0], rtol=1e-12)
+    one_thread = layered_beam_map(threads=1)[0]
+    rng = np.random.default_rng(6)
+    boxes_lo = imap.chart.origin + rng.uniform(0.0, 3.5, (300, 2))
+    boxes_hi = boxes_lo + rng.uniform(0.01, 0.5, (300, 2))
+    np.testing.assert_array_equal(imap.mean_over(boxes_lo, boxes_hi), one_thread.mean_over(boxes_lo, boxes_hi))

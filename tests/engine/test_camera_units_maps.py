@@ -9,7 +9,7 @@ import pytest
 from caustic_addon import Camera, SpotLight
 from caustic_addon.camera import eye_rays, ray_differentials
 from caustic_addon.illumination_map import (IlluminationMap, MapEstimate, PlaneChart, bilinear_splat, channel_tables,
-                                            rect_means, rgb)
+                                            as_rgb, rect_means)
 from caustic_addon.units import spot_attenuation
 
 
@@ -148,7 +148,7 @@ def test_rectangle_means_of_a_grid_are_exact(channels):
     hi = lo + 0.05 + rng.random((500, 2)) * 3.0
     tables = channel_tables(np.moveaxis(grid, -1, 0))
     assert len(tables) == channels
-    ours = rgb(rect_means(tables, np.zeros(2), 1.0, lo, hi))
+    ours = as_rgb(rect_means(tables, np.zeros(2), 1.0, lo, hi))
     inside = np.clip(lo, 0, [9, 7]), np.clip(hi, 0, [9, 7])
     covered = (inside[1] - inside[0]).prod(axis=1) / (hi - lo).prod(axis=1)
     np.testing.assert_allclose(ours, exact_rect_means(grid, lo, hi), rtol=1e-9, atol=1e-12)

@@ -26,12 +26,13 @@ def clipped_area(triangle: np.ndarray, x0: float, x1: float, y0: float, y1: floa
 
 
 def clipped_grid(shape, triangles, values):
+    """(c,h,w) planes: each cell's clipped area of every triangle times its value."""
     h, w = shape
-    grid = np.zeros((h, w, values.shape[1]))
+    grid = np.zeros((values.shape[1], h, w))
     for tri, value in zip(triangles, values):
         for r in range(h):
             for c in range(w):
-                grid[r, c] += value * clipped_area(tri, c, c + 1, r, r + 1)
+                grid[:, r, c] += value * clipped_area(tri, c, c + 1, r, r + 1)
     return grid
 
 
