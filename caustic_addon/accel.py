@@ -16,7 +16,7 @@ import numpy as np
 from embreex import rtcore_scene
 from embreex.mesh_construction import TriangleMesh
 
-from .optics import normalize
+from .optics import length, normalize
 from .scene import Object
 
 MISS = -1
@@ -57,12 +57,20 @@ class Hits:
         return self.obj != MISS
 
     def select(self, mask: np.ndarray) -> "Hits":
-        return Hits(self.t[mask], self.obj[mask], self.prim[mask], self.u[mask], self.v[mask], self.points[mask])
+        return Hits(*take_rows(mask, self.t, self.obj, self.prim, self.u, self.v, self.points))
 
     def replace(self, index: np.ndarray, other: "Hits") -> None:
         """Overwrite the hits at `index (k,)` with `other`'s k hits."""
         for name in ("t", "obj", "prim", "u", "v", "points"):
             getattr(self, name)[index] = getattr(other, name)
+
+
+def take_rows(mask: np.ndarray, *arrays: np.ndarray) -> list[np.ndarray]:
+    """The rows of each of `arrays` where `mask (n,)` is True, by `np.take`
+    on the mask's indices: boolean indexing is 3 to 6 times slower (numpy
+    2.x, rows of 1 or 3 values)."""
+    index = np.flatnonzero(mask)
+    return [np.take(a, index, axis=0) for a in arrays]
 
 
 def triangle_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -249,10 +257,10 @@ class Accelerator:
             skip = np.flatnonzero(self._contradicts(hits, dirs, medium))
             if len(skip) == 0:
                 break
-            face = self.face_normal[hits.prim[skip]]
+            face = np.take(self.face_normal, hits.prim[skip], axis=0)
             start = self.offset(hits.points[skip], face, dirs[skip])
             again = self._closest(start, dirs[skip])
-            again.t += hits.t[skip] + np.linalg.norm(start - hits.points[skip], axis=1)
+            again.t += hits.t[skip] + length(start - hits.points[skip])
             hits.replace(skip, again)
         return hits
 
@@ -274,7 +282,7 @@ class Accelerator:
                 behind = np.einsum("ij,ij->i", dirs[open_hit], self.face_normal[np.maximum(hits.prim, 0)]) > 0.0
                 found[open_hit[closed & behind]] = hits.obj[closed & behind]
                 through = hits.hit & ~closed
-                origins[open_hit[through]] = self.offset(hits.points[through], self.face_normal[hits.prim[through]],
+                origins[open_hit[through]] = self.offset(hits.points[through], np.take(self.face_normal, hits.prim[through], axis=0),
                                                          dirs[open_hit[through]])
                 open_hit = open_hit[through]
                 if len(open_hit) == 0:
@@ -288,7 +296,7 @@ class Accelerator:
         closed = hits.hit.copy()
         closed[closed] = self.closed[hits.obj[closed]]
         index = np.flatnonzero(closed)
-        toward = np.einsum("ij,ij->i", dirs[index], self.face_normal[hits.prim[index]]) < 0.0
+        toward = np.einsum("ij,ij->i", dirs[index], np.take(self.face_normal, hits.prim[index], axis=0)) < 0.0
         closed[index] = toward == (medium[index] == hits.obj[index])
         return closed
 
@@ -316,9 +324,9 @@ class Accelerator:
         just past an edge; a ray leaving from there would already be beyond
         the neighbouring face's plane and miss it."""
         bary = np.stack([1.0 - u - v, u, v], axis=1)
-        bary = np.maximum(bary, self.min_barycentric[prim])
-        bary /= bary.sum(axis=1, keepdims=True)
-        return np.einsum("ij,ijk->ik", bary, self.corners[prim])
+        bary = np.maximum(bary, np.take(self.min_barycentric, prim, axis=0))
+        bary /= (bary[:, 0] + bary[:, 1] + bary[:, 2])[:, None]
+        return np.einsum("ij,ijk->ik", bary, np.take(self.corners, prim, axis=0))
 
     def occluded(self, origins: np.ndarray, dirs: np.ndarray, dists: np.ndarray) -> np.ndarray:
         """(n,) bool: is anything between `origins` and `origins + dists * dirs`?"""
@@ -332,13 +340,13 @@ class Accelerator:
         """(n,3) unit shading normals, interpolated from the corner normals
         with Embree's barycentrics; the face normal where they cancel out."""
         w = 1.0 - u - v
-        c = self.corner_normal[prim]
+        c = np.take(self.corner_normal, prim, axis=0)
         n = w[:, None] * c[:, 0] + u[:, None] * c[:, 1] + v[:, None] * c[:, 2]
-        length = np.linalg.norm(n, axis=1)
-        bad = ~(length > 1e-12)
+        size = length(n)
+        bad = ~(size > 1e-12)
         n[bad] = self.face_normal[prim[bad]]
-        length[bad] = 1.0
-        return n / length[:, None]
+        size[bad] = 1.0
+        return n / size[:, None]
 
     def offset(self, points: np.ndarray, normals: np.ndarray, dirs: np.ndarray) -> np.ndarray:
         """Ray origins (n,3) nudged off the surface along the geometric normal

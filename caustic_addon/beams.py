@@ -33,12 +33,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import units
-from .accel import Accelerator, MISS, row_ids
+from .accel import MISS, Accelerator, row_ids, take_rows
 from .emission import Sphere, orthonormal_basis, target_cone, visible_targets
 from .illumination_map import IlluminationMap
 from .interface import orient, scatter
 from .materials import Materials
-from .optics import beer_lambert
+from .optics import beer_lambert, max_channel
 from .raster import signed_areas
 from .scene import Light, SunLight
 
@@ -209,7 +209,7 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
     vertex = np.arange(len(origins))
     family = np.zeros(len(origins), dtype=np.uint64)
     medium = np.full(len(origins), start_medium, dtype=np.int64)
-    floor = MIN_BRANCH_WEIGHT * weight.max(axis=1)
+    floor = MIN_BRANCH_WEIGHT * max_channel(weight)
     specular = np.zeros(len(origins), dtype=bool)
     landed = []
     for _ in range(max_depth + 1):
@@ -217,13 +217,13 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
             break
         hits = accel.intersect(origins, dirs, medium)
         keep = hits.hit
-        origins, dirs, weight, vertex, family, medium, floor, specular = (
-            a[keep] for a in (origins, dirs, weight, vertex, family, medium, floor, specular))
+        origins, dirs, weight, vertex, family, medium, floor, specular = take_rows(
+            keep, origins, dirs, weight, vertex, family, medium, floor, specular)
         hits = hits.select(keep)
         points = hits.points
         inside = medium != MISS
         if inside.any():
-            weight[inside] *= beer_lambert(materials.absorption[medium[inside]], hits.t[inside])
+            weight[inside] *= beer_lambert(np.take(materials.absorption, medium[inside], axis=0), hits.t[inside])
 
         land = specular & materials.receiver[hits.obj] & np.isin(hits.obj, list(maps))
         for index in np.unique(hits.obj[land]):
@@ -233,26 +233,25 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
             landed.append(Landings(vertex[sel], family[sel], hits.obj[sel],
                                    chart.coords(local, hits.u[sel], hits.v[sel], points[sel]),
                                    chart.area_scale(local), weight[sel],
-                                   weight[sel].max(axis=1) * MIN_BRANCH_WEIGHT / floor[sel]))
+                                   max_channel(weight[sel]) * MIN_BRANCH_WEIGHT / floor[sel]))
 
         bounce = materials.specular_surface[hits.obj]
-        origins, dirs, weight, vertex, family, medium, floor, points = (
-            a[bounce] for a in (origins, dirs, weight, vertex, family, medium, floor, points))
+        origins, dirs, weight, vertex, family, medium, floor, points = take_rows(
+            bounce, origins, dirs, weight, vertex, family, medium, floor, points)
         hits = hits.select(bounce)
         if len(vertex) == 0:
             break
         surface = orient(accel, hits, dirs, points, materials, medium, band)
-        tint = materials.color[hits.obj]
+        tint = np.take(materials.color, hits.obj, axis=0)
         branches = []
         for event, mirror in ((0, True), (1, False)):
             new_dirs, crossed = scatter(surface, dirs, np.full(len(dirs), mirror))
             share = surface.fresnel if mirror else np.where(crossed, 1.0 - surface.fresnel, 0.0)
             new_weight = weight * tint * share[:, None]
             new_medium = np.where(crossed, np.where(surface.entering, hits.obj, MISS), medium)
-            alive = (new_weight.max(axis=1) >= floor) & (mirror | materials.dielectric[hits.obj])
-            branches.append((accel.offset(points, surface.facing, new_dirs)[alive], new_dirs[alive],
-                             new_weight[alive], vertex[alive], _mix(family, hits.obj, event)[alive],
-                             new_medium[alive], floor[alive]))
+            alive = (max_channel(new_weight) >= floor) & (mirror | materials.dielectric[hits.obj])
+            branches.append(take_rows(alive, accel.offset(points, surface.facing, new_dirs), new_dirs, new_weight,
+                                      vertex, _mix(family, hits.obj, event), new_medium, floor))
         origins, dirs, weight, vertex, family, medium, floor = (np.concatenate(parts) for parts in zip(*branches))
         specular = np.ones(len(vertex), dtype=bool)
     if not landed:

@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from .emission import r2_sequence
+from .optics import normalize
 from .scene import Camera
 
 
@@ -55,7 +56,7 @@ def eye_rays(camera: Camera, pixels: np.ndarray, offsets: np.ndarray) -> tuple[n
     pixsize = 2.0 * math.tan(0.5 * camera.fov) / viewfac
     local = np.stack([sx * pixsize, sy * pixsize, -np.ones_like(sx)], axis=1)
     dirs = local @ rot.T
-    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    dirs = normalize(dirs)
     origins = eye + dirs * (camera.clip_start / (dirs @ forward))[:, None]
     return origins, dirs
 

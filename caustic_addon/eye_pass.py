@@ -23,13 +23,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .accel import Accelerator, MISS
+from .accel import MISS, Accelerator, take_rows
 from .camera import ray_differentials
 from .illumination_map import IlluminationMap, PlaneChart
 from .interface import orient, scatter
 from .lighting import direct_radiance
 from .materials import Materials
-from .optics import beer_lambert, dot
+from .optics import beer_lambert, dot, max_channel
 from .scene import Scene
 
 PASSES = ("direct", "caustic", "ambient")
@@ -52,8 +52,7 @@ class EyeRays:
     primary: bool = False
 
     def select(self, mask: np.ndarray) -> "EyeRays":
-        return EyeRays(self.origins[mask], self.dirs[mask], self.weight[mask], self.pixel[mask], self.medium[mask],
-                       self.primary)
+        return EyeRays(*take_rows(mask, self.origins, self.dirs, self.weight, self.pixel, self.medium), self.primary)
 
     @staticmethod
     def concat(parts: list["EyeRays"]) -> "EyeRays":
@@ -88,55 +87,56 @@ class EyePass:
             missed = ~hits.hit
             self._add("ambient", rays.pixel[missed], rays.weight[missed] * self.scene.background)
             rays, hits = rays.select(~missed), hits.select(~missed)
-            points = hits.points
             inside = rays.medium != MISS
             if inside.any():
-                rays.weight[inside] *= beer_lambert(self.materials.absorption[rays.medium[inside]], hits.t[inside])
+                rays.weight[inside] *= beer_lambert(np.take(self.materials.absorption, rays.medium[inside], axis=0),
+                                                    hits.t[inside])
 
             bounce = self.materials.specular_surface[hits.obj]
-            self._shade_opaque(rays.select(~bounce), hits.select(~bounce), points[~bounce])
-            rays = self._split_at_specular(rays.select(bounce), hits.select(bounce), points[bounce])
+            self._shade_opaque(rays.select(~bounce), hits.select(~bounce))
+            rays = self._split_at_specular(rays.select(bounce), hits.select(bounce))
 
-    def _shade_opaque(self, rays: EyeRays, hits, points: np.ndarray) -> None:
+    def _shade_opaque(self, rays: EyeRays, hits) -> None:
         if len(rays.pixel) == 0:
             return
         m, accel = self.materials, self.accel
         view = -rays.dirs
-        facing = accel.face_normal[hits.prim]
+        facing = np.take(accel.face_normal, hits.prim, axis=0)
         facing = np.where((dot(facing, view) < 0.0)[:, None], -facing, facing)
         shading = accel.shading_normal(hits.prim, hits.u, hits.v)
         shading = np.where((dot(shading, view) < 0.0)[:, None], -shading, shading)
-        albedo = m.albedo[hits.obj]
+        albedo = np.take(m.albedo, hits.obj, axis=0)
 
+        points = hits.points
         direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view,
-                                 albedo, m.specular[hits.obj], m.exponent[hits.obj], self.far)
+                                 albedo, np.take(m.specular, hits.obj, axis=0), m.exponent[hits.obj], self.far)
         self._add("direct", rays.pixel, rays.weight * direct)
         self._add("ambient", rays.pixel, rays.weight * self.scene.ambient * albedo)
 
         for index, imap in self.maps.items():
-            sel = hits.obj == index
-            if not sel.any():
+            on_map = hits.obj == index
+            if not on_map.any():
                 continue
-            local = hits.prim[sel] - accel.prim_offset[index]
-            xy = imap.chart.coords(local, hits.u[sel], hits.v[sel], points[sel])
+            here, at = rays.select(on_map), hits.select(on_map)
+            xy = imap.chart.coords(at.prim - accel.prim_offset[index], at.u, at.v, at.points)
             irradiance = np.empty((len(xy), 3))
             spread = np.zeros(len(xy), dtype=bool)
-            if rays.primary and isinstance(imap.chart, PlaneChart):
-                dirs = rays.dirs[sel]
-                lo, hi, spread = imap.chart.footprint(rays.origins[sel], dirs,
-                                                      *ray_differentials(self.scene.camera, dirs), self.stratum)
+            if here.primary and isinstance(imap.chart, PlaneChart):
+                lo, hi, spread = imap.chart.footprint(here.origins, here.dirs,
+                                                      *ray_differentials(self.scene.camera, here.dirs), self.stratum)
                 irradiance[spread] = imap.mean_over(lo[spread], hi[spread])
             irradiance[~spread] = imap.irradiance_at(xy[~spread])
-            radiance = irradiance * albedo[sel] / math.pi
-            self._add("caustic", rays.pixel[sel], rays.weight[sel] * radiance)
+            radiance = irradiance * take_rows(on_map, albedo)[0] / math.pi
+            self._add("caustic", here.pixel, here.weight * radiance)
 
-    def _split_at_specular(self, rays: EyeRays, hits, points: np.ndarray) -> EyeRays:
+    def _split_at_specular(self, rays: EyeRays, hits) -> EyeRays:
         """The reflected children of rays at dielectric and reflector hits,
         and the refracted children at dielectric hits."""
         if len(rays.pixel) == 0:
             return rays
+        points = hits.points
         surface = orient(self.accel, hits, rays.dirs, points, self.materials, rays.medium)
-        tint = self.materials.color[hits.obj]
+        tint = np.take(self.materials.color, hits.obj, axis=0)
         children = []
         for mirror in (True, False):
             dirs, crossed = scatter(surface, rays.dirs, np.full(len(rays.pixel), mirror))
@@ -145,5 +145,5 @@ class EyePass:
             medium = np.where(crossed, np.where(surface.entering, hits.obj, MISS), rays.medium)
             origins = self.accel.offset(points, surface.facing, dirs)
             child = EyeRays(origins, dirs, weight, rays.pixel, medium)
-            children.append(child.select(weight.max(axis=1) >= MIN_WEIGHT))
+            children.append(child.select(max_channel(weight) >= MIN_WEIGHT))
         return EyeRays.concat(children)

@@ -12,7 +12,7 @@ import numpy as np
 
 from .accel import Accelerator, Hits
 from .materials import Materials
-from .optics import dot, fresnel_dielectric, reflect, refract
+from .optics import dot, fresnel_dielectric, normalize, reflect, refract
 
 
 @dataclass
@@ -51,7 +51,7 @@ def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, points: np.ndarray,
     put on its side; where interpolation tips it past the ray
     (dot(d, n_s) >= 0), the geometric normal is used instead.
     """
-    face = accel.face_normal[hits.prim]
+    face = np.take(accel.face_normal, hits.prim, axis=0)
     toward = dot(dirs, face) < 0.0
     entering = np.where(accel.closed[hits.obj], medium != hits.obj, toward)
     facing = np.where(toward[:, None], face, -face)
@@ -85,4 +85,4 @@ def scatter(surface: Interface, dirs: np.ndarray, reflect_mask: np.ndarray) -> t
         redo_refract, redo_tir = refract(d, n, surface.eta[wrong])
         mirror[wrong] |= redo_tir
         out[wrong] = np.where(mirror[wrong][:, None], reflect(d, n), redo_refract)
-    return out / np.linalg.norm(out, axis=1, keepdims=True), ~mirror
+    return normalize(out), ~mirror

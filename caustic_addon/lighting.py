@@ -20,7 +20,7 @@ import numpy as np
 
 from . import units
 from .accel import Accelerator
-from .optics import dot, normalize
+from .optics import dot, length, max_channel, normalize
 from .scene import Light, SunLight
 
 
@@ -33,7 +33,7 @@ def toward_light(light: Light, energy: float, points: np.ndarray, far: float):
         return to_light, np.full(len(points), far), np.broadcast_to(
             units.sun_irradiance(light, energy), points.shape)
     offset = light.position - points
-    dist = np.linalg.norm(offset, axis=1)
+    dist = length(offset)
     to_light = offset / np.maximum(dist, 1e-300)[:, None]
     intensity = units.intensity(light, energy, -to_light)
     return to_light, dist, intensity / np.maximum(dist * dist, 1e-300)[:, None]
@@ -52,7 +52,7 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
     for light in lights:
         to_light, dist, irradiance = toward_light(light, energy, points, far)
         cos = dot(shading, to_light)
-        lit = (cos > 0.0) & (dot(facing, to_light) > 0.0) & (irradiance.max(axis=1) > 0.0)
+        lit = (cos > 0.0) & (dot(facing, to_light) > 0.0) & (max_channel(irradiance) > 0.0)
         if not lit.any():
             continue
         idx = np.flatnonzero(lit)

@@ -17,10 +17,26 @@ def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->i", a, b)
 
 
+# Row-wise reductions over 3 values are spelt out below: numpy's reductions
+# along a short last axis (norm, max or sum with axis=1) run 3 to 8 times
+# slower than einsum or two elementwise calls (numpy 2.x, measured on
+# (20000,3) arrays).
+
+
+def length(v: np.ndarray) -> np.ndarray:
+    """(n,) Euclidean lengths of the rows of `v (n,3)`."""
+    return np.sqrt(dot(v, v))
+
+
 def normalize(v: np.ndarray) -> np.ndarray:
     """Rows of `v (n,3)` scaled to unit length; zero rows stay zero."""
-    length = np.linalg.norm(v, axis=-1, keepdims=True)
-    return v / np.where(length > 0, length, 1.0)
+    size = length(v)[:, None]
+    return v / np.where(size > 0, size, 1.0)
+
+
+def max_channel(c: np.ndarray) -> np.ndarray:
+    """(n,) the largest of the three channels of `c (n,3)`."""
+    return np.maximum(np.maximum(c[:, 0], c[:, 1]), c[:, 2])
 
 
 def reflect(d: np.ndarray, n: np.ndarray) -> np.ndarray:

@@ -24,12 +24,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .accel import Accelerator, MISS
+from .accel import MISS, Accelerator, take_rows
 from .emission import Photons, hash_uniform
 from .illumination_map import IlluminationMap
 from .interface import orient, scatter
 from .materials import Materials
-from .optics import beer_lambert
+from .optics import beer_lambert, max_channel
 from .spectrum import photon_band
 
 # Below this fraction of its starting flux (max channel), a photon plays
@@ -60,7 +60,7 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, Illu
     origins, dirs, ids = photons.origins, photons.dirs, photons.ids
     band = photon_band(ids, materials.band_count, seed)
     flux = photons.flux * (materials.band_count * materials.band_weights[band])
-    start_flux = flux.max(axis=1)
+    start_flux = max_channel(flux)
     medium = np.full(len(flux), start_medium, dtype=np.int64)
     specular = np.zeros(len(flux), dtype=bool)
 
@@ -70,14 +70,14 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, Illu
         hits = accel.intersect(origins, dirs, medium)
         stats.rays += len(flux)
         keep = hits.hit
-        origins, dirs, flux, start_flux, medium, specular, ids, band = (
-            a[keep] for a in (origins, dirs, flux, start_flux, medium, specular, ids, band))
+        origins, dirs, flux, start_flux, medium, specular, ids, band = take_rows(
+            keep, origins, dirs, flux, start_flux, medium, specular, ids, band)
         hits = hits.select(keep)
         points = hits.points
 
         inside = medium != MISS
         if inside.any():
-            flux[inside] *= beer_lambert(materials.absorption[medium[inside]], hits.t[inside])
+            flux[inside] *= beer_lambert(np.take(materials.absorption, medium[inside], axis=0), hits.t[inside])
 
         land = specular & materials.receiver[hits.obj]
         for index in np.unique(hits.obj[land]):
@@ -88,22 +88,22 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, Illu
             stats.flux_landed = stats.flux_landed + flux[sel].sum(axis=0)
 
         bounce = materials.specular_surface[hits.obj]
-        origins, dirs, flux, start_flux, medium, points, ids, band = (
-            a[bounce] for a in (origins, dirs, flux, start_flux, medium, points, ids, band))
+        origins, dirs, flux, start_flux, medium, points, ids, band = take_rows(
+            bounce, origins, dirs, flux, start_flux, medium, points, ids, band)
         hits = hits.select(bounce)
         if len(flux) == 0:
             break
 
         surface = orient(accel, hits, dirs, points, materials, medium, band)
         dirs, crossed = scatter(surface, dirs, hash_uniform(ids, 2 * depth, seed) < surface.fresnel)
-        flux *= materials.color[hits.obj]
+        flux *= np.take(materials.color, hits.obj, axis=0)
         medium = np.where(crossed, np.where(surface.entering, hits.obj, MISS), medium)
         specular = np.ones(len(flux), dtype=bool)
         origins = accel.offset(points, surface.facing, dirs)
 
         flux, alive = _roulette(flux, start_flux, hash_uniform(ids, 2 * depth + 1, seed))
-        origins, dirs, flux, start_flux, medium, specular, ids, band = (
-            a[alive] for a in (origins, dirs, flux, start_flux, medium, specular, ids, band))
+        origins, dirs, flux, start_flux, medium, specular, ids, band = take_rows(
+            alive, origins, dirs, flux, start_flux, medium, specular, ids, band)
     return stats
 
 
@@ -112,7 +112,7 @@ def _roulette(flux: np.ndarray, start_flux: np.ndarray, xi: np.ndarray):
     flux: survive with probability q = flux / threshold, flux /= q. `xi (n,)`
     are uniform random numbers. Returns (flux (n,3), alive (n,) bool)."""
     threshold = ROULETTE_FRACTION * start_flux
-    peak = flux.max(axis=1)
+    peak = max_channel(flux)
     low = peak < threshold
     if not low.any():
         return flux, np.ones(len(flux), dtype=bool)
