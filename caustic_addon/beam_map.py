@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .accel import take_rows
 from .illumination_map import IlluminationMap, bilinear_sample, channel_tables, rect_means
 from .raster import rasterise_triangles, signed_areas
 
@@ -43,7 +44,8 @@ class _Layer:
         """(n,c) W/m^2 at chart points `xy (n,2)`, bilinear between cell
         centres; zero off the layer."""
         rc = self._rc(xy)
-        inside = ((rc >= -0.5) & (rc <= np.array(self.values.shape[1:]) - 0.5)).all(axis=1)
+        top = np.array(self.values.shape[1:]) - 0.5
+        inside = (rc[:, 0] >= -0.5) & (rc[:, 1] >= -0.5) & (rc[:, 0] <= top[0]) & (rc[:, 1] <= top[1])
         out = np.zeros((len(xy), len(self.values)))
         out[inside] = bilinear_sample(self.values, rc[inside])
         return out
@@ -52,9 +54,10 @@ class _Layer:
         """(n,c) mean W/m^2 over chart rectangles [lo, hi] ((n,2) each); only
         those that meet the layer are looked up."""
         end = self.origin + self.cell * np.array(self.values.shape[:0:-1])
-        meets = np.flatnonzero(((hi > self.origin) & (lo < end)).all(axis=1))
+        meets = ((hi[:, 0] > self.origin[0]) & (hi[:, 1] > self.origin[1])
+                 & (lo[:, 0] < end[0]) & (lo[:, 1] < end[1]))
         out = np.zeros((len(lo), len(self.values)))
-        out[meets] = rect_means(self.tables, self.origin[::-1], self.cell, lo[meets], hi[meets])
+        out[meets] = rect_means(self.tables, self.origin[::-1], self.cell, *take_rows(meets, lo, hi))
         return out
 
 

@@ -105,7 +105,7 @@ class PlaneChart(Chart):
         across = np.repeat(dirs / along[:, None], 2, axis=0)
         d_points = moved - across * (moved @ self.normal)[:, None]
         jacobian = (d_points @ np.stack([self.axis_x, self.axis_y], axis=1)).reshape(-1, 2, 2)
-        half = 0.5 * stratum * np.sqrt((jacobian ** 2).sum(axis=1))
+        half = 0.5 * stratum * np.sqrt(jacobian[:, 0] ** 2 + jacobian[:, 1] ** 2)
         centre = self._local(origins + s[:, None] * dirs)
         return centre - half, centre + half, ok
 
@@ -217,7 +217,7 @@ def rect_means(tables: np.ndarray, origin_rc: np.ndarray, cell: float, lo: np.nd
     index = (rows[:, None] * (w + 1) + cols[None, :]).reshape(16, -1)
     weight = (row_weights[:, None] * col_weights[None, :]).reshape(16, -1)
     total = np.stack([np.einsum("kn,kn->n", weight, np.take(table, index)) for table in tables], axis=1)
-    return np.maximum(total, 0.0) / ((hi - lo) / cell).prod(axis=1)[:, None]
+    return np.maximum(total, 0.0) * (cell * cell / ((hi[:, 0] - lo[:, 0]) * (hi[:, 1] - lo[:, 1])))[:, None]
 
 
 def _signed_taps(lo: np.ndarray, hi: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
@@ -361,7 +361,8 @@ class IlluminationMap:
             out = bilinear_sample(self._cells[1:], self._cell_coords(xy)) / self.cell ** 2
         else:
             out = self._adaptive(xy)
-        outside = ((xy < self.chart.origin) | (xy > self.chart.origin + self.chart.size)).any(axis=1)
+        lo, hi = self.chart.origin, self.chart.origin + self.chart.size
+        outside = (xy[:, 0] < lo[0]) | (xy[:, 1] < lo[1]) | (xy[:, 0] > hi[0]) | (xy[:, 1] > hi[1])
         out[outside] = 0.0
         return out
 
@@ -380,7 +381,7 @@ class IlluminationMap:
         self.prepare()
         if self.estimate.k_nearest is None:
             return as_rgb(rect_means(self._tables[1], self.origin_rc, self.cell, lo, hi)) / self.cell ** 2
-        half = 0.5 * (hi - lo).max(axis=1) / self.cell
+        half = 0.5 * np.maximum(hi[:, 0] - lo[:, 0], hi[:, 1] - lo[:, 1]) / self.cell
         return self._adaptive(0.5 * (lo + hi), np.ceil(half - 0.5).astype(np.int64))
 
     @property
