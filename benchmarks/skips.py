@@ -212,17 +212,17 @@ def shadow_rays_behind(repeats: int) -> dict:
 shade_opaque = eye_pass.EyePass._shade_opaque
 
 
-def shade_opaque_and_reflect(self, rays, hits, points):
+def shade_opaque_and_reflect(self, rays, hits):
     """EyePass._shade_opaque, then a mirror ray from every opaque hit, as a
     Whitted tracer casts at any surface (it carries nothing from these
     diffuse materials); one level only, so a lower bound of the cost."""
-    shade_opaque(self, rays, hits, points)
+    shade_opaque(self, rays, hits)
     if len(rays.pixel) == 0:
         return
-    facing = self.accel.face_normal[hits.prim]
+    facing = np.take(self.accel.face_normal, hits.prim, axis=0)
     facing = np.where((dot(facing, rays.dirs) > 0.0)[:, None], -facing, facing)
     mirrored = rays.dirs - 2.0 * dot(rays.dirs, facing)[:, None] * facing
-    self.accel.intersect(self.accel.offset(points, facing, mirrored), mirrored)
+    self.accel.intersect(self.accel.offset(hits.points, facing, mirrored), mirrored)
 
 
 def no_recursion_at_diffuse(repeats: int) -> dict:
