@@ -16,7 +16,7 @@ import numpy as np
 from embreex import rtcore_scene
 from embreex.mesh_construction import TriangleMesh
 
-from .optics import length, normalize
+from .optics import cross_rows, length, normalize
 from .scene import Object
 
 MISS = -1
@@ -77,15 +77,15 @@ def triangle_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(unit normals (nt,3), areas (nt,)) of triangles `corners (nt,3,3)`,
     oriented by the right-hand rule on their winding. Degenerate triangles get
     a zero normal and zero area."""
-    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    double_area = np.sqrt(np.einsum("ij,ij->i", cross, cross))
+    cross = cross_rows(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    double_area = length(cross)
     return cross / np.where(double_area > 0, double_area, 1.0)[:, None], 0.5 * double_area
 
 
 def signed_volume(corners: np.ndarray) -> float:
     """Volume enclosed by a closed mesh, positive when its normals face out
     (divergence theorem: sum of p0 . (p1 x p2) / 6 over triangles)."""
-    return float(np.einsum("ij,ij->i", corners[:, 0], np.cross(corners[:, 1], corners[:, 2])).sum() / 6.0)
+    return float(np.einsum("ij,ij->i", corners[:, 0], cross_rows(corners[:, 1], corners[:, 2])).sum() / 6.0)
 
 
 def open_edge_count(triangles: np.ndarray, vertices: np.ndarray) -> int:
@@ -184,7 +184,7 @@ class Accelerator:
         """(N,3) epsilon / altitude onto each corner's opposite edge, where
         altitude = 2 area / edge length; at most 0.3 (tiny triangles).
         `area (N,)` of each triangle."""
-        opposite = np.linalg.norm(np.roll(corners, -1, axis=1) - np.roll(corners, 1, axis=1), axis=2)
+        opposite = np.stack([length(corners[:, (k + 1) % 3] - corners[:, (k + 2) % 3]) for k in range(3)], axis=1)
         with np.errstate(divide="ignore", invalid="ignore"):
             fraction = self.epsilon * opposite / (2.0 * area[:, None])
         return np.where(np.isfinite(fraction), np.minimum(fraction, 0.3), 0.3)

@@ -442,15 +442,17 @@ def _beams_and_photons(lookup: _Lookup, triangles: np.ndarray, measure: np.ndarr
     tri, tri_group = lookup.first_of_each(element[count == 3], group[count == 3])
     idx = np.stack([lookup.find(tri_group, triangles[tri, k]) for k in range(3)], axis=1)
     obj = land.obj[idx[:, 0]]
-    xy = land.xy[idx]
+    xy = np.take(land.xy, idx, axis=0)
     area = np.abs(signed_areas(xy))
-    flux = measure[tri, None] * land.weight[idx].mean(axis=1)
+    corner_weight = np.take(land.weight, idx, axis=0)
+    flux = measure[tri, None] * (corner_weight[:, 0] + corner_weight[:, 1] + corner_weight[:, 2]) / 3.0
     chart_area = np.zeros(max(maps, default=-1) + 1)
     for index, imap in maps.items():
         chart_area[index] = np.prod(np.maximum(imap.chart.size, 1e-300))
     good = area > _MIN_AREA_FRACTION * chart_area[obj]
     with np.errstate(divide="ignore", invalid="ignore"):
-        irradiance = flux * (land.scale[idx].mean(axis=1) / area)[:, None]
+        scale = land.scale[idx]
+        irradiance = flux * ((scale[:, 0] + scale[:, 1] + scale[:, 2]) / (3.0 * area))[:, None]
 
     # fallback: each landed corner of an incoherent or degenerate triangle
     # carries a third of that triangle's flux
@@ -459,12 +461,12 @@ def _beams_and_photons(lookup: _Lookup, triangles: np.ndarray, measure: np.ndarr
     loose = (count < 3) | np.isin(pair, degenerate)
     share = np.bincount(landing[loose], weights=measure[element[loose]] / 3.0, minlength=len(land.vertex))
     holders = np.flatnonzero(share > 0)
-    photon_flux = share[holders, None] * land.weight[holders]
+    photon_flux = share[holders, None] * np.take(land.weight, holders, axis=0)
 
     beams, photons = {}, {}
     for o in np.unique(obj[good]):
         sel = good & (obj == o)
-        beams[int(o)] = (xy[sel], irradiance[sel])
+        beams[int(o)] = tuple(take_rows(sel, xy, irradiance))
     for o in np.unique(land.obj[holders]):
         sel = land.obj[holders] == o
         photons[int(o)] = (land.xy[holders[sel]], photon_flux[sel], land.scale[holders[sel]])

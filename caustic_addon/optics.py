@@ -34,6 +34,12 @@ def normalize(v: np.ndarray) -> np.ndarray:
     return v / np.where(size > 0, size, 1.0)
 
 
+def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(n,3) row-wise cross products of `a (n,3)` and `b (n,3)`."""
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
+
+
 def max_channel(c: np.ndarray) -> np.ndarray:
     """(n,) the largest of the three channels of `c (n,3)`."""
     return np.maximum(np.maximum(c[:, 0], c[:, 1]), c[:, 2])

@@ -56,18 +56,19 @@ def _accumulate(acc: np.ndarray, h: int, w: int, corners: np.ndarray, values: np
     weight = -np.sign(signed_areas(corners))[:, None] * values
 
     start = corners.reshape(-1, 2)
-    end = corners[:, [1, 2, 0]].reshape(-1, 2)
-    edge_weight = np.repeat(weight, 3, axis=0)
-    sloped = start[:, 1] != end[:, 1]
-    start, end, edge_weight = start[sloped], end[sloped], edge_weight[sloped]
+    end = np.take(corners, [1, 2, 0], axis=1).reshape(-1, 2)
+    sloped = np.flatnonzero(start[:, 1] != end[:, 1])
+    start, end = np.take(start, sloped, axis=0), np.take(end, sloped, axis=0)
+    triangle = sloped // 3
 
     row, x0, x1, dy, edge = _rows(start, end, h)
     col, xmid, dy, piece = _columns(x0, x1, dy, w)
     f = xmid - col
     at = row[piece] * (w + 2) + col + 1
     index = np.concatenate([at, at + 1])
+    of_piece = triangle[edge[piece]]
     for k in range(len(acc)):
-        wk = edge_weight[edge[piece], k] * dy
+        wk = weight[:, k][of_piece] * dy
         acc[k] += np.bincount(index, weights=np.concatenate([wk * (1.0 - f), wk * f]), minlength=acc.shape[1])
 
 
@@ -90,7 +91,7 @@ def _rows(start: np.ndarray, end: np.ndarray, h: int):
     slope = (end[:, 0] - start[:, 0]) / (yb - ya)
     edge, row = _bands(lo, hi, 0, h - 1)
     y0, y1 = np.maximum(lo[edge], row), np.minimum(hi[edge], row + 1.0)
-    xa, ya, k = start[edge, 0], ya[edge], slope[edge]
+    xa, ya, k = start[:, 0][edge], ya[edge], slope[edge]
     return row, xa + (y0 - ya) * k, xa + (y1 - ya) * k, (y1 - y0) * np.sign(yb - start[:, 1])[edge], edge
 
 

@@ -58,7 +58,7 @@ class Mesh:
     @property
     def corners(self) -> np.ndarray:
         """(nt,3,3) world positions of each triangle's corners."""
-        return self.vertices[self.triangles]
+        return np.take(self.vertices, self.triangles, axis=0)
 
     def transformed(self, matrix: np.ndarray) -> "Mesh":
         """This mesh under a (4,4) affine matrix; normals go by its inverse transpose."""
