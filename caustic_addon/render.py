@@ -99,27 +99,29 @@ def run_chunks(jobs: list[Callable[[], object]], threads: int, monitor: _Monitor
     """Run `jobs` with up to `threads` in flight, reporting progress from
     `start` to `start + share` and checking for cancel as each one ends.
     Two chunks in flight keep both cores busy: one traces in Embree (which
-    releases the GIL) while the other shades in numpy."""
-    results = []
+    releases the GIL) while the other shades in numpy. Returns the results
+    in the jobs' order, whichever finishes first, so that whatever is summed
+    from them is summed in the same order every time."""
+    results = {}
     with ThreadPoolExecutor(threads) as pool:
-        pending = set()
-        queue = iter(jobs)
+        pending = {}
         try:
-            for job in queue:
-                pending.add(pool.submit(job))
+            for index, job in enumerate(jobs):
+                pending[pool.submit(job)] = index
                 if len(pending) < threads:
                     continue
-                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                results += [f.result() for f in finished]
+                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    results[pending.pop(future)] = future.result()
                 monitor.step(start + share * len(results) / len(jobs), stage)
-            for future in pending:
-                results.append(future.result())
+            for future, index in pending.items():
+                results[index] = future.result()
                 monitor.step(start + share * len(results) / len(jobs), stage)
         except BaseException:
             for future in pending:
                 future.cancel()
             raise
-    return results
+    return [results[index] for index in range(len(jobs))]
 
 
 def chunk(total: int, settings: RenderSettings) -> int:

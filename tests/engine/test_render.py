@@ -2,12 +2,15 @@
 scale invariance, chunking, and finite outputs."""
 
 import math
+import time
+from functools import partial
 
 import numpy as np
 import pytest
 
 from caustic_addon import render
 from caustic_addon.emission import Sphere
+from caustic_addon.render import _Monitor, run_chunks
 from scenes import ball_lens, floor_points, quick, shadow_radius, unobstructed_irradiance
 
 
@@ -125,3 +128,10 @@ def test_caustic_matches_the_exact_ball_lens_reference():
     xy = annulus_points(r_edges, 200)
     ours = annulus_means(result.maps["Floor"].irradiance_at(xy)[:, 0], r_edges)
     assert relative_l2(ours, exact.caustic, r_edges) < 0.08
+
+
+def test_chunks_come_back_in_the_order_of_their_jobs():
+    """The first job finishes last, yet the results keep the jobs' order, so
+    what a pass sums from them (beams onto a map) sums the same every time."""
+    jobs = [partial(lambda k: (time.sleep(0.03 * (3 - k)), k)[1], k) for k in range(4)]
+    assert run_chunks(jobs, 2, _Monitor(None, None), 0.0, 1.0, "test") == [0, 1, 2, 3]
