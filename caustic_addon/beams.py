@@ -236,9 +236,10 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
                                    max_channel(weight[sel]) * MIN_BRANCH_WEIGHT / floor[sel]))
 
         bounce = materials.specular_surface[hits.obj]
-        origins, dirs, weight, vertex, family, medium, floor, points = take_rows(
-            bounce, origins, dirs, weight, vertex, family, medium, floor, points)
+        origins, dirs, weight, vertex, family, medium, floor = take_rows(
+            bounce, origins, dirs, weight, vertex, family, medium, floor)
         hits = hits.select(bounce)
+        points = hits.points
         if len(vertex) == 0:
             break
         surface = orient(accel, hits, dirs, points, materials, medium, band)

@@ -88,9 +88,10 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, Illu
             stats.flux_landed = stats.flux_landed + flux[sel].sum(axis=0)
 
         bounce = materials.specular_surface[hits.obj]
-        origins, dirs, flux, start_flux, medium, points, ids, band = take_rows(
-            bounce, origins, dirs, flux, start_flux, medium, points, ids, band)
+        origins, dirs, flux, start_flux, medium, ids, band = take_rows(
+            bounce, origins, dirs, flux, start_flux, medium, ids, band)
         hits = hits.select(bounce)
+        points = hits.points
         if len(flux) == 0:
             break
 
