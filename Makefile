@@ -57,6 +57,7 @@ package: $(VENV)/.installed
 bench: $(VENV)/.installed
 	$(VENV)/bin/python benchmarks/speed.py
 	$(VENV)/bin/python benchmarks/accuracy.py
+	$(VENV)/bin/python benchmarks/budget.py
 
 clean:
 	rm -rf $(VENV) $(VENV311) dist wheels out
