@@ -60,15 +60,6 @@ def lamp_rays_for(error: float) -> int:
     return min(p["photons"] for p in curve if p["error"] <= error)
 
 
-def fastest(run, repeats: int) -> float:
-    best = np.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        run()
-        best = min(best, time.perf_counter() - start)
-    return best
-
-
 def upload_and_build(scene, repeats: int) -> tuple[float, float]:
     """Seconds (upload, build) of the scene's meshes in a fresh Embree scene."""
     meshes = [(o.mesh.vertices.astype(np.float32), o.mesh.triangles.astype(np.int32)) for o in scene.objects]
