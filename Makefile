@@ -1,27 +1,37 @@
 # Everything a fresh machine needs: `make demo` renders the paper's scene,
-# `make test` runs the whole suite on both supported Blenders.
+# `make test` runs the whole suite on every Blender of the test matrix.
+#
+# Each Blender is a venv with its own Python and the numpy that Blender
+# bundles (requirements/blender-<version>.txt). The newest is the main one,
+# .venv: the demo, the benchmarks and the packaging run there.
 PY313 ?= $(shell pyenv root 2>/dev/null)/versions/3.13.0/bin/python3.13
 PY311 ?= python3.11
+NEWEST := 5.3
+OLDER := 4.2 4.5
 VENV := .venv
-VENV311 := .venv311
 
-.PHONY: all venv demo test test-engine bench clean package
+python_of = $(if $(filter $(NEWEST),$(1)),$(PY313),$(PY311))
+venv_of = $(if $(filter $(NEWEST),$(1)),$(VENV),.venv-$(1))
+
+.PHONY: all venv demo test test-engine bench clean package $(addprefix test-,$(NEWEST) $(OLDER))
 
 all: test
 
-$(VENV)/.installed: requirements/py313.txt
-	test -x $(VENV)/bin/python || $(PY313) -m venv $(VENV)
-	$(VENV)/bin/python -m pip install -q --upgrade pip
-	$(VENV)/bin/python -m pip install -q -r requirements/py313.txt
+# $(call make_venv,<Blender version>)
+define make_venv
+	test -x $(@D)/bin/python || $(call python_of,$(1)) -m venv $(@D)
+	$(@D)/bin/python -m pip install -q --upgrade pip
+	$(@D)/bin/python -m pip install -q -r $<
 	touch $@
+endef
 
-$(VENV311)/.installed: requirements/py311.txt
-	test -x $(VENV311)/bin/python || $(PY311) -m venv $(VENV311)
-	$(VENV311)/bin/python -m pip install -q --upgrade pip
-	$(VENV311)/bin/python -m pip install -q -r requirements/py311.txt
-	touch $@
+$(VENV)/.installed: requirements/blender-$(NEWEST).txt
+	$(call make_venv,$(NEWEST))
 
-venv: $(VENV)/.installed $(VENV311)/.installed
+.venv-%/.installed: requirements/blender-%.txt
+	$(call make_venv,$*)
+
+venv: $(VENV)/.installed $(foreach v,$(OLDER),.venv-$(v)/.installed)
 
 # The paper's scene through Blender, with a Cycles render beside it, then
 # the same scene through the engine's command line, all into out/.
@@ -30,27 +40,27 @@ demo: $(VENV)/.installed
 	$(VENV)/bin/python -m caustic_addon render examples/paper.toml examples/round.obj -o out/paper_cli.png
 
 test-engine: venv
-	$(VENV)/bin/python -m pytest -c tests/pytest.ini tests/engine
-	$(VENV311)/bin/python -m pytest -c tests/pytest.ini tests/engine
+	$(foreach v,$(NEWEST) $(OLDER),$(call venv_of,$(v))/bin/python -m pytest -c tests/pytest.ini tests/engine &&) true
 
-test: venv package
-	$(VENV)/bin/python -m pytest -c tests/pytest.ini tests
-	$(VENV311)/bin/python -m pytest -c tests/pytest.ini tests
+test: venv package $(addprefix test-,$(NEWEST) $(OLDER))
+
+$(addprefix test-,$(NEWEST) $(OLDER)): test-%: venv package
+	@echo "== Blender $* =="
+	$(call venv_of,$*)/bin/python -m pytest -c tests/pytest.ini tests
 
 # The extension: one zip per platform in dist/, each with the embreex wheels
 # for Blender 4.2-5.0 (Python 3.11) and 5.1+ (Python 3.13).
-EMBREEX := 4.4.0.post1
-WHEEL_PLATFORMS := manylinux_2_28_x86_64 win_amd64 macosx_13_0_arm64
+# The wheels blender_manifest.toml lists, and only those.
+WHEELS := $(shell sed -n 's|^ *"\./\(wheels/[^"]*\.whl\)",*|\1|p' blender_manifest.toml)
 BLENDER_EXT = $(VENV)/bin/python $(firstword $(wildcard $(VENV)/lib/python3.13/site-packages/bpy/*/scripts/addons_core/bl_pkg/cli/blender_ext.py))
 
 package: $(VENV)/.installed
 	mkdir -p wheels dist
-	for py in 3.11 3.13; do for platform in $(WHEEL_PLATFORMS); do \
-	  cp=cp$$(echo $$py | tr -d .); \
-	  ls wheels/embreex-$(EMBREEX)-$$cp-$$cp-*$$platform*.whl >/dev/null 2>&1 || \
-	  $(VENV)/bin/python -m pip download -q embreex==$(EMBREEX) --no-deps --only-binary=:all: \
-	    --python-version $$py --platform $$platform -d wheels || exit 1; \
-	done; done
+	for wheel in $(WHEELS); do test -f $$wheel || { \
+	  tags=$${wheel%.whl}; python=$$(echo $$tags | cut -d- -f3); platform=$${tags##*-}; \
+	  $(VENV)/bin/python -m pip download -q $$(basename $$wheel | cut -d- -f1)==$$(basename $$wheel | cut -d- -f2) \
+	    --no-deps --only-binary=:all: --python-version $${python#cp} --platform $${platform%%.*} -d wheels || exit 1; }; \
+	done
 	$(BLENDER_EXT) build --split-platforms --source-dir . --output-dir dist
 	for zip in dist/caustics-*.zip; do $(BLENDER_EXT) validate $$zip || exit 1; done
 
@@ -60,4 +70,4 @@ bench: $(VENV)/.installed
 	$(VENV)/bin/python benchmarks/budget.py
 
 clean:
-	rm -rf $(VENV) $(VENV311) dist wheels out
+	rm -rf $(VENV) $(foreach v,$(OLDER),.venv-$(v)) dist wheels out

@@ -268,11 +268,14 @@ class BandBeams:
 
     beams[obj] = (corners (m,3,2) chart metres, irradiance (m,3) W/m^2)
     photons[obj] = (xy (k,2), flux (k,3) W, scale (k,))
-    flux_landed (3,) W carried by both; paths traced, rays cast"""
+    flux_landed (3,) W carried by both; paths: the band's grid points (its
+    last row is the next band's first, and counts there) and the `refined`
+    points refinement added; rays cast"""
 
     beams: dict
     photons: dict
     paths: int
+    refined: int
     rays: int
     flux_landed: np.ndarray
 
@@ -368,6 +371,8 @@ def band_beams(source: BeamSource, first_row: int, end_row: int, accel: Accelera
                                                          np.arange(source.grid - 1), indexing="ij"))
     size = np.full(len(row), scale)
     traced = np.unique(_cell_corners(row, col, size, width))
+    on_grid = len(traced)
+    owned = on_grid - (source.grid if end_row < source.grid else 0)
     landings = trace(traced)
     for _ in range(levels):
         split = _diverging(_Lookup(landings, keys), _cell_corners(row, col, size, width)) & (size > 1)
@@ -387,7 +392,8 @@ def band_beams(source: BeamSource, first_row: int, end_row: int, accel: Accelera
     landings = Landings.concat([landings, trace(centres)])
     measure = source.cell_measure * area / scale ** 2
     beams, photons, flux_landed = _beams_and_photons(_Lookup(landings, keys), triangles, measure, maps)
-    return BandBeams(beams, photons, len(traced) + len(centres), accel.rays_cast - rays_before, flux_landed)
+    refined = len(traced) + len(centres) - on_grid
+    return BandBeams(beams, photons, owned + refined, refined, accel.rays_cast - rays_before, flux_landed)
 
 
 def _crack_free_triangles(row: np.ndarray, col: np.ndarray, size: np.ndarray, width: int, traced: np.ndarray):

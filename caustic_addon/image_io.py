@@ -149,9 +149,9 @@ def read_exr(path) -> np.ndarray:
     w, h = x1 - x0 + 1, y1 - y0 + 1
     offsets = np.frombuffer(data, dtype="<u8", count=h, offset=pos)
     image = np.ones((h, w, 4), dtype=np.float32)
-    for offset in offsets:
+    for offset in offsets.tolist():
         y, _ = struct.unpack("<ii", data[offset:offset + 8])
-        at = int(offset) + 8
+        at = offset + 8
         for name, kind in channels:
             values = np.frombuffer(data, dtype=_EXR_DTYPES[kind], count=w, offset=at)
             at += values.nbytes

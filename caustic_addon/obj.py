@@ -146,14 +146,14 @@ def _corner_indices(name: str, faces: _Statements):
     bool, and the line number (nc,) of each corner's face."""
     corner_line = np.repeat(np.array(faces.lines), faces.counts)
     tokens = np.array(faces.tokens)
-    slashes = np.strings.count(tokens, "/")
-    double = np.strings.find(tokens, "//") >= 0
+    slashes = np.char.count(tokens, "/")
+    double = np.char.find(tokens, "//") >= 0
     malformed = np.flatnonzero((slashes > 2) | (double & (slashes != 2)))
     if len(malformed):
         i = malformed[0]
         raise ObjError(f"{name}: line {corner_line[i]}: malformed face corner '{tokens[i]}'")
     present = np.stack([np.ones(len(tokens), bool), (slashes >= 1) & ~double, slashes == 2], axis=1)
-    padded = np.strings.add(np.strings.replace(tokens, "//", "/0/"), np.array(["/0/0", "/0", ""])[slashes])
+    padded = np.char.add(np.char.replace(tokens, "//", "/0/"), np.array(["/0/0", "/0", ""])[slashes])
     fields = np.array("/".join(padded.tolist()).split("/")).reshape(-1, 3)
     try:
         index = fields.astype(np.int64)

@@ -187,6 +187,7 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
             maps[obj].add_photons(xy, flux, scale)
         stats.rays += part.rays
         stats.emitted += part.paths
+        stats.refined += part.refined
         stats.flux_landed = stats.flux_landed + part.flux_landed
     stats.landed = sum(m.beams for m in maps.values())
     return stats
@@ -289,6 +290,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
 
     stats = {
         "photons_emitted": photon_stats.emitted,
+        "paths_refined": photon_stats.refined,
         "photons_landed": photon_stats.landed,
         "flux_landed_w": photon_stats.flux_landed.tolist(),
         "rays_photon_pass": rays_forward,

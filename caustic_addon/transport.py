@@ -39,14 +39,19 @@ ROULETTE_FRACTION = 0.05
 
 @dataclass
 class TransportStats:
+    """rays cast; paths emitted, of which `refined` were added by beam
+    refinement; photons or beams landed; flux landed (3,) W."""
+
     rays: int = 0
     emitted: int = 0
+    refined: int = 0
     landed: int = 0
     flux_landed: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def add(self, other: "TransportStats") -> None:
         self.rays += other.rays
         self.emitted += other.emitted
+        self.refined += other.refined
         self.landed += other.landed
         self.flux_landed = self.flux_landed + other.flux_landed
 

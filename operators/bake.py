@@ -9,8 +9,9 @@ from .bake_nodes import baked_nodes, make_group, material_output, unwire, wire
 from .errors import InputError
 from .images import write_image
 from .job import RenderJob
+from .render import no_render_running
 from .scene_reader import SceneRead, read_scene
-from .settings import render_settings
+from .settings import record_run, render_settings
 
 IMAGE_PREFIX = "Caustic Map "
 GROUP_PREFIX = "Caustic Bake "
@@ -45,6 +46,10 @@ class CAUSTIC_OT_bake(bpy.types.Operator):
                       "(EEVEE and the viewport then display it)")
     bl_options = {'REGISTER', 'UNDO'}
 
+    @classmethod
+    def poll(cls, context):
+        return no_render_running(cls)
+
     def execute(self, context):
         props = context.scene.caustic
         try:
@@ -74,14 +79,11 @@ class CAUSTIC_OT_bake(bpy.types.Operator):
             rgba[..., :3] = imap.irradiance()
             # Map row 0 is the chart's lowest y, the image's bottom row.
             image = write_image(IMAGE_PREFIX + name, rgba[::-1])
-            image.file_format = 'OPEN_EXR'
-            image.pack()
             source = bpy.data.objects[read.sources[name]].data
             uv_layer = source.uv_layers.active.name if source.uv_layers.active is not None else ""
             albedo = next(o.material.albedo for o in read.scene.objects if o.name == name)
             wire(material, make_group(GROUP_PREFIX + name, image, imap, albedo, uv_layer))
-        props.last_seconds = job.seconds
-        props.last_photons = job.result.stats["photons_emitted"]
+        record_run(props, job)
         self.report({'INFO'}, f"Baked caustics onto {', '.join(plan)} in {job.seconds:.1f} s")
         return {'FINISHED'}
 

@@ -12,9 +12,9 @@ from .errors import InputError
 from .images import show_image, write_image
 from .job import RenderJob
 from .metrics import caustic_region, psnr, relative_l2
-from .render import RESULT_IMAGE
+from .render import RESULT_IMAGE, no_render_running
 from .scene_reader import read_scene
-from .settings import render_settings
+from .settings import record_run, render_settings
 
 REFERENCE_IMAGE = "Cycles Reference"
 DIFFERENCE_IMAGE = "Difference"
@@ -38,6 +38,12 @@ class CAUSTIC_OT_compare_cycles(bpy.types.Operator):
     bl_label = "Compare with Cycles"
     bl_description = ("Render the camera with caustics and with Cycles (CPU, shadow caustics) and measure "
                       "the difference; this blocks Blender until both are done")
+    # As caustic.render: an undo step keeps the images, and no redo panel re-runs both renders.
+    bl_options = {'UNDO'}
+
+    @classmethod
+    def poll(cls, context):
+        return no_render_running(cls)
 
     def execute(self, context):
         scene, props = context.scene, context.scene.caustic
@@ -63,8 +69,7 @@ class CAUSTIC_OT_compare_cycles(bpy.types.Operator):
         write_image(DIFFERENCE_IMAGE, difference)
         show_image(context, write_image(RESULT_IMAGE, image))
         region = caustic_region(job.result.passes["caustic"])
-        props.last_seconds = job.seconds
-        props.last_photons = job.result.stats["photons_emitted"]
+        record_run(props, job)
         props.cycles_seconds = cycles_seconds
         props.cycles_relative_l2 = relative_l2(image, reference, region)
         props.cycles_psnr = psnr(image, reference)

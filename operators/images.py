@@ -1,8 +1,16 @@
 """Float images in and out of Blender. Arrays here are (h, w, 4) float32
 linear RGBA with row 0 at the TOP; Blender stores rows bottom to top."""
 
+import uuid
+
 import bpy
 import numpy as np
+from bpy.app.handlers import persistent
+
+# ID property: which write an image's packed EXR holds
+SERIAL = "caustic_pixels"
+# image name -> the write whose pixels are in that image's buffer
+_in_memory: dict[str, str] = {}
 
 
 def working_colorspace() -> str:
@@ -13,7 +21,10 @@ def working_colorspace() -> str:
 
 def write_image(name: str, rgba: np.ndarray):
     """Image `name` (float, linear) holding `rgba (h,w,4)`: the existing one
-    if it can take it (a saved one too), else a new one."""
+    if it can take it (a saved one too), else a new one. The pixels are
+    packed as a float EXR: undo and redo rebuild images from the .blend's
+    data, so pixels that are only in memory would come back blank (see
+    `drop_stale_pixels`)."""
     h, w = rgba.shape[:2]
     image = bpy.data.images.get(name)
     if image is not None and image.source == 'GENERATED':
@@ -26,7 +37,32 @@ def write_image(name: str, rgba: np.ndarray):
         image.colorspace_settings.name = working_colorspace()
     image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1], dtype=np.float32).ravel())
     image.update()
+    image.file_format = 'OPEN_EXR'
+    image.pack()
+    image[SERIAL] = _in_memory[image.name] = uuid.uuid4().hex
     return image
+
+
+@persistent
+def drop_stale_pixels(*_) -> None:
+    """After an undo or redo: an image restores its packed EXR but keeps the
+    pixels it had in memory. Where those are another write's, free them, and
+    Blender decodes the restored EXR when the pixels are next needed."""
+    for image in bpy.data.images:
+        serial = image.get(SERIAL)
+        if serial is not None and _in_memory.get(image.name) != serial:
+            image.buffers_free()
+            _in_memory[image.name] = serial
+
+
+def register() -> None:
+    bpy.app.handlers.undo_post.append(drop_stale_pixels)
+    bpy.app.handlers.redo_post.append(drop_stale_pixels)
+
+
+def unregister() -> None:
+    bpy.app.handlers.undo_post.remove(drop_stale_pixels)
+    bpy.app.handlers.redo_post.remove(drop_stale_pixels)
 
 
 def read_pixels(image) -> np.ndarray:

@@ -5,8 +5,8 @@ plain viewport colours and anything not understood are Diffuse receivers. A
 Volume Absorption node on the Volume output gives glass its absorption. What
 is read approximately comes back as a warning naming the material.
 
-No Glass or Principled BSDF has a Dispersion input in Blender 4.2 or 5.2
-(checked with both bpy modules), so dispersion comes only from the object's
+No Glass or Principled BSDF has a Dispersion input in Blender 4.2, 4.5 or 5.3
+(checked with each bpy module of the test matrix), so dispersion comes only from the object's
 Abbe number (Object.caustic.abbe)."""
 
 from __future__ import annotations

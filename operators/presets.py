@@ -12,7 +12,7 @@ def _paper(energy: int, map_scale: int) -> tuple[str, str, dict]:
     return (f"Paper: energy {energy}, map {map_scale} mm",
             f"40,000 lamp rays, lamp energy {energy}, map scale {map_scale} mm, bilinear map",
             dict(photons=40_000, emission='TARGETED', energy=float(energy), use_auto_map_scale=False,
-                 map_scale=float(map_scale), density='SPLAT'))
+                 map_scale=map_scale / 1000.0, density='SPLAT'))
 
 
 # key -> (label, description, Scene.caustic values)

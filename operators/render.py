@@ -10,15 +10,26 @@ from .errors import InputError
 from .images import show_image, write_image
 from .job import RenderJob
 from .scene_reader import SceneRead, read_scene
-from .settings import render_settings
+from .settings import record_run, render_settings
 
 RESULT_IMAGE = "Caustic Render"
+
+
+def no_render_running(operator) -> bool:
+    """Poll for the operators that run the engine: one render at a time."""
+    if CAUSTIC_OT_render.running:
+        operator.poll_message_set("A caustic render is running: wait for it, or press Esc to cancel it")
+        return False
+    return True
 
 
 class CAUSTIC_OT_render(bpy.types.Operator):
     bl_idname = "caustic.render"
     bl_label = "Render Caustics"
     bl_description = "Render the active camera's view with caustics into the image \"Caustic Render\""
+    # An undo step keeps the image through later undos; no REGISTER, whose
+    # redo panel would re-run the whole render.
+    bl_options = {'UNDO'}
 
     filepath: bpy.props.StringProperty(
         name="File Path", options={'SKIP_SAVE'},
@@ -29,7 +40,7 @@ class CAUSTIC_OT_render(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return not CAUSTIC_OT_render.running
+        return no_render_running(cls)
 
     def _prepare(self, context) -> tuple[SceneRead, RenderJob] | None:
         try:
@@ -104,8 +115,7 @@ class CAUSTIC_OT_render(bpy.types.Operator):
             return {'CANCELLED'}
         props = context.scene.caustic
         image = write_image(RESULT_IMAGE, job.result.image)
-        props.last_seconds = job.seconds
-        props.last_photons = job.result.stats["photons_emitted"]
+        record_run(props, job)
         props.progress = 1.0
         show_image(context, image)
         for warning in read.warnings + job.result.warnings:

@@ -1,4 +1,5 @@
-"""Scene.caustic turned into the engine's RenderSettings."""
+"""Scene.caustic turned into the engine's RenderSettings, and a finished
+run's figures written back into it."""
 
 import os
 
@@ -14,7 +15,9 @@ def render_settings(props, spp: int | None = None) -> RenderSettings:
         photons=props.photons,
         emission=props.emission.lower(),
         energy=props.energy,
-        map_scale=None if props.use_auto_map_scale else props.map_scale,
+        # the engine's map scale is in millimetres of world space; Blender
+        # stores lengths in scene units, whatever the unit scale shows
+        map_scale=None if props.use_auto_map_scale else props.map_scale * 1000.0,
         density=props.density.lower(),
         beam_refinement=props.beam_refinement,
         max_depth=props.max_depth,
@@ -22,3 +25,10 @@ def render_settings(props, spp: int | None = None) -> RenderSettings:
         spp=props.spp if spp is None else spp,
         threads=max(1, os.cpu_count() or 1),
     )
+
+
+def record_run(props, job) -> None:
+    """Show the finished `job`'s time and lamp rays in Scene.caustic `props`."""
+    props.last_seconds = job.seconds
+    props.last_photons = job.result.stats["photons_emitted"]
+    props.last_refined = job.result.stats["paths_refined"]

@@ -39,6 +39,8 @@ class CAUSTIC_PT_render(_CausticPanel, bpy.types.Panel):
         col = layout.column(align=True)
         col.label(text=f"Last render: {props.last_seconds:.1f} s")
         col.label(text=f"Lamp rays traced: {props.last_photons:,}")
+        if props.last_refined:
+            col.label(text=f"  of which refinement added {props.last_refined:,}")
         row = layout.row(align=True)
         row.operator("caustic.bake", icon='TEXTURE')
         row.operator("caustic.unbake", text="", icon='X')
@@ -77,17 +79,28 @@ class CAUSTIC_PT_eye(_CausticPanel, bpy.types.Panel):
         layout.use_property_decorate = False
         layout.prop(scene.caustic, "spp")
         layout.prop(scene.caustic, "ambient")
+
+
+class CAUSTIC_PT_camera(_CausticPanel, bpy.types.Panel):
+    bl_label = "Camera"
+    bl_parent_id = "CAUSTIC_PT_eye"
+    bl_description = ("The scene's resolution and the active camera's field of view, as the Output and Camera "
+                      "properties show them. In the paper's words, Resolution X and Y are pixx and pixy and "
+                      "Field of View is FOV; its screen size S, the width of the image plane, does not change "
+                      "a pinhole camera's image, so it has no setting")
+
+    def draw(self, context):
+        layout, scene = self.layout, context.scene
+        layout.use_property_split = True
+        layout.use_property_decorate = False
         col = layout.column(align=True)
-        col.prop(scene.render, "resolution_x", text="pixx")
-        col.prop(scene.render, "resolution_y", text="pixy")
+        col.prop(scene.render, "resolution_x", text="Resolution X")
+        col.prop(scene.render, "resolution_y", text="Y")
         col.prop(scene.render, "resolution_percentage", text="%")
-        if scene.camera is not None and scene.camera.type == 'CAMERA':
-            camera = scene.camera.data
-            if camera.type == 'PERSP':
-                layout.prop(camera, "angle", text="FOV")
-            layout.label(text="The paper's screen size S does not change a pinhole image", icon='INFO')
-        else:
+        if scene.camera is None or scene.camera.type != 'CAMERA':
             layout.label(text="No active camera", icon='ERROR')
+        elif scene.camera.data.type == 'PERSP':
+            layout.prop(scene.camera.data, "angle")
 
 
 class CAUSTIC_PT_object(_CausticPanel, bpy.types.Panel):

@@ -9,7 +9,8 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProp
 class CausticSceneSettings(bpy.types.PropertyGroup):
     photons: IntProperty(
         name="Lamp Rays",
-        description="Photons traced from each lamp, the paper's \"number of lamp rays\" (it used 40,000). "
+        description="Rays traced from the lamps, in all, the paper's \"number of lamp rays\" (it used "
+                    "40,000); the lamps share them by the light each sends toward the glass and mirrors. "
                     "More rays give smoother caustics and take longer",
         default=40_000, min=0, soft_max=20_000_000)
     emission: EnumProperty(
@@ -29,10 +30,11 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
         description="Size the illumination maps' cells from each receiver, with no tuning",
         default=True)
     map_scale: FloatProperty(
-        name="Map Scale (mm)",
-        description="Edge of one illumination-map cell, in millimetres of world space, the paper's \"map scale\" "
-                    "(it compared 5 and 40). Larger cells give smoother, blurrier caustics",
-        default=5.0, min=0.001, soft_max=100.0)
+        name="Map Scale",
+        description="Edge of one illumination-map cell, the paper's \"map scale\" (it compared 5 and 40 mm). "
+                    "Larger cells give smoother, blurrier caustics",
+        subtype='DISTANCE', unit='LENGTH', default=0.005, min=1e-6, soft_min=1e-4, soft_max=0.1,
+        step=0.1, precision=4)
     density: EnumProperty(
         name="Density",
         description="How stored lamp rays become irradiance on a receiver",
@@ -80,7 +82,11 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
     last_seconds: FloatProperty(
         name="Render Time", description="Seconds the last caustic render took", default=0.0, min=0.0)
     last_photons: IntProperty(
-        name="Lamp Rays Traced", description="Lamp rays the last caustic render traced, all lamps", default=0, min=0)
+        name="Lamp Rays Traced", description="Lamp rays the last caustic render traced, all lamps, with those "
+                                             "beam refinement added", default=0, min=0)
+    last_refined: IntProperty(
+        name="Added by Refinement", description="Lamp rays beam refinement added in the last caustic render, "
+                                                "where neighbouring rays part ways", default=0, min=0)
     cycles_seconds: FloatProperty(
         name="Cycles Time", description="Seconds the last Cycles reference render took", default=0.0, min=0.0)
     cycles_relative_l2: FloatProperty(

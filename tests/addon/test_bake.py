@@ -11,7 +11,7 @@ import blender_scenes as scenes
 from snapshot import material_state, snapshot_file
 from test_render import cycles_render
 
-RESULT_FIELDS = {"last_seconds", "last_photons"}
+RESULT_FIELDS = {"last_seconds", "last_photons", "last_refined"}
 
 
 def test_bake_adds_one_node_group_and_unbake_restores_the_material():
@@ -114,3 +114,28 @@ def test_baked_caustic_renders_like_the_caustic_pass(addon, tmp_path, floor_kind
           f"7x7 without the central 3x3 {ratio_around:.4f}")
     assert abs(ratio - 1.0) < 0.15
     assert abs(ratio_around - 1.0) < 0.03
+
+
+def baked_map_size(scale_length, map_scale_text):
+    """The baked map's (width, height) in cells of the ball-lens scene built
+    in units of `scale_length` metres, with Map Scale typed as
+    `map_scale_text` (Blender stores what is typed in scene units)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    parts = scenes.ball_lens_scene(16, 12, photons=5_000, segments=16, rings=8)
+    scene = bpy.context.scene
+    scene.unit_settings.scale_length = scale_length
+    for ob in parts.values():
+        ob.location *= 1.0 / scale_length
+        ob.scale *= 1.0 / scale_length
+    scene.caustic.use_auto_map_scale = False
+    scene.caustic.map_scale = bpy.utils.units.to_value('METRIC', 'LENGTH', map_scale_text) / scale_length
+    assert bpy.ops.caustic.bake() == {'FINISHED'}
+    return tuple(bpy.data.images["Caustic Map Floor"].size)
+
+
+def test_map_scale_is_a_length_that_follows_the_unit_scale():
+    in_metres = baked_map_size(1.0, "20 mm")
+    # the 6 m floor in cells of 20 mm
+    assert in_metres == (300, 300)
+    assert baked_map_size(0.01, "20 mm") == in_metres
+    assert baked_map_size(0.01, "2 cm") == in_metres

@@ -92,7 +92,7 @@ def test_open_glass_mesh_renders_with_a_warning(reports):
     for kind in after:
         if kind not in ("images", "scenes"):
             assert after[kind] == before[kind], kind
-    result_fields = {"last_seconds", "last_photons", "progress"}
+    result_fields = {"last_seconds", "last_photons", "last_refined", "progress"}
     caustic_before = {k: v for k, v in before["scenes"]["Scene"]["caustic"].items() if k not in result_fields}
     caustic_after = {k: v for k, v in after["scenes"]["Scene"]["caustic"].items() if k not in result_fields}
     assert caustic_after == caustic_before
