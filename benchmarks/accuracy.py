@@ -57,7 +57,7 @@ def run_engine(name: str, fields: dict, photon_counts: list[int], truth) -> list
     the_scene = ball_lens.scene()
     points = []
     for photons in photon_counts:
-        settings = RenderSettings(photons=photons, spp=SPP, **fields)
+        settings = RenderSettings(lamp_rays=photons, spp=SPP, **fields)
         runs = []
         for _ in range(REPEATS):
             start = time.perf_counter()
@@ -65,7 +65,7 @@ def run_engine(name: str, fields: dict, photon_counts: list[int], truth) -> list
             runs.append((time.perf_counter() - start, result))
         seconds, result = min(runs, key=lambda run: run[0])
         error = truth.error(result.passes["caustic"])
-        points.append(dict(photons=photons, paths=result.stats["photons_emitted"], seconds=seconds, error=error,
+        points.append(dict(lamp_rays=photons, paths=result.stats["lamp_rays"], seconds=seconds, error=error,
                            stages={k: round(v, 3) for k, v in result.stats["seconds"].items()}))
         print(f"{name:18s} {photons:>11,d} photons {seconds:7.2f} s  error {100 * error:6.2f}%", flush=True)
     return points

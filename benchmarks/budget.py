@@ -44,7 +44,7 @@ sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve
 
 import ball_lens  # noqa: E402
 from caustic_addon import RenderSettings, render  # noqa: E402
-from caustic_addon.accel import Accelerator  # noqa: E402
+from caustic_addon.tracing.accelerator import Accelerator  # noqa: E402
 from embreex import rtcore_scene  # noqa: E402
 from embreex.mesh_construction import TriangleMesh  # noqa: E402
 from skips import patched  # noqa: E402
@@ -150,7 +150,7 @@ def main() -> None:
 
     scene = ball_lens.scene()
     lamp_rays = lamp_rays_for(0.05)
-    settings = {threads: RenderSettings(photons=lamp_rays, spp=1, density="beam", threads=threads)
+    settings = {threads: RenderSettings(lamp_rays=lamp_rays, spp=1, density="beam", threads=threads)
                 for threads in (1, 2)}
     renders = {threads: timed_render(scene, s, args.repeats) for threads, s in settings.items()}
     upload, build = upload_and_build(scene, args.repeats)

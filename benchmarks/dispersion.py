@@ -33,7 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from caustic_addon import (Camera, Dielectric, Diffuse, Object, RenderSettings, Scene, SunLight,  # noqa: E402
                            render, shapes)
-from caustic_addon.image_io import write_image  # noqa: E402
+from caustic_addon.cli.image_io import write_image  # noqa: E402
 import slab  # noqa: E402
 from speed import benchmark_scene, machine  # noqa: E402
 
@@ -56,7 +56,7 @@ def cost(repeats: int) -> dict:
             scene = benchmark_scene()
             scene.camera.pixx, scene.camera.pixy = 320, 240
             scene.objects[1].material.abbe = abbe
-            settings = RenderSettings(photons=photons, density=density, spp=1)
+            settings = RenderSettings(lamp_rays=photons, density=density, spp=1)
             out[f"{density}, abbe {abbe}"] = best_seconds(scene, settings, repeats)
     return out
 
@@ -78,7 +78,7 @@ def white_point() -> dict:
         return Scene([Object("Floor", shapes.plane(8.0), Diffuse(albedo=1.0)),
                       Object("Glass", shapes.uv_sphere(1.0, (0, 0, 1.5), 128, 64), Dielectric(1.5, abbe=abbe))],
                      [SunLight((0, 0, -1), 1000.0)], top_camera(2.0, 8))
-    settings = RenderSettings(photons=1_000_000, spp=1, density="adaptive")
+    settings = RenderSettings(lamp_rays=1_000_000, spp=1, density="adaptive")
     plain = np.array(render(ball(math.inf), settings).stats["flux_landed_w"])
     spectral = np.array(render(ball(1e12), settings).stats["flux_landed_w"])
     return {"flux_landed_plain_w": plain.round(4).tolist(), "flux_landed_spectral_w": spectral.round(4).tolist(),
@@ -93,7 +93,7 @@ def picture() -> str:
                    Object("Glass", shapes.uv_sphere(1.0, (0, 0, 1.45), 256, 128), Dielectric(1.5, abbe=15.0))],
                   [SunLight((0, 0, -1), 1000.0)],
                   Camera.look_at((0, -2.2, 1.0), (0, 0, 0), pixx=480, pixy=270, fov=math.radians(12.0)))
-    result = render(scene, RenderSettings(photons=4_000_000, spp=4, k_nearest=256, density="adaptive"))
+    result = render(scene, RenderSettings(lamp_rays=4_000_000, spp=4, k_nearest=256, density="adaptive"))
     caustic = result.passes["caustic"]
     image = np.ones(caustic.shape[:2] + (4,), dtype=np.float32)
     luminance = caustic @ np.array([0.2126, 0.7152, 0.0722])

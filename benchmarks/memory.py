@@ -48,17 +48,17 @@ def peak_rss_mb() -> float:
 def measure(photons: int) -> dict:
     """One render in this process; what it cost."""
     scene = ball_lens_scene()
-    settings = RenderSettings(photons=photons, spp=1, density="adaptive")
+    settings = RenderSettings(lamp_rays=photons, spp=1, density="adaptive")
     before = peak_rss_mb()
     start = time.perf_counter()
     result = render(scene, settings)
     seconds = time.perf_counter() - start
     return {
-        "photons": result.stats["photons_emitted"],
-        "landed": result.stats["photons_landed"],
+        "photons": result.stats["lamp_rays"],
+        "landed": result.stats["landed"],
         "chunk_size": settings.chunk_size,
         "seconds": seconds,
-        "photons_per_second": result.stats["photons_emitted"] / seconds,
+        "photons_per_second": result.stats["lamp_rays"] / seconds,
         "peak_rss_mb_before": before,
         "peak_rss_mb": peak_rss_mb(),
     }

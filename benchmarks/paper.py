@@ -35,7 +35,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 import paper_scenes as ps  # noqa: E402
 from caustic_addon import Dielectric, Object, RenderSettings, render, shapes  # noqa: E402
-from caustic_addon.emission import Sphere  # noqa: E402
+from caustic_addon.emission.targets import Sphere  # noqa: E402
 from speed import machine  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
@@ -115,7 +115,7 @@ def shape_sweeps(photons: int, heights: tuple[float, ...]) -> dict[tuple, dict]:
     shots = {}
     for shape, ior, height in sorted(cases):
         scene = ps.paper_scene(shape, ior, height)
-        settings = ps.splat_settings(scene, ps.SHAPE_MAP_SCALE, photons=photons, energy=ENERGY)
+        settings = ps.splat_settings(scene, ps.SHAPE_MAP_SCALE, lamp_rays=photons, energy=ENERGY)
         shots[shape, ior, height] = shot(scene, settings) | {"scene": scene}
         print(f"  {shape:7s} n = {ior:<4} height {height:4.2f} m: {caption(shots[shape, ior, height]['caustic'])}",
               flush=True)
@@ -182,8 +182,8 @@ def photon_sweep(counts: tuple[int, ...]) -> dict:
     patch = ps.flat_patch(flat_scene)
     rows, lenses, slabs = [], [], []
     for count in counts:
-        lens = shot(round_scene, ps.splat_settings(round_scene, 5.0, photons=count, energy=ENERGY))
-        slab = shot(flat_scene, ps.splat_settings(flat_scene, 5.0, photons=count, energy=ENERGY), patch)
+        lens = shot(round_scene, ps.splat_settings(round_scene, 5.0, lamp_rays=count, energy=ENERGY))
+        slab = shot(flat_scene, ps.splat_settings(flat_scene, 5.0, lamp_rays=count, energy=ENERGY), patch)
         rows.append(record({"photons": count}, lens, noise_flat=slab["noise"], seconds_flat=rounded(slab["seconds"])))
         lenses.append(lens)
         slabs.append(slab)
@@ -208,7 +208,7 @@ def energy_sweep(photons: int) -> dict:
         images.append([])
         captions.append([])
         for energy in (low, high):
-            result = render(scene, ps.splat_settings(scene, 5.0, photons=photons, energy=energy))
+            result = render(scene, ps.splat_settings(scene, 5.0, lamp_rays=photons, energy=energy))
             caustic = ps.measure(result.maps["Floor"], scene, energy)
             flux[shape, energy] = result.maps["Floor"].flux
             rows.append({"shape": shape, "energy": energy, **caustic.as_dict(),
@@ -232,8 +232,8 @@ def map_scale_sweep(counts: tuple[int, ...]) -> dict:
     scales = ps.PAPER_SWEEPS["map_scale"]
     rows, images, captions = [], [], []
     for count in counts:
-        lenses = [shot(round_scene, ps.splat_settings(round_scene, mm, photons=count, energy=ENERGY)) for mm in scales]
-        slabs = [shot(flat_scene, ps.splat_settings(flat_scene, mm, photons=count, energy=ENERGY), patch)
+        lenses = [shot(round_scene, ps.splat_settings(round_scene, mm, lamp_rays=count, energy=ENERGY)) for mm in scales]
+        slabs = [shot(flat_scene, ps.splat_settings(flat_scene, mm, lamp_rays=count, energy=ENERGY), patch)
                  for mm in scales]
         for mm, lens, slab in zip(scales, lenses, slabs):
             rows.append(record({"photons": count, "map_scale_mm": mm}, lens, noise_flat=slab["noise"]))
@@ -261,10 +261,10 @@ def complexity(sizes: tuple[int, ...], photons: int, repeats: int) -> dict:
     rows = []
     for size in sizes:
         scene = complexity_scene(size)
-        runs = [render(scene, RenderSettings(photons=photons, spp=1, energy=ENERGY, density="adaptive")).stats for _ in range(repeats)]
+        runs = [render(scene, RenderSettings(lamp_rays=photons, spp=1, energy=ENERGY, density="adaptive")).stats for _ in range(repeats)]
         best = {stage: min(r["seconds"][stage] for r in runs) for stage in ("bvh", "photons", "eye")}
         rows.append({"triangles": len(scene.objects[1].mesh.triangles), **best, "total": sum(best.values()),
-                     "rays_photon_pass": runs[0]["rays_photon_pass"], "rays_eye_pass": runs[0]["rays_eye_pass"]})
+                     "rays_lamp_pass": runs[0]["rays_lamp_pass"], "rays_eye_pass": runs[0]["rays_eye_pass"]})
         print(f"  {rows[-1]['triangles']:>9,} triangles: " + ", ".join(f"{k} {best[k]:.3f} s" for k in best),
               flush=True)
     n = [r["triangles"] for r in rows]

@@ -18,29 +18,29 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from caustic_addon import Camera, Dielectric, Diffuse, Mesh, Object, PointLight, RenderSettings, Scene, shapes
-from caustic_addon.illumination_map import IlluminationMap
+from caustic_addon import Camera, Dielectric, Diffuse, Mesh, Object, PointLight, RenderSettings, Scene, paper, shapes
+from caustic_addon.maps.illumination_map import IlluminationMap
 import reference
 
-SHAPES = shapes.PAPER_SHAPES
-INDICES = shapes.PAPER_INDICES
+SHAPES = paper.SHAPES
+INDICES = paper.INDICES
 GLASS_IOR = 1.5
-RADIUS = shapes.PAPER_RADIUS
-CYLINDER_HEIGHT = shapes.PAPER_CYLINDER_HEIGHT
-CONE_HEIGHT = shapes.PAPER_CONE_HEIGHT
-GAP = shapes.PAPER_GAP
-RAISED = shapes.PAPER_RAISED
-FLOOR_SIZE = shapes.PAPER_FLOOR_SIZE
+RADIUS = paper.RADIUS
+CYLINDER_HEIGHT = paper.CYLINDER_HEIGHT
+CONE_HEIGHT = paper.CONE_HEIGHT
+GAP = paper.GAP
+RAISED = paper.RAISED
+FLOOR_SIZE = paper.FLOOR_SIZE
 # m: enough for the caustics of resting objects, for the 5 mm maps
 RESTING_FLOOR = 8.0
 # mm: the cells the shape and height sweeps measure on, over FLOOR_SIZE
 SHAPE_MAP_SCALE = 10.0
-FLOOR_ALBEDO = shapes.PAPER_FLOOR_ALBEDO
-LAMP_POSITION = shapes.PAPER_LAMP_POSITION
-LAMP_POWER = shapes.PAPER_LAMP_POWER
-EYE = shapes.PAPER_EYE
-TARGET = shapes.PAPER_TARGET
-FOV = shapes.PAPER_FOV
+FLOOR_ALBEDO = paper.FLOOR_ALBEDO
+LAMP_POSITION = paper.LAMP_POSITION
+LAMP_POWER = paper.LAMP_POWER
+EYE = paper.EYE
+TARGET = paper.TARGET
+FOV = paper.FOV
 GALLERY_PIXELS = (320, 240)
 
 # The paper's experiments: the values each table varies, and the defaults
@@ -71,7 +71,7 @@ def paper_scene(shape: str, ior: float = GLASS_IOR, height: float = 0.0, pixels:
     `floor` m square, lit by a LAMP_POWER W point lamp."""
     return Scene(
         objects=[Object("Floor", shapes.plane(floor), Diffuse(albedo=FLOOR_ALBEDO)),
-                 Object("Glass", shapes.paper_glass(shape, height), Dielectric(ior))],
+                 Object("Glass", paper.glass(shape, height), Dielectric(ior))],
         lights=[PointLight(LAMP_POSITION, LAMP_POWER)],
         camera=paper_camera(*pixels),
     )

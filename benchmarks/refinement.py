@@ -43,7 +43,7 @@ def gem_caustic(photons: int, levels: int):
     """(irradiance (n,) over a 300x300 grid of 1 cm boxes on the floor, result)."""
     ticks = np.linspace(-1.5, 1.5, 300)
     xy = np.stack(np.meshgrid(ticks, ticks), axis=-1).reshape(-1, 2)
-    result = render(facetted_gem(), RenderSettings(photons=photons, spp=1, density="beam", map_scale=10.0,
+    result = render(facetted_gem(), RenderSettings(lamp_rays=photons, spp=1, density="beam", map_scale=10.0,
                                                    beam_refinement=levels))
     return result.maps["Floor"].mean_over(xy - 0.005, xy + 0.005)[:, 0], result
 
@@ -55,16 +55,16 @@ def main() -> None:
     for levels in LEVELS:
         for grid in GRIDS:
             start = time.perf_counter()
-            lens = render(ball_lens.scene(), RenderSettings(photons=grid, spp=1, density="beam",
+            lens = render(ball_lens.scene(), RenderSettings(lamp_rays=grid, spp=1, density="beam",
                                                             beam_refinement=levels))
             lens_seconds = time.perf_counter() - start
             start = time.perf_counter()
             gem, gem_result = gem_caustic(grid, levels)
             gem_seconds = time.perf_counter() - start
             row = dict(levels=levels, grid=grid,
-                       ball_lens=dict(paths=lens.stats["photons_emitted"], seconds=round(lens_seconds, 3),
+                       ball_lens=dict(paths=lens.stats["lamp_rays"], seconds=round(lens_seconds, 3),
                                       error=truth.error(lens.passes["caustic"])),
-                       gem=dict(paths=gem_result.stats["photons_emitted"], seconds=round(gem_seconds, 3),
+                       gem=dict(paths=gem_result.stats["lamp_rays"], seconds=round(gem_seconds, 3),
                                 error=float(np.linalg.norm(gem - gem_reference) / np.linalg.norm(gem_reference))))
             rows.append(row)
             print(f"refinement {levels}  grid {grid:>6,d}   ball lens {row['ball_lens']['paths']:>7,d} paths "

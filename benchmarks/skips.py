@@ -38,8 +38,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import ball_lens  # noqa: E402
 from caustic_addon import (Camera, Dielectric, Diffuse, MapCache, Object, PointLight, RenderSettings,  # noqa: E402
                            Scene, SpotLight, emission, eye_pass, lighting, render, shapes, transport)
-from caustic_addon.accel import Accelerator  # noqa: E402
-from caustic_addon.optics import dot  # noqa: E402
+from caustic_addon.tracing.accelerator import Accelerator  # noqa: E402
+from caustic_addon.util.vectors import dot  # noqa: E402
 from speed import machine  # noqa: E402
 
 # the module; the package's `render` is its function
@@ -72,7 +72,7 @@ def timed(scene: Scene, settings: RenderSettings, repeats: int, cache: MapCache 
 
 
 def rays(result) -> int:
-    return int(result.stats["rays_photon_pass"] + result.stats["rays_eye_pass"])
+    return int(result.stats["rays_lamp_pass"] + result.stats["rays_eye_pass"])
 
 
 def row(name: str, scene_text: str, disabled_text: str, stage: str, on, off, effect: str = "",
@@ -119,7 +119,7 @@ class Quality:
     def __init__(self):
         scene = ball_scene()
         self.region = ball_lens.pixel_reference(scene, supersample=2, bins=2000).region
-        self.reference = render(scene, RenderSettings(photons=self.REFERENCE_PHOTONS, **SPLAT))
+        self.reference = render(scene, RenderSettings(lamp_rays=self.REFERENCE_PHOTONS, **SPLAT))
 
     def noise(self, result) -> float:
         return caustic_noise(result, self.reference, self.region)
@@ -135,7 +135,7 @@ def lamps_out_of_view(repeats: int, quality: Quality) -> list[dict]:
     keep_all = partial(patched, emission, "visible_targets", lambda light, targets: list(targets))
     alone = ball_scene()
     alone.lights = [spot]
-    settings = RenderSettings(photons=1_000_000, **SPLAT)
+    settings = RenderSettings(lamp_rays=1_000_000, **SPLAT)
     on = timed(alone, settings, repeats)
     with keep_all():
         off = timed(alone, settings, repeats)
@@ -145,17 +145,17 @@ def lamps_out_of_view(repeats: int, quality: Quality) -> list[dict]:
 
     both = ball_scene([spot])
     photons = 200_000
-    on = timed(both, RenderSettings(photons=photons, **SPLAT), repeats)
+    on = timed(both, RenderSettings(lamp_rays=photons, **SPLAT), repeats)
     with keep_all():
-        probe = render(both, RenderSettings(photons=photons, **SPLAT))
-        count = int(round(photons * on[1].stats["photons_landed"] / probe.stats["photons_landed"], -4))
-        off = timed(both, RenderSettings(photons=count, **SPLAT), repeats)
-    landed = (on[1].stats["photons_landed"], off[1].stats["photons_landed"])
+        probe = render(both, RenderSettings(lamp_rays=photons, **SPLAT))
+        count = int(round(photons * on[1].stats["landed"] / probe.stats["landed"], -4))
+        off = timed(both, RenderSettings(lamp_rays=count, **SPLAT), repeats)
+    landed = (on[1].stats["landed"], off[1].stats["landed"])
     out.append(row("no photons from a lamp that sees no glass", f"ball lens, its point lamp and the spot lamp; "
                    f"{photons:,} photons", f"`visible_targets` keeps every glass; {count:,} photons land as many",
                    "photons", on, off, f"landed {landed[0]:,} vs {landed[1]:,}; caustic noise "
                    f"{100 * quality.noise(on[1]):.1f}% vs {100 * quality.noise(off[1]):.1f}%",
-                   photons_without=count, photons_landed_with=landed[0], photons_landed_without=landed[1]))
+                   photons_without=count, landed_with=landed[0], landed_without=landed[1]))
     return out
 
 
@@ -165,21 +165,21 @@ def targeted_emission(repeats: int, quality: Quality) -> list[dict]:
     photons as it needs to land as many on the floor (equal noise)."""
     scene = ball_scene()
     photons = 100_000
-    on = timed(scene, RenderSettings(photons=photons, **SPLAT), repeats)
+    on = timed(scene, RenderSettings(lamp_rays=photons, **SPLAT), repeats)
     out = []
-    landed = on[1].stats["photons_landed"]
+    landed = on[1].stats["landed"]
     sphere_counts = {"equal photon count": photons}
-    probe = render(scene, RenderSettings(photons=photons, emission="sphere", **SPLAT))
-    sphere_counts["as many landed"] = int(round(photons * landed / probe.stats["photons_landed"], -4))
+    probe = render(scene, RenderSettings(lamp_rays=photons, emission="sphere", **SPLAT))
+    sphere_counts["as many landed"] = int(round(photons * landed / probe.stats["landed"], -4))
     for label, count in sphere_counts.items():
-        off = timed(scene, RenderSettings(photons=count, emission="sphere", **SPLAT), repeats)
-        effect = (f"landed {landed:,} vs {off[1].stats['photons_landed']:,}; "
+        off = timed(scene, RenderSettings(lamp_rays=count, emission="sphere", **SPLAT), repeats)
+        effect = (f"landed {landed:,} vs {off[1].stats['landed']:,}; "
                   f"caustic noise {100 * quality.noise(on[1]):.1f}% vs {100 * quality.noise(off[1]):.1f}%")
         out.append(row("photons only toward the glass", f"ball lens, {photons:,} photons",
                        f"`emission='sphere'` (the paper's eq. 1), {label}: {count:,} photons", "photons", on, off,
                        effect, equal_quality=label != "equal photon count",
-                       sphere_photons=count, photons_landed_with=landed,
-                       photons_landed_without=off[1].stats["photons_landed"]))
+                       sphere_photons=count, landed_with=landed,
+                       landed_without=off[1].stats["landed"]))
     return out
 
 
@@ -200,7 +200,7 @@ def direct_radiance_shadowing_all(accel, lights, energy, points, shading, facing
 def shadow_rays_behind(repeats: int) -> dict:
     """A second lamp under the floor: every floor point faces away from it."""
     scene = ball_scene([PointLight((0.0, 0.0, -2.0), 1000.0)])
-    settings = RenderSettings(photons=20_000, spp=4, density="adaptive")
+    settings = RenderSettings(lamp_rays=20_000, spp=4, density="adaptive")
     on = timed(scene, settings, repeats)
     with patched(eye_pass, "direct_radiance", direct_radiance_shadowing_all):
         off = timed(scene, settings, repeats)
@@ -227,7 +227,7 @@ def shade_opaque_and_reflect(self, rays, hits):
 
 def no_recursion_at_diffuse(repeats: int) -> dict:
     scene = ball_scene()
-    settings = RenderSettings(photons=20_000, spp=4, density="adaptive")
+    settings = RenderSettings(lamp_rays=20_000, spp=4, density="adaptive")
     on = timed(scene, settings, repeats)
     with patched(eye_pass.EyePass, "_shade_opaque", shade_opaque_and_reflect):
         off = timed(scene, settings, repeats)
@@ -240,11 +240,11 @@ def russian_roulette(repeats: int) -> dict:
     of a photon's flux, and below 5% of its start a photon plays Russian
     roulette. Unbiased: the landed flux agrees within its noise."""
     scene = Scene(
-        objects=[Object("Floor", shapes.plane(shapes.PAPER_FLOOR_SIZE), Diffuse(albedo=0.8)),
-                 Object("Gem", shapes.paper_glass("pointed"), Dielectric(2.41, color=(0.3, 0.3, 0.3)))],
-        lights=[PointLight(shapes.PAPER_LAMP_POSITION, 100.0)],
-        camera=Camera.from_paper(shapes.PAPER_FOV, *PIXELS, 1.0, shapes.PAPER_EYE, shapes.PAPER_TARGET))
-    settings = RenderSettings(photons=500_000, spp=1, density="adaptive")
+        objects=[Object("Floor", shapes.plane(paper.FLOOR_SIZE), Diffuse(albedo=0.8)),
+                 Object("Gem", paper.glass("pointed"), Dielectric(2.41, color=(0.3, 0.3, 0.3)))],
+        lights=[PointLight(paper.LAMP_POSITION, 100.0)],
+        camera=Camera.from_paper(paper.FOV, *PIXELS, 1.0, paper.EYE, paper.TARGET))
+    settings = RenderSettings(lamp_rays=500_000, spp=1, density="adaptive")
     on = timed(scene, settings, repeats)
     with patched(transport, "_roulette", lambda flux, start, xi: (flux, flux.max(axis=1) > 0.0)):
         off = timed(scene, settings, repeats)
@@ -272,7 +272,7 @@ def one_embree_scene(repeats: int) -> dict:
             accel.rays_cast += own.rays_cast
             own.close()
 
-    settings = RenderSettings(photons=100_000, spp=1, density="adaptive")
+    settings = RenderSettings(lamp_rays=100_000, spp=1, density="adaptive")
     on = timed(scene, settings, repeats)
     with patched(render_module, "eye_pass", eye_pass_own_bvh):
         off = timed(scene, settings, repeats)
@@ -286,12 +286,12 @@ def map_cache(repeats: int) -> dict:
     moved = ball_scene()
     moved.camera = Camera.look_at((2.0, -4.5, 3.0), (0.0, 0.3, 0.0), pixx=PIXELS[0], pixy=PIXELS[1],
                                   fov=ball_lens.FOV)
-    settings = RenderSettings(photons=1_000_000, spp=1, density="adaptive")
+    settings = RenderSettings(lamp_rays=1_000_000, spp=1, density="adaptive")
     cache = MapCache()
     render(scene, settings, cache=cache)
     on = timed(moved, settings, repeats, cache=cache)
     off = timed(moved, settings, repeats)
-    assert on[1].stats["photon_pass_cached"] and not off[1].stats["photon_pass_cached"]
+    assert on[1].stats["maps_cached"] and not off[1].stats["maps_cached"]
     return row("illumination maps kept when only the camera moves", "ball lens, 1M photons, re-render after a "
                "camera move", "no cache: the photon pass again", "total", on, off, "same image")
 

@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from caustic_addon import Camera, Dielectric, Diffuse, Object, RenderSettings, Scene, SunLight, render, shapes
-from caustic_addon.optics import absorption_from_color
+from caustic_addon.optics.media import absorption_from_color
 
 THICKNESS, IOR, SUN = 0.2, 1.5, 1000.0
 COLOR = np.array([0.8, 0.5, 0.2])
@@ -43,7 +43,7 @@ def exact_irradiance() -> np.ndarray:
 def measured_irradiance(photons: int) -> np.ndarray:
     """(3,) W/m^2: the splat map's mean over the 2 x 2 m square under the
     slab's middle, from `photons` photons."""
-    result = render(scene(), RenderSettings(photons=photons, density="splat", map_scale=50.0, spp=1))
+    result = render(scene(), RenderSettings(lamp_rays=photons, density="splat", map_scale=50.0, spp=1))
     floor = result.maps["Floor"]
     h, w = floor.shape
     cols, rows = np.meshgrid(np.arange(w), np.arange(h))

@@ -27,8 +27,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from caustic_addon import (Camera, Dielectric, Diffuse, MapCache, Object, PointLight, Reflector,  # noqa: E402
                            RenderSettings, Scene, render, shapes)
-from caustic_addon.accel import Accelerator  # noqa: E402
-from caustic_addon.emission import Sphere, sample_cone  # noqa: E402
+from caustic_addon.tracing.accelerator import Accelerator  # noqa: E402
+from caustic_addon.emission.targets import Sphere  # noqa: E402
+from caustic_addon.sampling.warps import sample_cone  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -86,31 +87,31 @@ def main() -> None:
     # glass and mirror runs alternate, so a change in the machine's load hits both
     runs, mirror_runs = [], []
     for _ in range(args.repeats):
-        runs.append(render(scene, RenderSettings(photons=args.photons, spp=1, density="adaptive")).stats)
-        mirror_runs.append(render(benchmark_scene(Reflector(0.9)), RenderSettings(photons=args.photons, spp=1, density="adaptive")).stats)
+        runs.append(render(scene, RenderSettings(lamp_rays=args.photons, spp=1, density="adaptive")).stats)
+        mirror_runs.append(render(benchmark_scene(Reflector(0.9)), RenderSettings(lamp_rays=args.photons, spp=1, density="adaptive")).stats)
 
     # a camera move with the map cache: only the eye pass runs again
     cache = MapCache()
-    render(scene, RenderSettings(photons=args.photons, spp=1, density="adaptive"), cache=cache)
+    render(scene, RenderSettings(lamp_rays=args.photons, spp=1, density="adaptive"), cache=cache)
     scene.camera.matrix[0, 3] += 0.5
     clock = time.perf_counter()
-    render(scene, RenderSettings(photons=args.photons, spp=1, density="adaptive"), cache=cache)
+    render(scene, RenderSettings(lamp_rays=args.photons, spp=1, density="adaptive"), cache=cache)
     cached_rerender = time.perf_counter() - clock
-    photon = min(runs, key=lambda s: s["seconds"]["photons"])
+    photon = min(runs, key=lambda s: s["seconds"]["lamp_pass"])
     eye = min(runs, key=lambda s: s["seconds"]["eye"])
 
-    paths_per_s = photon["photons_emitted"] / photon["seconds"]["photons"]
-    photon_rays_per_s = photon["rays_photon_pass"] / photon["seconds"]["photons"]
+    paths_per_s = photon["lamp_rays"] / photon["seconds"]["lamp_pass"]
+    photon_rays_per_s = photon["rays_lamp_pass"] / photon["seconds"]["lamp_pass"]
     eye_rays_per_s = eye["rays_eye_pass"] / eye["seconds"]["eye"]
-    mirror = min(mirror_runs, key=lambda s: s["seconds"]["photons"])
-    mirror_rays_per_s = mirror["rays_photon_pass"] / mirror["seconds"]["photons"]
+    mirror = min(mirror_runs, key=lambda s: s["seconds"]["lamp_pass"])
+    mirror_rays_per_s = mirror["rays_lamp_pass"] / mirror["seconds"]["lamp_pass"]
     report = {
         "date": date.today().isoformat(),
         "machine": machine(),
         "scene": "smooth glass UV sphere, 65,536 triangles, over a floor; point lamp; 640x480, 1 spp",
         "raw_embree_rays_per_s": raw,
-        "photons": photon["photons_emitted"],
-        "photon_pass_s": photon["seconds"]["photons"],
+        "photons": photon["lamp_rays"],
+        "photon_pass_s": photon["seconds"]["lamp_pass"],
         "photon_paths_per_s": paths_per_s,
         "photon_pass_rays_per_s": photon_rays_per_s,
         "photon_pass_fraction_of_raw": photon_rays_per_s / raw,
@@ -118,11 +119,11 @@ def main() -> None:
         "eye_pass_rays": eye["rays_eye_pass"],
         "eye_pass_rays_per_s": eye_rays_per_s,
         "eye_pass_fraction_of_raw": eye_rays_per_s / raw,
-        "reflector_photon_pass_s": mirror["seconds"]["photons"],
-        "reflector_photon_paths_per_s": mirror["photons_emitted"] / mirror["seconds"]["photons"],
+        "reflector_photon_pass_s": mirror["seconds"]["lamp_pass"],
+        "reflector_photon_paths_per_s": mirror["lamp_rays"] / mirror["seconds"]["lamp_pass"],
         "reflector_photon_pass_rays_per_s": mirror_rays_per_s,
-        "reflector_rays_per_photon": mirror["rays_photon_pass"] / mirror["photons_emitted"],
-        "glass_rays_per_photon": photon["rays_photon_pass"] / photon["photons_emitted"],
+        "reflector_rays_per_photon": mirror["rays_lamp_pass"] / mirror["lamp_rays"],
+        "glass_rays_per_photon": photon["rays_lamp_pass"] / photon["lamp_rays"],
         "reflector_over_glass_rays_per_s": mirror_rays_per_s / photon_rays_per_s,
         "bvh_s": photon["seconds"]["bvh"],
         "rerender_after_camera_move_s": cached_rerender,
@@ -133,7 +134,7 @@ def main() -> None:
     print(f"raw embreex (2 threads)   {raw / 1e6:6.2f} M rays/s")
     print(f"photon pass               {paths_per_s / 1e6:6.2f} M paths/s, {photon_rays_per_s / 1e6:.2f} M rays/s "
           f"({100 * photon_rays_per_s / raw:.0f}% of raw), {photon['seconds']['photons']:.2f} s for "
-          f"{photon['photons_emitted']:,} photons")
+          f"{photon['lamp_rays']:,} photons")
     print(f"photon pass, mirror ball  {report['reflector_photon_paths_per_s'] / 1e6:6.2f} M paths/s, "
           f"{mirror_rays_per_s / 1e6:.2f} M rays/s ({100 * mirror_rays_per_s / photon_rays_per_s:.0f}% of the glass's "
           f"per ray; {report['reflector_rays_per_photon']:.2f} rays per photon against "

@@ -1,19 +1,28 @@
-"""Caustics through transparent meshes and off mirrors: a photon pass into illumination maps
-and a Whitted eye pass, on Embree. This package never imports bpy.
+"""Caustics through transparent meshes and off mirrors: a photon pass into
+illumination maps and a Whitted eye pass, on Embree. This package never
+imports bpy: a numpy scene goes in, float arrays come out.
 
     from caustic_addon import render, Scene, RenderSettings
-    result = render(scene, RenderSettings(photons=40_000))  # beams, the default
+    result = render(scene, RenderSettings(lamp_rays=40_000))  # beams, the default
     result.image  # (pixy, pixx, 4) float32, linear
+
+The stages, in the order data flows through them: scene (the model), tracing
+(Embree), emission (the lamps), passes (photons, beams, eye rays), maps (the
+illumination maps), renderer (all of it, in one call); beneath them util,
+sampling and optics; beside them cli, the command line.
 """
 
-from .cache import MapCache
 from .errors import Cancelled, SceneError
-from .illumination_map import PlaneChart, UVChart
-from .render import RenderResult, render
+from .maps.cache import MapCache
+from .maps.charts import ImageFrame
+from .maps.illumination_map import IlluminationMap
+from .optics.media import absorption_from_color, volume_absorption
+from .renderer import RenderResult, render
 from .scene import (Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector, RenderSettings, Scene,
-                    SpotLight, SunLight)
+                    SpotLight, SunLight, paper, shapes)
 
 __all__ = [
-    "Camera", "Cancelled", "Dielectric", "Diffuse", "MapCache", "Mesh", "Object", "PlaneChart", "PointLight", "Reflector", "RenderResult",
-    "RenderSettings", "Scene", "SceneError", "SpotLight", "SunLight", "UVChart", "render",
+    "Camera", "Cancelled", "Dielectric", "Diffuse", "IlluminationMap", "ImageFrame", "MapCache", "Mesh", "Object", "PointLight", "Reflector",
+    "RenderResult", "RenderSettings", "Scene", "SceneError", "SpotLight", "SunLight", "absorption_from_color",
+    "paper", "render", "shapes", "volume_absorption",
 ]

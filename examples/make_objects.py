@@ -13,7 +13,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
 from caustic_addon import shapes  # noqa: E402
-from caustic_addon.obj import write_obj  # noqa: E402
+from caustic_addon.cli.obj import write_obj# noqa: E402
 
 OBJECTS = {
     "round": ("sphere, radius 0.5 m, 64 segments x 32 rings", shapes.uv_sphere(0.5, (0.0, 0.0, 0.5), 64, 32)),

@@ -11,38 +11,29 @@ import bpy
 import numpy as np
 from mathutils import Matrix
 
-from ..caustic_addon import PlaneChart
+from ..caustic_addon import ImageFrame
 
 NODE_NAME = "Caustic Bake"
 # Custom property marking the node groups a bake made.
 TAG = "caustic_bake"
 
 
-def _chart_coordinates(nodes, links, imap, uv_layer: str):
-    """A Mapping node (type TEXTURE: out = R^T (p - location) / scale) that
-    turns the shading point into [0,1]^2 coordinates of the image of
-    illumination map `imap`: from the world position for a plane chart, from
-    the UV map for a UV chart."""
-    chart = imap.chart
-    h, w = imap.shape
-    extent = np.array([w * imap.cell, h * imap.cell, 1.0])
+def _chart_coordinates(nodes, links, frame: ImageFrame, uv_layer: str):
+    """A Mapping node that turns the shading point into the [0,1]^2
+    coordinates of the image that `frame` places: from the world position
+    or from the UV map `uv_layer`, as the frame says."""
     mapping = nodes.new('ShaderNodeMapping')
     mapping.vector_type = 'TEXTURE'
-    if isinstance(chart, PlaneChart):
+    if frame.coordinates == 'POSITION':
         source = nodes.new('ShaderNodeNewGeometry')
-        corner = chart.point + chart.origin[0] * chart.axis_x + chart.origin[1] * chart.axis_y
-        frame = Matrix(np.stack([chart.axis_x, chart.axis_y, chart.normal], axis=1).tolist())
-        mapping.inputs['Location'].default_value = corner.tolist()
-        mapping.inputs['Rotation'].default_value = frame.to_euler('XYZ')
         links.new(source.outputs['Position'], mapping.inputs['Vector'])
     else:
         source = nodes.new('ShaderNodeUVMap')
         source.uv_map = uv_layer
-        metres = chart.metres_per_uv
-        mapping.inputs['Location'].default_value = (chart.origin[0] / metres, chart.origin[1] / metres, 0.0)
-        extent[:2] /= metres
         links.new(source.outputs['UV'], mapping.inputs['Vector'])
-    mapping.inputs['Scale'].default_value = extent.tolist()
+    mapping.inputs['Location'].default_value = frame.location.tolist()
+    mapping.inputs['Rotation'].default_value = Matrix(frame.rotation.tolist()).to_euler('XYZ')
+    mapping.inputs['Scale'].default_value = frame.scale.tolist()
     return source, mapping
 
 
@@ -55,7 +46,7 @@ def make_group(name: str, image, imap, albedo: np.ndarray, uv_layer: str):
     group.interface.new_socket(name="Shader", in_out='OUTPUT', socket_type='NodeSocketShader')
     nodes, links = group.nodes, group.links
     inputs, outputs = nodes.new('NodeGroupInput'), nodes.new('NodeGroupOutput')
-    source, mapping = _chart_coordinates(nodes, links, imap, uv_layer)
+    source, mapping = _chart_coordinates(nodes, links, imap.image_frame(), uv_layer)
     texture = nodes.new('ShaderNodeTexImage')
     texture.image, texture.interpolation, texture.extension = image, 'Linear', 'CLIP'
     radiance = nodes.new('ShaderNodeVectorMath')

@@ -17,8 +17,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from ..caustic_addon import Dielectric, Diffuse, Reflector
-from ..caustic_addon.optics import absorption_from_color, volume_absorption
+from ..caustic_addon import Dielectric, Diffuse, Reflector, absorption_from_color, volume_absorption
 
 DEFAULT_ALBEDO = 0.8
 GLASS_NODES = {'ShaderNodeBsdfGlass', 'ShaderNodeBsdfRefraction'}

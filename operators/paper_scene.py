@@ -8,15 +8,14 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-from ..caustic_addon import shapes
-from ..caustic_addon.scene import Mesh
+from ..caustic_addon import Mesh, paper, shapes
 
 COLLECTION = "Paper scene"
 # key -> (label, IOR, description)
 INDICES = {
-    'WATER': ("Water", shapes.PAPER_INDICES["water"], "Water, n = 1.33"),
-    'ZIRCONIA': ("Cubic Zirconia", shapes.PAPER_INDICES["cubic zirconia"], "Cubic zirconia, n = 1.9"),
-    'DIAMOND': ("Diamond", shapes.PAPER_INDICES["diamond"], "Diamond, n = 2.41"),
+    'WATER': ("Water", paper.INDICES["water"], "Water, n = 1.33"),
+    'ZIRCONIA': ("Cubic Zirconia", paper.INDICES["cubic zirconia"], "Cubic zirconia, n = 1.9"),
+    'DIAMOND': ("Diamond", paper.INDICES["diamond"], "Diamond, n = 2.41"),
 }
 SHAPE_ITEMS = [
     ('ROUND', "Round Base", "A sphere (radius 0.5 m): the paper's table 1"),
@@ -103,22 +102,22 @@ class CAUSTIC_OT_add_paper_scene(bpy.types.Operator):
             collection.objects.link(ob)
             return ob
 
-        floor = add("Floor", _blender_mesh("Floor", shapes.plane(shapes.PAPER_FLOOR_SIZE), np.zeros(3)), cursor)
+        floor = add("Floor", _blender_mesh("Floor", shapes.plane(paper.FLOOR_SIZE), np.zeros(3)), cursor)
         floor.data.materials.append(_material("Paper Floor", 'ShaderNodeBsdfDiffuse',
-                                              Color=(*[shapes.PAPER_FLOOR_ALBEDO] * 3, 1.0)))
-        mesh = shapes.paper_glass(self.shape.lower(), shapes.PAPER_RAISED if self.raised else 0.0)
+                                              Color=(*[paper.FLOOR_ALBEDO] * 3, 1.0)))
+        mesh = paper.glass(self.shape.lower(), paper.RAISED if self.raised else 0.0)
         origin = np.array([0.0, 0.0, mesh.vertices[:, 2].min()])
         glass = add(self.shape.title(), _blender_mesh(self.shape.title(), mesh, origin), cursor + origin)
         glass.data.materials.append(_material(f"{label} {ior:g}", 'ShaderNodeBsdfGlass', IOR=ior, Roughness=0.0))
 
         light = bpy.data.lights.new("Lamp", 'POINT')
-        light.energy = shapes.PAPER_LAMP_POWER
+        light.energy = paper.LAMP_POWER
         light.shadow_soft_size = 0.0
-        add("Lamp", light, cursor + shapes.PAPER_LAMP_POSITION)
+        add("Lamp", light, cursor + paper.LAMP_POSITION)
         data = bpy.data.cameras.new("Camera")
-        data.sensor_fit, data.angle = 'HORIZONTAL', math.radians(shapes.PAPER_FOV)
-        camera = add("Camera", data, cursor + shapes.PAPER_EYE)
-        camera.rotation_euler = (Vector(shapes.PAPER_TARGET) - Vector(shapes.PAPER_EYE)).to_track_quat(
+        data.sensor_fit, data.angle = 'HORIZONTAL', math.radians(paper.FOV)
+        camera = add("Camera", data, cursor + paper.EYE)
+        camera.rotation_euler = (Vector(paper.TARGET) - Vector(paper.EYE)).to_track_quat(
             '-Z', 'Y').to_euler()
         if scene.camera is None:
             scene.camera = camera

@@ -127,5 +127,5 @@ class CAUSTIC_OT_render(bpy.types.Operator):
                 self.report({'ERROR'}, f"Rendered into \"{RESULT_IMAGE}\" but could not save it: {exc}")
                 return {'CANCELLED'}
         self.report({'INFO'}, f"Caustics rendered in {job.seconds:.1f} s from "
-                              f"{props.last_photons:,} lamp rays into \"{RESULT_IMAGE}\"")
+                              f"{props.last_lamp_rays:,} lamp rays into \"{RESULT_IMAGE}\"")
         return {'FINISHED'}

@@ -9,10 +9,10 @@ from .errors import InputError
 
 def render_settings(props, spp: int | None = None) -> RenderSettings:
     """The engine settings of Scene.caustic `props`; `spp` overrides its samples."""
-    if props.photons == 0:
+    if props.lamp_rays == 0:
         raise InputError("Lamp Rays is 0: the photon pass needs at least one lamp ray")
     return RenderSettings(
-        photons=props.photons,
+        lamp_rays=props.lamp_rays,
         emission=props.emission.lower(),
         energy=props.energy,
         # the engine's map scale is in millimetres of world space; Blender
@@ -30,5 +30,5 @@ def render_settings(props, spp: int | None = None) -> RenderSettings:
 def record_run(props, job) -> None:
     """Show the finished `job`'s time and lamp rays in Scene.caustic `props`."""
     props.last_seconds = job.seconds
-    props.last_photons = job.result.stats["photons_emitted"]
-    props.last_refined = job.result.stats["paths_refined"]
+    props.last_lamp_rays = job.result.stats["lamp_rays"]
+    props.last_refined = job.result.stats["lamp_rays_refined"]

@@ -38,7 +38,7 @@ class CAUSTIC_PT_render(_CausticPanel, bpy.types.Panel):
             layout.progress(factor=props.progress, type='BAR', text=f"{props.progress:.0%}  (Esc cancels)")
         col = layout.column(align=True)
         col.label(text=f"Last render: {props.last_seconds:.1f} s")
-        col.label(text=f"Lamp rays traced: {props.last_photons:,}")
+        col.label(text=f"Lamp rays traced: {props.last_lamp_rays:,}")
         if props.last_refined:
             col.label(text=f"  of which refinement added {props.last_refined:,}")
         row = layout.row(align=True)
@@ -55,7 +55,7 @@ class CAUSTIC_PT_photons(_CausticPanel, bpy.types.Panel):
         layout.menu(CAUSTIC_MT_presets.__name__, text="Presets", icon='PRESET')
         layout.use_property_split = True
         layout.use_property_decorate = False
-        layout.prop(props, "photons")
+        layout.prop(props, "lamp_rays")
         layout.prop(props, "emission")
         layout.prop(props, "energy")
         layout.prop(props, "use_auto_map_scale")

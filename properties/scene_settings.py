@@ -7,7 +7,7 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProp
 
 
 class CausticSceneSettings(bpy.types.PropertyGroup):
-    photons: IntProperty(
+    lamp_rays: IntProperty(
         name="Lamp Rays",
         description="Rays traced from the lamps, in all, the paper's \"number of lamp rays\" (it used "
                     "40,000); the lamps share them by the light each sends toward the glass and mirrors. "
@@ -81,7 +81,7 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
         default=0.0, min=0.0, max=1.0, subtype='FACTOR')
     last_seconds: FloatProperty(
         name="Render Time", description="Seconds the last caustic render took", default=0.0, min=0.0)
-    last_photons: IntProperty(
+    last_lamp_rays: IntProperty(
         name="Lamp Rays Traced", description="Lamp rays the last caustic render traced, all lamps, with those "
                                              "beam refinement added", default=0, min=0)
     last_refined: IntProperty(

@@ -134,7 +134,7 @@ def main():
         save(result, scene, args.out / "paper_caustics.exr")
         save(result, scene, args.out / "paper_caustics.png")
         props = scene.caustic
-        print(f"caustic render: {props.last_seconds:.2f} s, {props.last_photons:,} lamp rays")
+        print(f"caustic render: {props.last_seconds:.2f} s, {props.last_lamp_rays:,} lamp rays")
         if args.compare:
             save(bpy.data.images["Cycles Reference"], scene, args.out / "paper_cycles.png")
             save(side_by_side(result, bpy.data.images["Cycles Reference"]), scene,

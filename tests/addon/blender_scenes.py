@@ -85,7 +85,7 @@ def set_resolution(width, height):
     render.resolution_x, render.resolution_y, render.resolution_percentage = width, height, 100
 
 
-def ball_lens_scene(width=160, height=120, photons=100_000, segments=64, rings=32):
+def ball_lens_scene(width=160, height=120, lamp_rays=100_000, segments=64, rings=32):
     """The ball lens of the engine's reference, at half scale: a glass sphere
     (radius 0.5, IOR 1.5) centred 0.75 above a 6 m diffuse floor, lit by a
     point lamp straight above at 3 m, seen obliquely."""
@@ -95,12 +95,12 @@ def ball_lens_scene(width=160, height=120, photons=100_000, segments=64, rings=3
     lamp = add_point_light((0.0, 0.0, 3.0), 1000.0)
     camera = add_camera((0.0, -4.5, 3.5), target=(0.0, 0.3, 0.0))
     set_resolution(width, height)
-    scene.caustic.photons = photons
+    scene.caustic.lamp_rays = lamp_rays
     scene.caustic.density = 'ADAPTIVE'
     return dict(floor=floor, ball=ball, lamp=lamp, camera=camera)
 
 
-def ring_scene(width=64, height=48, photons=200_000):
+def ring_scene(width=64, height=48, lamp_rays=200_000):
     """A coffee cup without its coffee: an open Glossy ring (radius 0.5,
     height 0.3) on a 4 m diffuse floor, a 100 W point lamp inside it at
     (0.3, 0, 1), seen from above. The ring's nephroid caustic has its cusp at
@@ -116,7 +116,7 @@ def ring_scene(width=64, height=48, photons=200_000):
     lamp = add_point_light((0.3, 0.0, 1.0), 100.0)
     camera = add_camera((0.0, -0.6, 2.5), target=(0.0, 0.0, 0.0))
     set_resolution(width, height)
-    scene.caustic.photons = photons
+    scene.caustic.lamp_rays = lamp_rays
     scene.caustic.density = 'ADAPTIVE'
     return dict(floor=floor, ring=ring, lamp=lamp, camera=camera)
 

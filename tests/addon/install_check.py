@@ -26,7 +26,7 @@ installed = bpy.ops.extensions.package_install_files(filepath=sys.argv[1], repo=
                                                      enable_on_install=True)
 import embreex  # noqa: E402
 
-scenes.ball_lens_scene(32, 24, photons=20_000, segments=32, rings=16)
+scenes.ball_lens_scene(32, 24, lamp_rays=20_000, segments=32, rings=16)
 rendered = bpy.ops.caustic.render()
 image = bpy.data.images["Caustic Render"]
 print(json.dumps({

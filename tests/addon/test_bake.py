@@ -11,11 +11,11 @@ import blender_scenes as scenes
 from snapshot import material_state, snapshot_file
 from test_render import cycles_render
 
-RESULT_FIELDS = {"last_seconds", "last_photons", "last_refined"}
+RESULT_FIELDS = {"last_seconds", "last_lamp_rays", "last_refined"}
 
 
 def test_bake_adds_one_node_group_and_unbake_restores_the_material():
-    parts = scenes.ball_lens_scene(32, 24, photons=100_000)
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=100_000)
     floor_material = parts["floor"].active_material
     glass_before = material_state(parts["ball"].active_material)
     bpy.context.view_layer.update()
@@ -89,7 +89,7 @@ def test_baked_caustic_renders_like_the_caustic_pass(addon, tmp_path, floor_kind
     lamp = scenes.add_point_light((-1.5, 0.6, 3.0), 1000.0)
     scenes.add_camera((3.5, -2.5, 2.5), target=(0.5, -0.2, 0.0))
     scenes.set_resolution(64, 48)
-    bpy.context.scene.caustic.photons, bpy.context.scene.caustic.density = 200_000, 'ADAPTIVE'
+    bpy.context.scene.caustic.lamp_rays, bpy.context.scene.caustic.density = 200_000, 'ADAPTIVE'
     assert bpy.ops.caustic.bake() == {'FINISHED'}
     chart_input = 'ShaderNodeUVMap' if floor_kind == "bent" else 'ShaderNodeNewGeometry'
     assert any(node.bl_idname == chart_input for node in bpy.data.node_groups[0].nodes)
@@ -121,7 +121,7 @@ def baked_map_size(scale_length, map_scale_text):
     in units of `scale_length` metres, with Map Scale typed as
     `map_scale_text` (Blender stores what is typed in scene units)."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    parts = scenes.ball_lens_scene(16, 12, photons=5_000, segments=16, rings=8)
+    parts = scenes.ball_lens_scene(16, 12, lamp_rays=5_000, segments=16, rings=8)
     scene = bpy.context.scene
     scene.unit_settings.scale_length = scale_length
     for ob in parts.values():

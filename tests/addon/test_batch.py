@@ -16,7 +16,7 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 def test_saved_file_renders_in_the_background(tmp_path):
-    scenes.ball_lens_scene(48, 36, photons=30_000, segments=32, rings=16)
+    scenes.ball_lens_scene(48, 36, lamp_rays=30_000, segments=32, rings=16)
     bpy.context.scene.caustic.spp = 2
     blend = tmp_path / "scene.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
@@ -24,10 +24,10 @@ def test_saved_file_renders_in_the_background(tmp_path):
 
     bpy.ops.wm.open_mainfile(filepath=str(blend))
     props = bpy.context.scene.caustic
-    assert (props.photons, props.spp) == (30_000, 2)
+    assert (props.lamp_rays, props.spp) == (30_000, 2)
     # A button press invokes the operator; in the background that is the synchronous path.
     assert bpy.ops.caustic.render('INVOKE_DEFAULT') == {'FINISHED'}
-    assert props.last_photons == 30_000
+    assert props.last_lamp_rays == 30_000
     rendered = np.array(bpy.data.images["Caustic Render"].pixels[:], dtype=np.float32)
     assert rendered.max() > 1.0
 

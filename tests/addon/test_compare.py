@@ -26,7 +26,7 @@ def render_state():
 
 
 def test_compare_restores_every_setting_and_stores_the_images():
-    scenes.ball_lens_scene(64, 48, photons=50_000)
+    scenes.ball_lens_scene(64, 48, lamp_rays=50_000)
     scene = bpy.context.scene
     # Settings a user might have that the comparison has to change and put back.
     scene.render.engine = 'BLENDER_WORKBENCH'
@@ -63,7 +63,7 @@ def test_compare_restores_every_setting_and_stores_the_images():
 
 
 def test_compare_says_cycles_cannot_render_a_mirrors_caustic(reports):
-    scenes.ring_scene(32, 24, photons=50_000)
+    scenes.ring_scene(32, 24, lamp_rays=50_000)
     bpy.context.scene.caustic.cycles_samples = 4
     reports()
     assert bpy.ops.caustic.compare_cycles() == {'FINISHED'}

@@ -26,7 +26,7 @@ def no_receiver(parts):
 
 
 def zero_lamp_rays(parts):
-    bpy.context.scene.caustic.photons = 0
+    bpy.context.scene.caustic.lamp_rays = 0
 
 
 def zero_ior_in_the_material(parts):
@@ -54,7 +54,7 @@ CASES = [
 def test_bad_input_is_refused_and_changes_nothing(operator, spoil, message, operators):
     if operator not in operators:
         pytest.skip(f"{operator} does not need this")
-    parts = scenes.ball_lens_scene(32, 24, photons=2000, segments=16, rings=8)
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=2000, segments=16, rings=8)
     spoil(parts)
     bpy.context.view_layer.update()
     before = snapshot_file()
@@ -74,7 +74,7 @@ def test_bake_without_glass_is_refused():
 
 
 def test_open_glass_mesh_renders_with_a_warning(reports):
-    parts = scenes.ball_lens_scene(32, 24, photons=2000, segments=16, rings=8)
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=2000, segments=16, rings=8)
     mesh = parts["ball"].data
     bm = bmesh.new()
     bm.from_mesh(mesh)
@@ -92,7 +92,7 @@ def test_open_glass_mesh_renders_with_a_warning(reports):
     for kind in after:
         if kind not in ("images", "scenes"):
             assert after[kind] == before[kind], kind
-    result_fields = {"last_seconds", "last_photons", "last_refined", "progress"}
+    result_fields = {"last_seconds", "last_lamp_rays", "last_refined", "progress"}
     caustic_before = {k: v for k, v in before["scenes"]["Scene"]["caustic"].items() if k not in result_fields}
     caustic_after = {k: v for k, v in after["scenes"]["Scene"]["caustic"].items() if k not in result_fields}
     assert caustic_after == caustic_before

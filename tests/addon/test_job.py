@@ -9,8 +9,8 @@ import pytest
 import blender_scenes as scenes
 
 
-def job_for_scene(addon, photons):
-    scenes.ball_lens_scene(64, 48, photons=photons, segments=32, rings=16)
+def job_for_scene(addon, lamp_rays):
+    scenes.ball_lens_scene(64, 48, lamp_rays=lamp_rays, segments=32, rings=16)
     read = addon.operators.scene_reader.read_scene(bpy.context)
     settings = addon.operators.settings.render_settings(bpy.context.scene.caustic)
     settings.chunk_size = 1 << 14  # many chunks: progress moves, and the cancel is seen soon
@@ -23,7 +23,7 @@ def test_job_runs_on_a_thread_to_the_end(addon):
     job.wait()
     assert job.result is not None and job.error is None and not job.cancelled
     assert job.fraction == pytest.approx(1.0) and job.stage == "eye pass"
-    assert job.result.stats["photons_emitted"] == 50_000
+    assert job.result.stats["lamp_rays"] == 50_000
 
 
 def test_cancel_stops_the_job(addon):

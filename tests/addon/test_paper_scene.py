@@ -10,7 +10,7 @@ import pytest
 from mathutils import Vector
 
 import blender_scenes as scenes
-from caustic_addon import shapes
+from caustic_addon import paper, shapes
 from snapshot import snapshot_file
 
 SHAPES = ("ROUND", "FLAT", "POINTED")
@@ -46,10 +46,10 @@ def test_adds_its_objects_beside_the_users_and_changes_none_of_them(shape):
     assert tuple(diffuse.inputs['Color'].default_value)[:3] == pytest.approx((0.8, 0.8, 0.8))
     lamp, camera = bpy.data.objects["Lamp.001"], bpy.data.objects["Camera.001"]
     assert lamp.data.type == 'POINT' and lamp.data.energy == pytest.approx(LAMP_POWER)
-    assert tuple(lamp.location) == pytest.approx(shapes.PAPER_LAMP_POSITION)
+    assert tuple(lamp.location) == pytest.approx(paper.LAMP_POSITION)
     assert camera.data.angle == pytest.approx(math.radians(40.0)) and camera.data.sensor_fit == 'HORIZONTAL'
     view = camera.matrix_world.to_3x3() @ Vector((0.0, 0.0, -1.0))
-    to_target = (Vector(shapes.PAPER_TARGET) - Vector(shapes.PAPER_EYE)).normalized()
+    to_target = (Vector(paper.TARGET) - Vector(paper.EYE)).normalized()
     assert view.dot(to_target) == pytest.approx(1.0, abs=1e-6)
 
 
@@ -71,7 +71,7 @@ def test_the_addon_reads_back_the_engines_geometry(addon, shape, raised):
     read = addon.operators.scene_reader.read_scene(bpy.context)
     objects = {ob.name: ob for ob in read.scene.objects}
     cursor = np.array([0.3, -0.2, 0.1])
-    engine = shapes.paper_glass(shape.lower(), 1.0 if raised else 0.0)
+    engine = paper.glass(shape.lower(), 1.0 if raised else 0.0)
     glass = objects[shape.title()]
     # Positions come back at float32 precision. Blender keeps custom normals
     # at lower precision (the sphere's within 4e-4): 1e-3 rad of normal
@@ -117,7 +117,7 @@ def measure_render(shape):
     scene = bpy.context.scene
     scenes.set_resolution(160, 120)
     # the paper's lamp energy 10
-    scene.caustic.photons, scene.caustic.energy, scene.caustic.density = 200_000, 10.0, 'ADAPTIVE'
+    scene.caustic.lamp_rays, scene.caustic.energy, scene.caustic.density = 200_000, 10.0, 'ADAPTIVE'
     assert bpy.ops.caustic.render() == {'FINISHED'}
     image = scenes.pixels_of("Caustic Render")[..., 0]
 
@@ -128,9 +128,9 @@ def measure_render(shape):
     unit = dirs / np.linalg.norm(dirs, axis=-1, keepdims=True)
     along = ((centre - eye) * unit).sum(axis=-1)
     misses_glass = np.linalg.norm(eye + along[..., None] * unit - centre, axis=-1) > radius
-    seen = misses_glass & (np.abs(floor[..., :2]).max(axis=-1) < 0.5 * shapes.PAPER_FLOOR_SIZE)
+    seen = misses_glass & (np.abs(floor[..., :2]).max(axis=-1) < 0.5 * paper.FLOOR_SIZE)
 
-    lamp = np.array(shapes.PAPER_LAMP_POSITION)
+    lamp = np.array(paper.LAMP_POSITION)
     distance2 = ((floor - lamp) ** 2).sum(axis=-1)
     direct = 0.8 / math.pi * LAMP_POWER * scene.caustic.energy / (4.0 * math.pi) * lamp[2] / distance2 ** 1.5
     ratio = image[seen] / direct[seen]
@@ -170,7 +170,7 @@ def test_round_gathers_flat_keeps_a_disc_pointed_spreads_and_moves_away(raised_w
     from the shadow): pixels 3.5 cm across the floor resolve all three."""
     round_, flat, pointed = (raised_water[shape] for shape in SHAPES)
     assert round_["r50"] < 0.5 * flat["r50"]
-    assert 0.5 * shapes.PAPER_RADIUS < flat["r50"] / 0.707 < 1.5 * shapes.PAPER_RADIUS
+    assert 0.5 * paper.RADIUS < flat["r50"] / 0.707 < 1.5 * paper.RADIUS
     assert pointed["r50"] > 2.0 * flat["r50"]
     assert round_["brightest"] > 10.0 * flat["brightest"]
     assert pointed["offset"] > 2.0 * max(round_["offset"], flat["offset"]) and pointed["offset"] > 0.4

@@ -27,10 +27,10 @@ def line_clears_sphere(start, end, centre, radius):
     return np.linalg.norm(start + t * d - centre) > radius
 
 
-@pytest.mark.parametrize("density, photons", [('ADAPTIVE', 100_000), ('BEAM', 40_000)],
+@pytest.mark.parametrize("density, lamp_rays", [('ADAPTIVE', 100_000), ('BEAM', 40_000)],
                          ids=["adaptive", "beam-the-default"])
-def test_caustic_under_the_ball_and_dark_shadow_ring(density, photons):
-    parts = scenes.ball_lens_scene(160, 120, photons=photons)
+def test_caustic_under_the_ball_and_dark_shadow_ring(density, lamp_rays):
+    parts = scenes.ball_lens_scene(160, 120, lamp_rays=lamp_rays)
     bpy.context.scene.caustic.density = density
     assert bpy.ops.caustic.render() == {'FINISHED'}
     image = scenes.pixels_of("Caustic Render")
@@ -62,7 +62,7 @@ def test_caustic_under_the_ball_and_dark_shadow_ring(density, photons):
 
 
 def test_output_image_is_float_linear_at_the_render_resolution():
-    scenes.ball_lens_scene(100, 80, photons=20_000, segments=32, rings=16)
+    scenes.ball_lens_scene(100, 80, lamp_rays=20_000, segments=32, rings=16)
     bpy.context.scene.render.resolution_percentage = 50
     bpy.ops.caustic.render()
     image = bpy.data.images["Caustic Render"]
@@ -70,7 +70,7 @@ def test_output_image_is_float_linear_at_the_render_resolution():
     assert image.is_float
     assert image.colorspace_settings.name == "Linear Rec.709"
     props = bpy.context.scene.caustic
-    assert props.last_photons == 20_000 and props.last_seconds > 0 and props.progress == 1.0
+    assert props.last_lamp_rays == 20_000 and props.last_seconds > 0 and props.progress == 1.0
 
 
 def cycles_render(tmp_path, samples):
@@ -151,7 +151,7 @@ def test_dispersion_colours_the_caustic_rim():
     more, focuses nearer the glass and gathers into the centre; red is left
     spread out to the rim. Without dispersion every pixel is grey (R = B to
     rounding: one band is traced). Seen from low down across the caustic."""
-    parts = scenes.ball_lens_scene(160, 120, photons=1_000_000)
+    parts = scenes.ball_lens_scene(160, 120, lamp_rays=1_000_000)
     bpy.context.scene.caustic.spp = 1
     scenes.add_camera((0.0, -2.0, 0.3), target=(0.0, 0.0, 0.0), lens=100.0)
     xs = np.linspace(-0.08, 0.08, 33)

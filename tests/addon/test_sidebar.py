@@ -19,12 +19,12 @@ def test_map_scale_is_a_length():
 
 
 def test_the_traced_count_says_what_refinement_added():
-    scenes.ball_lens_scene(32, 24, photons=10_000, segments=32, rings=16)
+    scenes.ball_lens_scene(32, 24, lamp_rays=10_000, segments=32, rings=16)
     props = bpy.context.scene.caustic
     props.density, props.beam_refinement = 'BEAM', 2
     bpy.ops.caustic.render()
     assert props.last_refined > 0
-    assert props.last_photons - props.last_refined == 10_000
+    assert props.last_lamp_rays - props.last_refined == 10_000
     props.beam_refinement = 0
     bpy.ops.caustic.render()
-    assert props.last_refined == 0 and props.last_photons == 10_000
+    assert props.last_refined == 0 and props.last_lamp_rays == 10_000

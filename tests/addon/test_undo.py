@@ -18,7 +18,7 @@ def move_then_undo(ob) -> None:
 
 
 def test_render_survives_undo_and_redo_with_its_pixels():
-    parts = scenes.ball_lens_scene(32, 24, photons=20_000, segments=32, rings=16)
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=20_000, segments=32, rings=16)
     bpy.ops.ed.undo_push(message="Scene")
     assert bpy.ops.caustic.render('EXEC_DEFAULT', True) == {'FINISHED'}
     rendered = scenes.pixels_of("Caustic Render")
@@ -33,7 +33,7 @@ def test_render_survives_undo_and_redo_with_its_pixels():
 
 
 def test_a_second_render_replaces_the_pixels_and_undo_brings_the_first_back():
-    parts = scenes.ball_lens_scene(32, 24, photons=20_000, segments=32, rings=16)
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=20_000, segments=32, rings=16)
     bpy.ops.ed.undo_push(message="Scene")
     bpy.ops.caustic.render('EXEC_DEFAULT', True)
     first = scenes.pixels_of("Caustic Render")
@@ -48,7 +48,7 @@ def test_a_second_render_replaces_the_pixels_and_undo_brings_the_first_back():
 
 
 def test_cycles_reference_survives_undo_with_its_pixels():
-    parts = scenes.ball_lens_scene(24, 18, photons=10_000, segments=32, rings=16)
+    parts = scenes.ball_lens_scene(24, 18, lamp_rays=10_000, segments=32, rings=16)
     bpy.context.scene.caustic.cycles_samples = 4
     bpy.ops.ed.undo_push(message="Scene")
     assert bpy.ops.caustic.compare_cycles('EXEC_DEFAULT', True) == {'FINISHED'}
@@ -61,7 +61,7 @@ def test_cycles_reference_survives_undo_with_its_pixels():
 
 
 def test_bake_and_compare_wait_while_a_render_runs(addon):
-    scenes.ball_lens_scene(24, 18, photons=10_000, segments=32, rings=16)
+    scenes.ball_lens_scene(24, 18, lamp_rays=10_000, segments=32, rings=16)
     render = addon.operators.render.CAUSTIC_OT_render
     render.running = True
     try:

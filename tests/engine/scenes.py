@@ -56,6 +56,6 @@ def shadow_radius(center_z=1.5, radius=1.0, lamp_z=LAMP_Z) -> float:
 
 
 def quick(**kwargs) -> RenderSettings:
-    base = dict(photons=400_000, spp=1, chunk_size=1 << 16, density="adaptive")
+    base = dict(lamp_rays=400_000, spp=1, chunk_size=1 << 16, density="adaptive")
     base.update(kwargs)
     return RenderSettings(**base)

@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 
 from caustic_addon import Scene, render
-from caustic_addon.beam_map import BeamMap
-from caustic_addon.beams import concentric_disc
-from caustic_addon.illumination_map import MapEstimate, PlaneChart
-from caustic_addon.raster import signed_areas
+from caustic_addon.maps.beam_map import BeamMap
+from caustic_addon.sampling.warps import concentric_disc
+from caustic_addon.maps.charts import PlaneChart
+from caustic_addon.maps.illumination_map import MapEstimate
+from caustic_addon.maps.raster import signed_areas
 from metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
 
@@ -30,7 +31,7 @@ def radial_error(photons: int) -> float:
 
     r_edges = np.linspace(0.0, shadow_radius(), 61)
     exact = reference.ball_lens_irradiance(1.0, 1.5, 1.5, 6.0, 1000.0 / (4 * math.pi), r_edges)
-    result = render(ball_lens(pixels=8, segments=256), quick(photons=photons, density="beam"))
+    result = render(ball_lens(pixels=8, segments=256), quick(lamp_rays=photons, density="beam"))
     ours = annulus_means(result.maps["Floor"].irradiance_at(annulus_points(r_edges, 200))[:, 0], r_edges)
     return relative_l2(ours, exact.caustic, r_edges)
 
@@ -43,8 +44,8 @@ def test_beams_match_the_exact_reference_with_few_paths():
 
 
 def test_beams_carry_the_same_flux_as_photons():
-    beams = render(ball_lens(pixels=8), quick(photons=40_000, density="beam")).stats["flux_landed_w"]
-    photons = render(ball_lens(pixels=8), quick(photons=400_000)).stats["flux_landed_w"]
+    beams = render(ball_lens(pixels=8), quick(lamp_rays=40_000, density="beam")).stats["flux_landed_w"]
+    photons = render(ball_lens(pixels=8), quick(lamp_rays=400_000)).stats["flux_landed_w"]
     np.testing.assert_allclose(beams, photons, rtol=0.01)
 
 
@@ -54,14 +55,14 @@ def test_beam_caustic_has_no_noise():
     xy = np.stack([np.linspace(0.0, 0.9, 50), np.zeros(50)], axis=1)
 
     def caustic(**kwargs):
-        return render(ball_lens(pixels=8), quick(photons=40_000, **kwargs)).maps["Floor"].irradiance_at(xy)
+        return render(ball_lens(pixels=8), quick(lamp_rays=40_000, **kwargs)).maps["Floor"].irradiance_at(xy)
 
     np.testing.assert_allclose(caustic(density="beam", seed=1), caustic(density="beam", seed=2), rtol=1e-9)
     assert not np.allclose(caustic(seed=1), caustic(seed=2), rtol=1e-3)
 
 
 def test_beam_renders_are_finite_and_conserve_flux_under_glass_colour_and_absorption():
-    result = render(ball_lens(pixels=16, absorption=0.4, ior=2.41), quick(photons=20_000, density="beam", spp=4))
+    result = render(ball_lens(pixels=16, absorption=0.4, ior=2.41), quick(lamp_rays=20_000, density="beam", spp=4))
     assert np.isfinite(result.image).all()
     assert np.isfinite(result.maps["Floor"].irradiance()).all()
 
@@ -69,7 +70,7 @@ def test_beam_renders_are_finite_and_conserve_flux_under_glass_colour_and_absorp
 def test_refined_cells_are_tiled_without_cracks():
     """A cell beside split neighbours becomes a fan through their shared
     vertex, so no beam edge ends in the middle of another's."""
-    from caustic_addon.beams import _crack_free_triangles
+    from caustic_addon.passes.beam import _crack_free_triangles
 
     width = 9
     row, col, size = np.array([0, 0, 2, 0, 2]), np.array([0, 4, 4, 6, 6]), np.array([4, 2, 2, 2, 2])
@@ -101,10 +102,10 @@ def test_refinement_moves_light_from_fallback_photons_into_beams_on_a_facetted_g
     grid with as many paths in all has about 160 a side: it leaves about
     160/224 = 0.71 as much light to photons. The total is unchanged."""
     def render_gem(photons, levels):
-        result = render(facetted_gem(), quick(photons=photons, density="beam", beam_refinement=levels,
+        result = render(facetted_gem(), quick(lamp_rays=photons, density="beam", beam_refinement=levels,
                                               map_scale=10.0, spp=1))
         total = np.array(result.stats["flux_landed_w"])
-        return result.maps["Floor"].flux.sum(axis=(0, 1)) / total, total, result.stats["photons_emitted"]
+        return result.maps["Floor"].flux.sum(axis=(0, 1)) / total, total, result.stats["lamp_rays"]
 
     refined_share, refined_total, paths = render_gem(3162, 2)
     plain_share, plain_total, _ = render_gem(paths, 0)
@@ -118,8 +119,8 @@ def test_beams_land_on_a_receiver_listed_after_the_glass():
     must not change the light."""
     scene = ball_lens(pixels=8)
     reversed_scene = Scene(objects=scene.objects[::-1], lights=scene.lights, camera=scene.camera)
-    first = render(scene, quick(photons=4_000, density="beam")).stats["flux_landed_w"]
-    second = render(reversed_scene, quick(photons=4_000, density="beam")).stats["flux_landed_w"]
+    first = render(scene, quick(lamp_rays=4_000, density="beam")).stats["flux_landed_w"]
+    second = render(reversed_scene, quick(lamp_rays=4_000, density="beam")).stats["flux_landed_w"]
     np.testing.assert_allclose(second, first, rtol=1e-9)
 
 

@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 
 from caustic_addon import Camera, SpotLight
-from caustic_addon.camera import eye_rays, ray_differentials
-from caustic_addon.illumination_map import (IlluminationMap, MapEstimate, PlaneChart, bilinear_splat, channel_tables,
-                                            as_rgb, rect_means)
-from caustic_addon.units import spot_attenuation
+from caustic_addon.passes.camera_rays import eye_rays, ray_differentials
+from caustic_addon.maps.charts import PlaneChart
+from caustic_addon.maps.grid import as_rgb, bilinear_splat, channel_tables, rect_means
+from caustic_addon.maps.illumination_map import IlluminationMap, MapEstimate
+from caustic_addon.emission.radiometry import spot_attenuation
 
 
 def test_perspective_rays_span_the_field_of_view_along_the_fitted_side():

@@ -13,9 +13,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from caustic_addon import Reflector, SceneError, cli, config, render, shapes
-from caustic_addon.image_io import read_exr, read_png, srgb_encode, write_image
-from caustic_addon.obj import ObjError, parse_obj, read_obj, write_obj
+from caustic_addon import Reflector, RenderSettings, SceneError, render, shapes
+from caustic_addon.cli import config
+from caustic_addon.cli import main as cli
+from caustic_addon.cli.image_io import read_exr, read_png, srgb_encode, write_image
+from caustic_addon.cli.obj import ObjError, parse_obj, read_obj, write_obj
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
@@ -37,7 +39,7 @@ position = [0.0, 0.0, 0.6]
 power = 0.8
 
 [photons]
-count = 20000
+lamp_rays = 20000
 energy = 10.0
 map_scale = 5.0
 
@@ -88,7 +90,10 @@ def test_render_writes_a_png_with_a_caustic(tmp_path):
     out = tmp_path / "new" / "folder" / "out.png"
     proc = run_cli("render", scene, EXAMPLES / "round.obj", "-o", out)
     assert proc.returncode == 0, proc.stderr
-    assert "photons emitted 20,000" in proc.stderr
+    # beams, the default: a 141 x 141 grid for 20,000 lamp rays, and what refinement adds
+    traced, refined = (int(n.replace(",", "")) for n in
+                       re.search(r"lamp rays ([\d,]+) \(([\d,]+) added by refinement\)", proc.stderr).groups())
+    assert traced - refined == 141 ** 2
     image = read_png(out)
     assert image.shape == (48, 64, 4)
     assert (image[..., 3] == 255).all()
@@ -114,9 +119,9 @@ def test_png_and_exr_of_one_render_agree_through_exposure(tmp_path):
 
 def test_command_line_overrides_the_scene_file(tmp_path):
     scene = write(tmp_path / "scene.toml", SMALL)
-    proc = run_cli("render", scene, EXAMPLES / "round.obj", "-o", tmp_path / "out.png", "--photons", "0")
+    proc = run_cli("render", scene, EXAMPLES / "round.obj", "-o", tmp_path / "out.png", "--lamp-rays", "0")
     assert proc.returncode == 0, proc.stderr
-    assert "photons emitted 0," in proc.stderr
+    assert "lamp rays 0," in proc.stderr
 
 
 # --- bad input: error: <message>, status 2 -------------------------------------------------------------------
@@ -126,8 +131,9 @@ def test_command_line_overrides_the_scene_file(tmp_path):
     (lambda t: t.replace("pixy = 48", "pixy = = 48"), ["scene.toml", "line 4"]),
     (lambda t: t.replace("size = 2.0", "size = 2.0\ncolour = 1.0"), ["plane.colour"]),
     (lambda t: t + "[lights]\npower = 1.0\n", ["[lights]"]),
-    (lambda t: t.replace("count = 20000", "count = -5"), ["scene.toml: photons.count", "integer >= 0", "-5"]),
-    (lambda t: t.replace("count = 20000", "count = 2.5"), ["photons.count"]),
+    (lambda t: t.replace("lamp_rays = 20000", "lamp_rays = -5"), ["scene.toml: photons.lamp_rays", "integer >= 0", "-5"]),
+    (lambda t: t.replace("lamp_rays = 20000", "lamp_rays = 2.5"), ["photons.lamp_rays"]),
+    (lambda t: t.replace("lamp_rays = 20000", "count = 20000"), ["photons.count is now photons.lamp_rays"]),
     (lambda t: t.replace("pixx = 64", 'pixx = "64"'), ["camera.pixx"]),
     (lambda t: t.replace("eye = [0.0, -0.55, 0.4]\n", ""), ["camera.eye", "missing"]),
     (lambda t: t.replace("map_scale = 5.0", "map_scale = 0"), ["photons.map_scale"]),
@@ -146,7 +152,7 @@ def test_command_line_overrides_the_scene_file(tmp_path):
     (lambda t: t.replace("ior = 1.5", "ior = 1.5\nabsorption_color = 0.5\nabsorption = 1.0"),
      ["object.absorption and object.absorption_color"]),
     (lambda t: t.replace("map_scale = 5.0", "map_scale = 5.0\nbands = 65"), ["photons.bands", "1..64"]),
-], ids=["syntax", "unknown-key", "unknown-table", "negative-count", "fractional-count", "string-pixx",
+], ids=["syntax", "unknown-key", "unknown-table", "negative-count", "fractional-count", "renamed-count", "string-pixx",
         "missing-eye", "zero-map-scale", "key-of-another-lamp", "nan-ior", "beam-refinement-too-deep",
         "ior-of-a-reflector", "unknown-material", "zero-abbe", "nan-abbe", "black-absorption-color",
         "negative-absorption-distance", "two-absorptions", "too-many-bands"])
@@ -218,7 +224,7 @@ def test_progress_bar_draws_in_place_only_on_a_terminal():
 def test_the_example_scene_is_the_papers_and_well_exposed():
     cfg = config.load(EXAMPLES / "paper.toml")
     s = cfg.settings
-    assert (s.photons, s.energy, s.map_scale, s.density) == (40_000, 10.0, 5.0, "splat")
+    assert (s.lamp_rays, s.energy, s.map_scale, s.density) == (40_000, 10.0, 5.0, "splat")
     # radiance of the plane under the lamp: albedo * E / pi, E = energy * power / (4 pi h^2)
     height = cfg.lamp.position[2] - cfg.floor.mesh.vertices[0, 2]
     irradiance = s.energy * cfg.lamp.power / (4 * math.pi * height ** 2)
@@ -228,7 +234,8 @@ def test_the_example_scene_is_the_papers_and_well_exposed():
 def test_scene_file_defaults_and_placement():
     text = SMALL.replace("map_scale = 5.0", 'map_scale = "auto"').replace("scale = 0.1", "scale = [0.1, 0.2, 0.3]")
     cfg = config.parse(text)
-    assert cfg.settings.map_scale is None and cfg.settings.density == "adaptive"
+    # the density is the engine's default, as in the add-on
+    assert cfg.settings.map_scale is None and cfg.settings.density == RenderSettings().density == "beam"
     assert cfg.settings.spp == 1 and cfg.settings.max_depth == 12
     mesh = shapes.cylinder(0.5, 0.5)
     scene = cfg.scene(mesh, "Cylinder")

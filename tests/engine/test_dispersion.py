@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from caustic_addon import Dielectric, Diffuse, Object, RenderSettings, Scene, SceneError, render, shapes
-from caustic_addon.optics import (LAMBDA_C, LAMBDA_D, LAMBDA_F, absorption_from_color, cauchy_ior,
-                                  volume_absorption)
+from caustic_addon.optics.dispersion import LAMBDA_C, LAMBDA_D, LAMBDA_F, cauchy_ior
+from caustic_addon.optics.media import absorption_from_color, volume_absorption
 from caustic_addon.scene import SunLight
-from caustic_addon.spectrum import XYZ_TO_REC709, bands, cie_xyz, photon_band
-from caustic_addon.illumination_map import IlluminationMap
+from caustic_addon.optics.spectrum import XYZ_TO_REC709, bands, cie_xyz, photon_band
+from caustic_addon.maps.illumination_map import IlluminationMap
 import slab
 from scenes import ball_lens, quick, shadow_radius, top_camera, unobstructed_irradiance
 
@@ -84,11 +84,11 @@ def test_white_point_beams_with_no_dispersion_equal_the_plain_render():
     render's, to rounding. (The few fallback photons go through the k-nearest
     estimate, which counts K of them where the plain render has one.)"""
     paths = 2000
-    plain = render(ball_lens(pixels=8), quick(photons=paths, density="beam"))
+    plain = render(ball_lens(pixels=8), quick(lamp_rays=paths, density="beam"))
     scene = ball_lens(pixels=8)
     scene.objects[1].material.abbe = 1e12
-    spectral = render(scene, quick(photons=6 * paths, density="beam", bands=6))
-    assert spectral.stats["photons_emitted"] == 6 * plain.stats["photons_emitted"]
+    spectral = render(scene, quick(lamp_rays=6 * paths, density="beam", bands=6))
+    assert spectral.stats["lamp_rays"] == 6 * plain.stats["lamp_rays"]
     np.testing.assert_allclose(spectral.stats["flux_landed_w"], plain.stats["flux_landed_w"], rtol=1e-9)
 
     def beams_only(result):
@@ -106,15 +106,15 @@ def test_white_point_photons_with_no_dispersion_keep_the_flux_white():
     band's weight instead of 1. That factor has mean 1 and a relative spread
     s (about 1.2 at K = 6) per channel, so each channel's landed flux is the
     plain one within 4 s / sqrt(landed photons)."""
-    settings = quick(photons=200_000, bands=6)
+    settings = quick(lamp_rays=200_000, bands=6)
     plain = render(ball_lens(pixels=8), settings)
     scene = ball_lens(pixels=8)
     scene.objects[1].material.abbe = 1e12
     spectral = render(scene, settings)
     weights = 6 * bands(6).weights
     spread = np.sqrt((weights ** 2).mean(axis=0) - 1.0)
-    landed = plain.stats["photons_landed"]
-    assert spectral.stats["photons_landed"] == landed
+    landed = plain.stats["landed"]
+    assert spectral.stats["landed"] == landed
     np.testing.assert_allclose(spectral.stats["flux_landed_w"], plain.stats["flux_landed_w"],
                                rtol=4 * spread.max() / math.sqrt(landed))
 
@@ -153,7 +153,7 @@ def test_blue_focuses_closer_to_the_lens_than_red(density, paths, tolerance):
     per_band = 1000.0 * (1 - fresnel) ** 2 * (focus / (3.0 - focus)) ** 2
     expected = per_band @ b.weights
 
-    settings = RenderSettings(photons=paths, density=density, map_scale=10.0 if density == "splat" else None, spp=1,
+    settings = RenderSettings(lamp_rays=paths, density=density, map_scale=10.0 if density == "splat" else None, spp=1,
                               max_depth=2)
     floor = render(sun_ball_lens(15.0), settings).maps["Floor"]
     ticks = np.linspace(-0.1, 0.1, 81)
@@ -180,7 +180,7 @@ def test_bad_abbe_numbers_name_the_object(abbe, why):
     scene = ball_lens(pixels=4)
     scene.objects[1].material.abbe = abbe
     with pytest.raises(SceneError, match=f"Glass: .*{why}"):
-        render(scene, quick(photons=10))
+        render(scene, quick(lamp_rays=10))
 
 
 def test_bands_setting_is_checked():

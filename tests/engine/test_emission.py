@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from caustic_addon import PointLight, SpotLight, SunLight
-from caustic_addon.emission import (PointConeEmitter, PointSphereEmitter, Sphere, SunDiscEmitter, make_emitters,
-                                    sample_cone)
+from caustic_addon.emission.photons import PointConeEmitter, PointSphereEmitter, SunDiscEmitter, make_emitters
+from caustic_addon.emission.targets import Sphere
+from caustic_addon.sampling.warps import sample_cone
 
 
 def test_sphere_mode_carries_the_whole_power_uniformly():

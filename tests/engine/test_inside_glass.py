@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 
 from caustic_addon import Camera, Dielectric, Diffuse, Object, PointLight, Scene, render, shapes
-from caustic_addon.accel import MISS, Accelerator, triangle_normals
+from caustic_addon.tracing.accelerator import Accelerator
+from caustic_addon.tracing.hits import MISS
+from caustic_addon.tracing.topology import triangle_normals
 
 from scenes import quick
 
@@ -57,8 +59,8 @@ def test_a_lamp_inside_absorbing_glass_is_dimmed_by_the_radius_it_crosses(densit
     through, r the distance to the faceted surface (one fixed set of paths,
     so no noise)."""
     camera = Camera.look_at((0.0, -6.0, 4.0), (0.0, 0.0, 0.0), pixx=8, pixy=8)
-    clear = render(absorbing_sphere_scene(0.0, camera), quick(photons=50_000, density=density))
-    dimmed = render(absorbing_sphere_scene(SIGMA, camera), quick(photons=50_000, density=density))
+    clear = render(absorbing_sphere_scene(0.0, camera), quick(lamp_rays=50_000, density=density))
+    dimmed = render(absorbing_sphere_scene(SIGMA, camera), quick(lamp_rays=50_000, density=density))
     ratio = np.array(dimmed.stats["flux_landed_w"]) / np.array(clear.stats["flux_landed_w"])
     low, high = chord_bounds()
     assert np.all((ratio > low) & (ratio < high)), ratio
@@ -72,8 +74,8 @@ def test_a_camera_inside_absorbing_glass_sees_through_the_radius_it_crosses():
     1e-7 m from the eye.)"""
     camera = Camera.look_at(CENTER, (0.0, 0.1, 0.0), pixx=16, pixy=12, fov=math.radians(60.0), clip_start=1e-7)
     lamp = (6.0, 0.0, 0.8)
-    clear = render(absorbing_sphere_scene(0.0, camera, lamp), quick(photons=20_000)).passes["direct"]
-    dimmed = render(absorbing_sphere_scene(SIGMA, camera, lamp), quick(photons=20_000)).passes["direct"]
+    clear = render(absorbing_sphere_scene(0.0, camera, lamp), quick(lamp_rays=20_000)).passes["direct"]
+    dimmed = render(absorbing_sphere_scene(SIGMA, camera, lamp), quick(lamp_rays=20_000)).passes["direct"]
     assert clear.min() > 0.0
     low, high = chord_bounds()
     ratio = dimmed / clear

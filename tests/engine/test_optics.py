@@ -5,7 +5,8 @@ import math
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
-from caustic_addon.optics import dot, fresnel_dielectric, reflect, refract
+from caustic_addon.optics.specular import fresnel_dielectric, reflect, refract
+from caustic_addon.util.vectors import dot
 
 UP = np.array([[0.0, 0.0, 1.0]])
 

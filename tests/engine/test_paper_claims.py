@@ -32,7 +32,7 @@ def render_floor(shape: str, ior: float, height: float, floor: float, map_scale:
                  energy: float = ENERGY):
     """(scene, floor illumination map) of the paper's scene, splat cells of `map_scale` mm."""
     scene = ps.paper_scene(shape, ior, height, TINY, floor)
-    result = render(scene, ps.splat_settings(scene, map_scale, photons=photons, energy=energy, spp=1))
+    result = render(scene, ps.splat_settings(scene, map_scale, lamp_rays=photons, energy=energy, spp=1))
     return scene, result.maps["Floor"]
 
 
@@ -144,7 +144,7 @@ def test_lamp_energy_scales_the_caustic_linearly():
     image are exactly proportional to it."""
     low, high = ps.PAPER_SWEEPS["energy"]
     scene = ps.paper_scene("round", pixels=TINY, floor=ps.RESTING_FLOOR)
-    results = [render(scene, ps.splat_settings(scene, SMALL_MM, photons=PAPER_RAYS, energy=e, spp=1))
+    results = [render(scene, ps.splat_settings(scene, SMALL_MM, lamp_rays=PAPER_RAYS, energy=e, spp=1))
                for e in (low, high)]
     ratio = high / low
     np.testing.assert_allclose(results[1].maps["Floor"].flux, ratio * results[0].maps["Floor"].flux, rtol=1e-12)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from caustic_addon.raster import rasterise_triangles
+from caustic_addon.maps.raster import rasterise_triangles
 
 
 def clipped_area(triangle: np.ndarray, x0: float, x1: float, y0: float, y1: float) -> float:

@@ -8,8 +8,8 @@ import pytest
 
 from caustic_addon import Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector, Scene, SunLight, render
 from caustic_addon import shapes
-from caustic_addon.emission import make_emitters
-from caustic_addon.render import targets_and_bounds
+from caustic_addon.emission.photons import make_emitters
+from caustic_addon.renderer import targets_and_bounds
 from scenes import quick, top_camera
 
 POWER = 1000.0
@@ -71,12 +71,12 @@ def photon_tolerance(result, exact: np.ndarray) -> np.ndarray:
     with M the box's share of the landed photons; plus the bilinear splat's
     spill over the box edges (half a 20 mm cell against the box's side)."""
     areas = np.prod(BOXES[:, 1] - BOXES[:, 0], axis=1)
-    photons = result.stats["photons_landed"] * exact * areas / result.stats["flux_landed_w"][0]
+    photons = result.stats["landed"] * exact * areas / result.stats["flux_landed_w"][0]
     return 4.0 / np.sqrt(photons) + 0.01 / (BOXES[:, 1, 0] - BOXES[:, 0, 0])
 
 
 def test_flat_mirror_lights_the_floor_as_the_mirrored_lamp():
-    result = render(ceiling_mirror(), quick(photons=400_000, density="splat", map_scale=20.0))
+    result = render(ceiling_mirror(), quick(lamp_rays=400_000, density="splat", map_scale=20.0))
     exact = exact_box_means(mirrored_lamp_irradiance, BOXES)
     ours = box_means(result.maps["Floor"], BOXES)
     np.testing.assert_array_less(np.abs(ours / exact - 1.0), photon_tolerance(result, exact))
@@ -87,7 +87,7 @@ def test_glass_then_mirror_then_glass_multiplies_the_tints():
     glass events and one mirror bounce in one path): the floor sees tint^4 of
     the mirrored lamp."""
     tint = 0.9
-    result = render(ceiling_mirror(glass_slab=True, tint=tint), quick(photons=400_000, density="splat",
+    result = render(ceiling_mirror(glass_slab=True, tint=tint), quick(lamp_rays=400_000, density="splat",
                                                                        map_scale=20.0))
     exact = tint ** 4 * exact_box_means(mirrored_lamp_irradiance, BOXES)
     ours = box_means(result.maps["Floor"], BOXES)
@@ -97,7 +97,7 @@ def test_glass_then_mirror_then_glass_multiplies_the_tints():
 def test_beams_off_a_mirror_match_the_mirrored_lamp():
     """Beams have no noise; what is left is their rasterisation, under 3%
     over boxes a few hundred beams wide."""
-    result = render(ceiling_mirror(glass_slab=True, tint=0.9), quick(photons=40_000, density="beam"))
+    result = render(ceiling_mirror(glass_slab=True, tint=0.9), quick(lamp_rays=40_000, density="beam"))
     exact = 0.9 ** 4 * exact_box_means(mirrored_lamp_irradiance, BOXES)
     np.testing.assert_allclose(box_means(result.maps["Floor"], BOXES), exact, rtol=0.03)
 
@@ -111,7 +111,7 @@ def test_reflectors_cast_shadows_and_are_seen_in_the_eye_pass():
     matrix = np.diag([1.0, -1.0, -1.0, 1.0])
     matrix[2, 3] = 2.0
     scene.camera = Camera(matrix, pixx=16, pixy=16, kind="ORTHO", ortho_scale=1.6)
-    result = render(scene, quick(photons=50_000, spp=1))
+    result = render(scene, quick(lamp_rays=50_000, spp=1))
     step = 1.6 / 16
     ticks = (np.arange(16) + 0.5) * step - 0.8
     x, y = np.meshgrid(ticks, -ticks)  # row 0 at the top is camera +Y, world -y
@@ -123,7 +123,7 @@ def test_reflectors_cast_shadows_and_are_seen_in_the_eye_pass():
     above = Scene([Object("Floor", shapes.plane(8.0), Diffuse(albedo=1.0)),
                    Object("Mirror", shapes.plane(1.0, (0, 0, 1.0)), Reflector(RHO))],
                   [PointLight((0, 0, 3.0), POWER)], top_camera(2.0, 16))
-    direct = render(above, quick(photons=1000, spp=1)).passes["direct"][..., 0]
+    direct = render(above, quick(lamp_rays=1000, spp=1)).passes["direct"][..., 0]
     # columns 5 and 10 see the floor at |x| = 0.625: past the mirror's edge, inside its shadow (0.75)
     assert direct[7:9, [5, 10]].max() == 0.0 and direct[7:9, [3, 12]].min() > 0.0
 
@@ -189,7 +189,7 @@ def assert_cusp_resolved(imap, cusp: float, fold: np.ndarray) -> None:
     assert along.max() > 2.0 * along[x > 0.5 * cusp].max()
 
 
-@pytest.mark.parametrize("settings", [dict(photons=1_000_000), dict(photons=100_000, density="beam")],
+@pytest.mark.parametrize("settings", [dict(lamp_rays=1_000_000), dict(lamp_rays=100_000, density="beam")],
                          ids=["photons", "beams"])
 def test_mirror_tube_nephroid_cusp_lands_where_geometric_optics_puts_it(settings):
     """Every downward ray from the lamp, at height 2.5 >= 2H, meets the wall
@@ -209,7 +209,7 @@ def test_parallel_light_in_a_mirror_tube_has_its_cusp_at_half_the_radius():
     sun = SunLight((-1.0, 0.0, -slope), 10.0)
     scene = Scene([Object("Floor", shapes.plane(3.0), Diffuse(albedo=1.0)),
                    Object("Tube", shapes.tube(R, 0.5, segments=512), Reflector(TUBE_RHO))], [sun], top_camera(1.5, 8))
-    result = render(scene, quick(photons=1_000_000))
+    result = render(scene, quick(lamp_rays=1_000_000))
 
     def lines(b):
         q = np.stack([-np.sqrt(R * R - b * b), b], axis=1)
@@ -237,11 +237,11 @@ def test_flux_off_the_tube_is_the_flux_on_its_wall_times_the_reflectance(density
     _, _, dist = reflected_lines(phi)
     h, low = HEIGHT, HEIGHT - H
     on_wall = INTENSITY * 2 * math.pi * np.mean(h / np.hypot(h, dist) - low / np.hypot(low, dist))
-    result = render(mirror_tube(), quick(photons=200_000, density=density))
+    result = render(mirror_tube(), quick(lamp_rays=200_000, density=density))
     landed = result.stats["flux_landed_w"][0]
     stats = result.stats
-    tolerance = (1.0 / math.sqrt(stats["photons_emitted"]) if density == "beam"
-                 else 4.0 / math.sqrt(stats["photons_landed"]))
+    tolerance = (1.0 / math.sqrt(stats["lamp_rays"]) if density == "beam"
+                 else 4.0 / math.sqrt(stats["landed"]))
     assert landed == pytest.approx(TUBE_RHO * on_wall, rel=tolerance)
 
 
@@ -284,16 +284,16 @@ def test_64_bounces_between_parallel_mirrors_lose_and_create_no_photon():
     floor within 64 epsilon of a wall's foot takes a 65th bounce there:
     max_depth allows it.)"""
     scene, entering = corridor(1.0)
-    result = render(scene, quick(photons=1_000_000, max_depth=BOUNCES + 1))
+    result = render(scene, quick(lamp_rays=1_000_000, max_depth=BOUNCES + 1))
     stats = result.stats
     count, flux = entering_photons(scene, 1_000_000)
     assert count > 5000
-    assert stats["photons_landed"] == count
+    assert stats["landed"] == count
     assert stats["flux_landed_w"][0] == pytest.approx(flux, rel=1e-9)
     assert flux == pytest.approx(entering, rel=4.0 / math.sqrt(count))
     assert np.isfinite(result.maps["Floor"].irradiance()).all() and np.isfinite(result.image).all()
-    short = render(scene, quick(photons=1_000_000, max_depth=BOUNCES - 1))
-    assert short.stats["photons_landed"] == 0
+    short = render(scene, quick(lamp_rays=1_000_000, max_depth=BOUNCES - 1))
+    assert short.stats["landed"] == 0
 
 
 def test_dim_mirrors_keep_the_expected_flux_through_russian_roulette():
@@ -302,8 +302,8 @@ def test_dim_mirrors_keep_the_expected_flux_through_russian_roulette():
     p = rho^64 / 0.05, so the relative noise is sqrt((1 - p) / (p N))."""
     rho = 0.9
     scene, entering = corridor(rho)
-    stats = render(scene, quick(photons=1_000_000, max_depth=BOUNCES + 1)).stats
-    bright = render(corridor(1.0)[0], quick(photons=1_000_000, max_depth=BOUNCES + 1)).stats
+    stats = render(scene, quick(lamp_rays=1_000_000, max_depth=BOUNCES + 1)).stats
+    bright = render(corridor(1.0)[0], quick(lamp_rays=1_000_000, max_depth=BOUNCES + 1)).stats
     p = rho ** BOUNCES / 0.05
-    noise = math.sqrt((1 - p) / (p * bright["photons_landed"]))
+    noise = math.sqrt((1 - p) / (p * bright["landed"]))
     assert stats["flux_landed_w"][0] == pytest.approx(rho ** BOUNCES * bright["flux_landed_w"][0], rel=4 * noise)

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from caustic_addon import render
-from caustic_addon.emission import Sphere
-from caustic_addon.render import _Monitor, run_chunks
+from caustic_addon.emission.targets import Sphere
+from caustic_addon.renderer import _Monitor, run_chunks
 from scenes import ball_lens, floor_points, quick, shadow_radius, unobstructed_irradiance
 
 
@@ -23,7 +23,7 @@ def test_index_matched_glass_vanishes():
     """IOR 1, no absorption: direct light plus the illumination map equals the
     unobstructed I cos(theta) / d^2, in the shadow and out of it."""
     scene = ball_lens(ior=1.0, pixels=96, half_width=2.0)
-    settings = quick(photons=1_000_000)
+    settings = quick(lamp_rays=1_000_000)
     result = render(scene, settings)
     xy = floor_points(scene)
     r = np.linalg.norm(xy, axis=-1)
@@ -53,7 +53,7 @@ def test_glass_sphere_focuses_where_geometric_optics_puts_it():
     # centre height c with the image on the floor: 1/(lamp_z - c) + 1/c = 1/f
     c = 0.5 * lamp_z + math.sqrt(0.25 * lamp_z ** 2 - f * lamp_z)
     scene = ball_lens(ior=n, center_z=c, pixels=64, half_width=1.0)
-    result = render(scene, quick(photons=1_000_000))
+    result = render(scene, quick(lamp_rays=1_000_000))
     imap = result.maps["Floor"]
     xy = floor_points(scene).reshape(-1, 2)
     caustic = imap.irradiance_at(xy)[:, 0]
@@ -78,7 +78,7 @@ def test_landed_flux_never_exceeds_what_was_sent_toward_the_glass():
 
 @pytest.mark.parametrize("scale", [1e-3, 1e4])
 def test_results_do_not_depend_on_scene_scale(scale):
-    settings = quick(photons=200_000)
+    settings = quick(lamp_rays=200_000)
     reference = render(ball_lens(scale=1.0, pixels=48), settings).image
     scaled = render(ball_lens(scale=scale, pixels=48), settings).image
     error = np.linalg.norm(scaled - reference) / np.linalg.norm(reference)
@@ -87,15 +87,15 @@ def test_results_do_not_depend_on_scene_scale(scale):
 
 def test_chunking_changes_nothing():
     scene = ball_lens(pixels=32)
-    small = render(scene, quick(photons=100_000, chunk_size=4096))
-    large = render(scene, quick(photons=100_000, chunk_size=1 << 17))
+    small = render(scene, quick(lamp_rays=100_000, chunk_size=4096))
+    large = render(scene, quick(lamp_rays=100_000, chunk_size=1 << 17))
     np.testing.assert_allclose(small.maps["Floor"].flux, large.maps["Floor"].flux, rtol=1e-9, atol=1e-15)
     np.testing.assert_allclose(small.image, large.image, rtol=1e-5, atol=1e-7)
 
 
 @pytest.mark.parametrize("ior", [1.0, 1.33, 2.41, 4.0, 1 / 1.33])
 def test_outputs_are_finite(ior):
-    result = render(ball_lens(ior=ior, pixels=32, absorption=0.5), quick(photons=50_000, spp=2))
+    result = render(ball_lens(ior=ior, pixels=32, absorption=0.5), quick(lamp_rays=50_000, spp=2))
     assert np.isfinite(result.image).all()
     assert all(np.isfinite(p).all() for p in result.passes.values())
     assert all(np.isfinite(m.irradiance()).all() for m in result.maps.values())
@@ -124,7 +124,7 @@ def test_caustic_matches_the_exact_ball_lens_reference():
 
     r_edges = np.linspace(0.0, shadow_radius(), 61)
     exact = reference.ball_lens_irradiance(1.0, 1.5, 1.5, 6.0, 1000.0 / (4 * math.pi), r_edges)
-    result = render(ball_lens(pixels=8), quick(photons=1_000_000))
+    result = render(ball_lens(pixels=8), quick(lamp_rays=1_000_000))
     xy = annulus_points(r_edges, 200)
     ours = annulus_means(result.maps["Floor"].irradiance_at(xy)[:, 0], r_edges)
     assert relative_l2(ours, exact.caustic, r_edges) < 0.08

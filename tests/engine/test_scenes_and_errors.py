@@ -22,8 +22,8 @@ def test_targeted_and_sphere_emission_agree():
     def profile(settings):
         return annulus_means(render(scene, settings).maps["Floor"].irradiance_at(xy)[:, 0], r_edges)
 
-    targeted = profile(quick(photons=300_000))
-    sphere = profile(quick(photons=300_000 * 20, emission="sphere"))
+    targeted = profile(quick(lamp_rays=300_000))
+    sphere = profile(quick(lamp_rays=300_000 * 20, emission="sphere"))
     assert relative_l2(targeted, sphere, r_edges) < 0.05
 
 
@@ -34,7 +34,7 @@ def test_targeted_and_sphere_emission_agree():
 def test_spot_and_sun_make_a_caustic_too(light):
     scene = ball_lens(pixels=32)
     scene.lights = [light]
-    result = render(scene, quick(photons=200_000))
+    result = render(scene, quick(lamp_rays=200_000))
     floor = result.maps["Floor"].irradiance_at(np.zeros((1, 2)))[0, 0]
     if isinstance(light, SunLight):
         unobstructed = light.strength
@@ -55,12 +55,12 @@ def test_sun_direct_light_is_its_strength():
 def test_progress_reaches_the_end_and_cancel_stops():
     scene = ball_lens(pixels=32)
     seen = []
-    render(scene, quick(photons=100_000, chunk_size=8192), progress=lambda f, stage: seen.append((f, stage)))
+    render(scene, quick(lamp_rays=100_000, chunk_size=8192), progress=lambda f, stage: seen.append((f, stage)))
     fractions = [f for f, _ in seen]
     assert fractions == sorted(fractions) and fractions[-1] == 1.0
     assert {stage for _, stage in seen} == {"photon pass", "eye pass"}
     with pytest.raises(Cancelled):
-        render(scene, quick(photons=100_000, chunk_size=8192), cancel=lambda: True)
+        render(scene, quick(lamp_rays=100_000, chunk_size=8192), cancel=lambda: True)
 
 
 def broken(**changes):
@@ -87,10 +87,10 @@ def broken(**changes):
 ])
 def test_bad_scenes_name_the_culprit(changes, message):
     with pytest.raises(SceneError, match=message):
-        render(broken(**changes), quick(photons=1000))
+        render(broken(**changes), quick(lamp_rays=1000))
 
 
-@pytest.mark.parametrize("field, value", [("photons", -1), ("spp", 0), ("map_scale", -2.0), ("emission", "cone")])
+@pytest.mark.parametrize("field, value", [("lamp_rays", -1), ("spp", 0), ("map_scale", -2.0), ("emission", "cone")])
 def test_bad_settings_name_the_field(field, value):
     with pytest.raises(ValueError, match=field):
         render(ball_lens(pixels=8), RenderSettings(**{field: value}))
@@ -100,9 +100,9 @@ def test_open_and_inverted_meshes_are_reported():
     scene = ball_lens(pixels=8)
     glass = scene.objects[1].mesh
     scene.objects[1].mesh = Mesh(glass.vertices, glass.triangles[:, ::-1], -glass.corner_normals[:, ::-1])
-    assert any("inverted normals" in w for w in render(scene, quick(photons=10_000)).warnings)
+    assert any("inverted normals" in w for w in render(scene, quick(lamp_rays=10_000)).warnings)
     scene.objects[1].mesh = Mesh(glass.vertices, glass.triangles[10:], glass.corner_normals[10:])
-    assert any("not a closed mesh" in w for w in render(scene, quick(photons=10_000)).warnings)
+    assert any("not a closed mesh" in w for w in render(scene, quick(lamp_rays=10_000)).warnings)
 
 
 def test_inverted_normals_render_like_the_right_ones():
@@ -129,10 +129,10 @@ def test_a_curved_receiver_collects_caustics_through_its_uvs():
     uv = (np.stack([gx, gy], -1).reshape(-1, 2) + 4) / 8
     trough = Scene([Object("Floor", Mesh(verts, tris, corner_uvs=uv[tris]), Diffuse()), flat.objects[1]],
                    flat.lights, flat.camera)
-    curved = render(trough, quick(photons=200_000))
+    curved = render(trough, quick(lamp_rays=200_000))
     assert "Floor" in curved.maps
     landed = curved.maps["Floor"].flux.sum()
-    assert landed == pytest.approx(render(flat, quick(photons=200_000)).maps["Floor"].flux.sum(), rel=0.02)
+    assert landed == pytest.approx(render(flat, quick(lamp_rays=200_000)).maps["Floor"].flux.sum(), rel=0.02)
 
 
 def test_a_camera_move_reuses_the_illumination_maps():
@@ -141,21 +141,21 @@ def test_a_camera_move_reuses_the_illumination_maps():
     changing the lamp, the glass or the photon settings traces again."""
     cache = MapCache()
     scene = ball_lens(pixels=16)
-    first = render(scene, quick(photons=50_000), cache=cache)
-    assert not first.stats["photon_pass_cached"]
+    first = render(scene, quick(lamp_rays=50_000), cache=cache)
+    assert not first.stats["maps_cached"]
 
     scene.camera.matrix[0, 3] += 0.3
-    moved = render(scene, quick(photons=50_000, spp=4), cache=cache)
-    assert moved.stats["photon_pass_cached"] and moved.stats["rays_photon_pass"] == 0
-    np.testing.assert_allclose(moved.image, render(scene, quick(photons=50_000, spp=4)).image, rtol=1e-6)
+    moved = render(scene, quick(lamp_rays=50_000, spp=4), cache=cache)
+    assert moved.stats["maps_cached"] and moved.stats["rays_lamp_pass"] == 0
+    np.testing.assert_allclose(moved.image, render(scene, quick(lamp_rays=50_000, spp=4)).image, rtol=1e-6)
 
     scene.lights = [PointLight((0, 0, 6), 500.0)]
-    assert not render(scene, quick(photons=50_000), cache=cache).stats["photon_pass_cached"]
+    assert not render(scene, quick(lamp_rays=50_000), cache=cache).stats["maps_cached"]
     scene.objects[1].material = Dielectric(1.33)
-    assert not render(scene, quick(photons=50_000), cache=cache).stats["photon_pass_cached"]
-    assert not render(scene, quick(photons=60_000), cache=cache).stats["photon_pass_cached"]
+    assert not render(scene, quick(lamp_rays=50_000), cache=cache).stats["maps_cached"]
+    assert not render(scene, quick(lamp_rays=60_000), cache=cache).stats["maps_cached"]
     # the band count matters only once a material disperses
-    assert render(scene, quick(photons=60_000, bands=3), cache=cache).stats["photon_pass_cached"]
+    assert render(scene, quick(lamp_rays=60_000, bands=3), cache=cache).stats["maps_cached"]
     scene.objects[1].material = Dielectric(1.33, abbe=55.7)
-    assert not render(scene, quick(photons=60_000, bands=3), cache=cache).stats["photon_pass_cached"]
-    assert not render(scene, quick(photons=60_000, bands=4), cache=cache).stats["photon_pass_cached"]
+    assert not render(scene, quick(lamp_rays=60_000, bands=3), cache=cache).stats["maps_cached"]
+    assert not render(scene, quick(lamp_rays=60_000, bands=4), cache=cache).stats["maps_cached"]

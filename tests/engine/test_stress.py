@@ -19,12 +19,16 @@ from hypothesis import HealthCheck, example, given, settings, strategies as st
 
 from caustic_addon import (Dielectric, Diffuse, Mesh, Object, PointLight, RenderSettings, Scene, SpotLight,
                            SunLight, render, shapes)
-from caustic_addon.accel import MISS, Accelerator, Hits
-from caustic_addon.emission import Photons, Sphere, hash_uniform
-from caustic_addon.interface import orient, scatter
-from caustic_addon.materials import Materials
-from caustic_addon.optics import dot, fresnel_dielectric, refract
-from caustic_addon.transport import trace_photons
+from caustic_addon.tracing.accelerator import Accelerator
+from caustic_addon.tracing.hits import Hits, MISS
+from caustic_addon.emission.photons import Photons
+from caustic_addon.emission.targets import Sphere
+from caustic_addon.sampling.hash import hash_uniform
+from caustic_addon.passes.bounce import orient, scatter
+from caustic_addon.scene.material_table import Materials
+from caustic_addon.optics.specular import fresnel_dielectric, refract
+from caustic_addon.util.vectors import dot
+from caustic_addon.passes.photon import trace_photons
 from metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius, top_camera, unobstructed_irradiance
 
@@ -632,7 +636,7 @@ def test_degenerate_and_duplicate_triangles_in_glass_and_receiver_change_nothing
     spoiled = ball_lens(pixels=16)
     spoiled.objects[0].mesh = with_junk(fine_floor(), rows=(10, 300, 301, 600))
     spoiled.objects[1].mesh = with_junk(spoiled.objects[1].mesh)
-    settings = quick(photons=100_000)
+    settings = quick(lamp_rays=100_000)
     a, b = render(clean, settings), render(spoiled, settings)
     assert np.isfinite(b.image).all() and all(np.isfinite(m.irradiance()).all() for m in b.maps.values())
     assert not any("non-finite" in w for w in b.warnings)
@@ -647,12 +651,12 @@ def test_closed_mesh_with_degenerate_or_duplicate_triangle_is_still_closed(junk)
     like the correctly wound sphere."""
     scene = ball_lens(pixels=16)
     glass = scene.objects[1].mesh
-    right = render(scene, quick(photons=50_000))
+    right = render(scene, quick(lamp_rays=50_000))
     t = glass.triangles
     extra = np.array([[t[50, 0], t[50, 0], t[50, 1]]]) if junk == "repeated corner" else t[[200]]
     scene.objects[1].mesh = inverted(Mesh(glass.vertices, np.vstack([t, extra]),
                                           np.concatenate([glass.corner_normals, glass.corner_normals[[50]]])))
-    flipped = render(scene, quick(photons=50_000))
+    flipped = render(scene, quick(lamp_rays=50_000))
     error = np.linalg.norm(flipped.image - right.image) / np.linalg.norm(right.image)
     called_open = any("not a closed mesh" in w for w in flipped.warnings)
     assert error < 0.01 and not called_open, f"image error {error:.3g}, called open: {called_open}"
@@ -670,8 +674,8 @@ def test_inverted_flat_shaded_icosahedron_renders_like_the_right_winding():
     Embree's float32 rounding, which follows the winding), with a warning."""
     mesh = icosahedron()
     mesh.vertices[:, 2] += 1.5
-    right = render(low_poly_lens_scene(mesh), quick(photons=100_000))
-    flipped = render(low_poly_lens_scene(inverted(mesh)), quick(photons=100_000))
+    right = render(low_poly_lens_scene(mesh), quick(lamp_rays=100_000))
+    flipped = render(low_poly_lens_scene(inverted(mesh)), quick(lamp_rays=100_000))
     assert any("inverted normals" in w for w in flipped.warnings) and not right.warnings
     np.testing.assert_allclose(flipped.stats["flux_landed_w"], right.stats["flux_landed_w"], rtol=1e-3)
     assert np.linalg.norm(flipped.image - right.image) / np.linalg.norm(right.image) < 1e-3
@@ -685,17 +689,17 @@ def test_open_mesh_warns_and_inside_outside_follows_its_normals():
     is the same."""
     scene = ball_lens(pixels=16)
     glass = scene.objects[1].mesh
-    closed = render(scene, quick(photons=100_000))
+    closed = render(scene, quick(lamp_rays=100_000))
     equator = np.argsort(np.abs(glass.corners.mean(axis=1)[:, 2] - 1.5))[:2]
     keep = np.setdiff1d(np.arange(len(glass.triangles)), equator)
     holed = Mesh(glass.vertices, glass.triangles[keep], glass.corner_normals[keep])
     scene.objects[1].mesh = holed
-    opened = render(scene, quick(photons=100_000))
+    opened = render(scene, quick(lamp_rays=100_000))
     assert any("not a closed mesh" in w for w in opened.warnings)
     assert np.isfinite(opened.image).all()
     assert np.linalg.norm(opened.image - closed.image) / np.linalg.norm(closed.image) < 0.01
     scene.objects[1].mesh = inverted(holed)
-    assert any("not a closed mesh" in w and "leak" in w for w in render(scene, quick(photons=10_000)).warnings)
+    assert any("not a closed mesh" in w and "leak" in w for w in render(scene, quick(lamp_rays=10_000)).warnings)
 
 
 # --------------------------------------------------------------------------------------------
@@ -704,7 +708,7 @@ def test_open_mesh_warns_and_inside_outside_follows_its_normals():
 
 @pytest.fixture(scope="module")
 def unit_scale_image():
-    return render(ball_lens(scale=1.0, pixels=32), quick(photons=100_000)).image
+    return render(ball_lens(scale=1.0, pixels=32), quick(lamp_rays=100_000)).image
 
 
 @STRESS
@@ -715,7 +719,7 @@ def test_image_does_not_depend_on_scene_scale(unit_scale_image, exponent):
     """Everything scaled by s = 10^exponent (log-uniform over 1e-3..1e4), lamp
     power by s^2 so irradiance is unchanged: the image equals the unit-scale
     one within noise (1% relative L2)."""
-    scaled = render(ball_lens(scale=10.0 ** exponent, pixels=32), quick(photons=100_000)).image
+    scaled = render(ball_lens(scale=10.0 ** exponent, pixels=32), quick(lamp_rays=100_000)).image
     assert np.isfinite(scaled).all()
     assert np.linalg.norm(scaled - unit_scale_image) / np.linalg.norm(unit_scale_image) < 0.01
 
@@ -745,7 +749,7 @@ def test_any_ior_from_1_to_4_keeps_flux_finite_and_bounded(ior):
     """IOR from 1 to 4 (diamond is 2.42): no NaN or inf anywhere, and the
     flux that lands is at most what the lamp sent toward the glass."""
     scene = ball_lens(ior=ior, pixels=16, absorption=0.2)
-    result = render(scene, quick(photons=40_000))
+    result = render(scene, quick(lamp_rays=40_000))
     assert_all_finite(result)
     landed = np.array(result.stats["flux_landed_w"])
     assert np.all(landed <= flux_sent_toward(scene)) and np.all(landed > 0)
@@ -762,7 +766,7 @@ def test_air_bubble_in_water_diverges_light():
 
     n = 1 / 1.33
     scene = ball_lens(ior=n, pixels=8)
-    result = render(scene, quick(photons=100_000))
+    result = render(scene, quick(lamp_rays=100_000))
     assert_all_finite(result)
     assert np.all(np.array(result.stats["flux_landed_w"]) <= flux_sent_toward(scene))
     imap = result.maps["Floor"]
@@ -788,7 +792,7 @@ def slab_scene(thickness: float) -> Scene:
 def slab_transmission(thickness: float, photons: int = 100_000):
     """(transmitted fraction of the flux on the slab, its binomial standard
     error, the render's warnings)."""
-    result = render(slab_scene(thickness), RenderSettings(photons=photons, spp=1, map_resolution_limit=64, density="adaptive"))
+    result = render(slab_scene(thickness), RenderSettings(lamp_rays=photons, spp=1, map_resolution_limit=64, density="adaptive"))
     transmitted = result.stats["flux_landed_w"][0] / 4.0  # sun of 1 W/m^2 on 4 m^2
     on_slab = photons * 4.0 / (2.0 * math.pi)  # photons fill the 2 x 2 slab's bounding disc, radius sqrt 2
     return transmitted, math.sqrt(transmitted * (1 - transmitted) / on_slab), result.warnings
@@ -877,7 +881,7 @@ def test_hollow_sphere_shell_1e_4_thick_is_crossed_surface_by_surface(ior):
 def caustic_profile(mesh: Mesh, seed: int = 0) -> tuple[np.ndarray, np.ndarray, dict]:
     scene = ball_lens(pixels=16)
     scene.objects[1].mesh = mesh
-    result = render(scene, quick(photons=100_000, seed=seed))
+    result = render(scene, quick(lamp_rays=100_000, seed=seed))
     assert_all_finite(result)
     assert not result.warnings
     r_edges = np.linspace(0.0, shadow_radius(), 31)
@@ -904,7 +908,7 @@ def peak_traced_bytes(photons: int) -> int:
     """tracemalloc's peak (numpy reports its buffers to it) over one render
     of `photons` photons in chunks of 2^15, on an 8x8 image. One thread, so
     that two chunks' peaks never coincide by chance."""
-    settings = quick(photons=photons, chunk_size=1 << 15, map_resolution_limit=128, threads=1)
+    settings = quick(lamp_rays=photons, chunk_size=1 << 15, map_resolution_limit=128, threads=1)
     scene = ball_lens(pixels=8, segments=32)
     tracemalloc.start()
     try:
@@ -913,7 +917,7 @@ def peak_traced_bytes(photons: int) -> int:
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()
-    assert result.stats["photons_emitted"] == pytest.approx(photons, rel=0.01)
+    assert result.stats["lamp_rays"] == pytest.approx(photons, rel=0.01)
     return peak
 
 
@@ -965,7 +969,7 @@ def test_random_small_scenes_never_produce_nan_or_inf(scene):
     spot or sun lamps, lamps inside the glass: image, passes and maps are
     finite, the stored flux is non-negative, and no warning mentions
     non-finite values."""
-    result = render(scene, quick(photons=20_000))
+    result = render(scene, quick(lamp_rays=20_000))
     assert_all_finite(result)
     for imap in result.maps.values():
         assert imap.flux.min() >= 0.0 and imap.count.min() >= 0.0
@@ -974,6 +978,6 @@ def test_random_small_scenes_never_produce_nan_or_inf(scene):
 def test_caustic_irradiance_is_never_negative():
     """Irradiance is a sum of non-negative flux: the ball lens's map and
     caustic pass have no negative value anywhere."""
-    result = render(ball_lens(pixels=16), quick(photons=20_000))
+    result = render(ball_lens(pixels=16), quick(lamp_rays=20_000))
     assert result.maps["Floor"].irradiance().min() >= 0.0
     assert result.passes["caustic"].min() >= 0.0 and result.image.min() >= 0.0

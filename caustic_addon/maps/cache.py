@@ -1,0 +1,73 @@
+"""Illumination maps kept between renders: moving the camera, or changing
+only the eye pass (samples, ambient, background), must not re-run the photon
+pass. Maps are found by a hash of everything the photon pass reads."""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import threading
+from collections import OrderedDict
+from dataclasses import fields
+
+import numpy as np
+
+from ..scene import RenderSettings, Scene
+
+# RenderSettings fields that change nothing in the photon pass's maps.
+_EYE_ONLY = {"spp", "threads", "chunk_size"}
+
+
+def photon_pass_key(scene: Scene, settings: RenderSettings) -> str:
+    """SHA-1 of the objects in order (name, geometry, material), the lamps
+    and the photon-pass settings: equal keys give equal maps. The band count
+    counts only if a material disperses."""
+    digest = hashlib.sha1()
+
+    def add(value) -> None:
+        if isinstance(value, np.ndarray):
+            digest.update(str((value.dtype, value.shape)).encode())
+            digest.update(np.ascontiguousarray(value).tobytes())
+        else:
+            digest.update(repr(value).encode())
+
+    for obj in scene.objects:
+        add((obj.name, type(obj.material).__name__))
+        for array in (obj.mesh.vertices, obj.mesh.triangles, obj.mesh.corner_normals, obj.mesh.corner_uvs):
+            add(array)
+        for name, value in vars(obj.material).items():
+            add(name)
+            add(value if isinstance(value, np.ndarray) else np.asarray(value))
+    for light in scene.lights:
+        add(type(light).__name__)
+        for name, value in vars(light).items():
+            add(name)
+            add(value if isinstance(value, np.ndarray) else np.asarray(value))
+    disperses = any(math.isfinite(getattr(o.material, "abbe", math.inf)) for o in scene.objects)
+    ignored = _EYE_ONLY if disperses else _EYE_ONLY | {"bands"}
+    add({f.name: getattr(settings, f.name) for f in fields(settings) if f.name not in ignored})
+    return digest.hexdigest()
+
+
+class MapCache:
+    """The photon passes of the last `capacity` distinct scenes: key ->
+    (maps, photon stats). Safe to share between threads."""
+
+    def __init__(self, capacity: int = 2):
+        self.capacity = capacity
+        self._entries: OrderedDict = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, key: str):
+        with self._lock:
+            if key in self._entries:
+                self._entries.move_to_end(key)
+                return self._entries[key]
+            return None
+
+    def put(self, key: str, value) -> None:
+        with self._lock:
+            self._entries[key] = value
+            self._entries.move_to_end(key)
+            while len(self._entries) > self.capacity:
+                self._entries.popitem(last=False)

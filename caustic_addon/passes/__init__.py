@@ -1,0 +1,1 @@
+"""The passes: photons and beams from the lamps into the maps, and Whitted rays from the eye."""

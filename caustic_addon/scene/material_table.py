@@ -1,0 +1,74 @@
+"""Per-object material tables, so both passes look materials up by object
+index in one numpy gather instead of a Python loop per hit."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..optics.dispersion import cauchy_ior
+from ..optics.spectrum import bands
+from .scene import Object
+
+
+@dataclass
+class Materials:
+    """Indexed by object index (m objects).
+
+    dielectric (m,) bool        reflector (m,) bool        receiver (m,) bool
+    specular_surface (m,) bool  dielectric or reflector: rays scatter there
+    ior (m,)                    color (m,3): glass tint or reflectance
+    absorption (m,3) per metre
+    albedo (m,3)                specular (m,3), exponent (m,)
+    ior_bands (m,K)             IOR in each of the K wavelength bands
+    band_weights (K,3)          each band's RGB share (spectrum.Bands)
+
+    K is 1, with ior_bands = ior, unless a dielectric disperses.
+    """
+
+    dielectric: np.ndarray
+    reflector: np.ndarray
+    receiver: np.ndarray
+    ior: np.ndarray
+    color: np.ndarray
+    absorption: np.ndarray
+    albedo: np.ndarray
+    specular: np.ndarray
+    exponent: np.ndarray
+    ior_bands: np.ndarray
+    band_weights: np.ndarray
+
+    @property
+    def band_count(self) -> int:
+        return len(self.band_weights)
+
+    @staticmethod
+    def of(objects: list[Object], band_count: int = 1) -> "Materials":
+        """The tables for `objects`, with `band_count` wavelength bands if
+        any of them disperses."""
+        def column(name, default):
+            return np.array([getattr(o.material, name, default) for o in objects], dtype=np.float64)
+
+        def rgb_column(name, default):
+            return column(name, np.full(3, default)).reshape(-1, 3)
+
+        ior, abbe = column("ior", 1.0), column("abbe", np.inf)
+        spectral = bands(band_count if np.isfinite(abbe).any() else 1)
+        return Materials(
+            dielectric=np.array([o.is_transparent for o in objects], dtype=bool),
+            reflector=np.array([o.is_reflector for o in objects], dtype=bool),
+            receiver=np.array([o.is_receiver for o in objects], dtype=bool),
+            ior=ior,
+            color=rgb_column("color", 1.0),
+            absorption=rgb_column("absorption", 0.0),
+            albedo=rgb_column("albedo", 0.0),
+            specular=rgb_column("specular", 0.0),
+            exponent=column("exponent", 1.0),
+            ior_bands=cauchy_ior(ior[:, None], abbe[:, None], spectral.wavelengths[None, :]),
+            band_weights=spectral.weights,
+        )
+
+    @property
+    def specular_surface(self) -> np.ndarray:
+        return self.dielectric | self.reflector

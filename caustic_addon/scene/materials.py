@@ -1,0 +1,79 @@
+"""What a surface does to light: glass, diffuse, mirror."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Union
+
+import numpy as np
+
+from .color import RGB, rgb
+
+
+@dataclass
+class Dielectric:
+    """Clear or coloured glass, water, gems: refracts and reflects (Fresnel).
+
+    ior           index of refraction relative to the surrounding medium: 1.33
+                  water, 1.5 glass, 1.9 cubic zirconia, 2.41 diamond; below 1 for
+                  an air bubble in water (1/1.33)
+    color         tint applied at every reflection and refraction, as the
+                  colour of Blender's Glass BSDF
+    absorption    (3,) Beer-Lambert absorption coefficient, per metre, inside
+                  (optics.absorption_from_color turns a colour at a distance
+                  into one)
+    abbe          Abbe number V_d: the IOR follows Cauchy's law through `ior`
+                  at 587.6 nm with this dispersion (optics.cauchy_ior); 55
+                  diamond, 58 crown glass, 33 cubic zirconia; inf for none
+    """
+
+    ior: float = 1.5
+    color: RGB = field(default_factory=lambda: np.ones(3))
+    absorption: RGB = field(default_factory=lambda: np.zeros(3))
+    abbe: float = math.inf
+
+    def __post_init__(self):
+        self.color = rgb(self.color)
+        self.absorption = rgb(self.absorption)
+
+
+@dataclass
+class Diffuse:
+    """An opaque Lambertian surface with an optional Blinn-Phong highlight.
+
+    albedo        (3,) diffuse reflectance
+    specular      (3,) specular colour (0 for none)
+    exponent      Blinn-Phong exponent
+    receiver      whether it collects caustics into an illumination map
+    """
+
+    albedo: RGB = field(default_factory=lambda: np.full(3, 0.8))
+    specular: RGB = field(default_factory=lambda: np.zeros(3))
+    exponent: float = 50.0
+    receiver: bool = True
+
+    def __post_init__(self):
+        self.albedo = rgb(self.albedo)
+        self.specular = rgb(self.specular)
+
+
+@dataclass
+class Reflector:
+    """A specular mirror or polished metal: every ray reflects, r = d - 2 (d.n) n
+    about the shading normal, and its colour is multiplied by `color`.
+
+    color         (3,) reflectance, the same at every angle (a metal's
+                  Schlick/F82 rise toward grazing incidence is ignored)
+
+    It is perfectly smooth: the add-on names glossy materials with a
+    roughness above 0 in a warning, as it does rough glass.
+    """
+
+    color: RGB = field(default_factory=lambda: np.full(3, 0.9))
+
+    def __post_init__(self):
+        self.color = rgb(self.color)
+
+
+Material = Union[Dielectric, Diffuse, Reflector]

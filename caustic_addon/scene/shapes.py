@@ -1,0 +1,97 @@
+"""Procedural meshes for tests, benchmarks and the paper's experiments: a
+sphere, a cylinder, a cone (point down), a plane, and an open tube (a mirror
+ring). All but the tube are closed; all are wound counter-clockwise seen from
+outside, with smooth corner normals (flat on caps and the plane)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .geometry import Mesh
+
+
+def plane(size: float = 10.0, center=(0.0, 0.0, 0.0)) -> Mesh:
+    """A square of side `size` in the z = center_z plane, facing +z, with UVs."""
+    h = 0.5 * size
+    verts = np.array([[-h, -h, 0], [h, -h, 0], [h, h, 0], [-h, h, 0]], dtype=np.float64) + center
+    tris = np.array([[0, 1, 2], [0, 2, 3]])
+    uv = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=np.float64)
+    return Mesh(verts, tris, np.tile([0.0, 0.0, 1.0], (2, 3, 1)), uv[tris])
+
+
+def uv_sphere(radius: float = 1.0, center=(0.0, 0.0, 0.0), segments: int = 64, rings: int = 32) -> Mesh:
+    """A UV sphere with smooth normals: segments around, rings pole to pole."""
+    theta = np.linspace(0.0, math.pi, rings + 1)[1:-1]
+    phi = np.linspace(0.0, 2.0 * math.pi, segments, endpoint=False)
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    ring = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1).reshape(-1, 3)
+    unit = np.concatenate([[[0.0, 0.0, 1.0]], ring, [[0.0, 0.0, -1.0]]])
+    top, bottom = 0, len(unit) - 1
+
+    def at(r, s):
+        return 1 + r * segments + s % segments
+
+    s = np.arange(segments)
+    tris = [np.stack([np.full(segments, top), at(0, s), at(0, s + 1)], axis=1)]
+    for r in range(rings - 2):
+        a, b, c, d = at(r, s), at(r + 1, s), at(r + 1, s + 1), at(r, s + 1)
+        tris += [np.stack([a, b, c], axis=1), np.stack([a, c, d], axis=1)]
+    tris.append(np.stack([np.full(segments, bottom), at(rings - 2, s + 1), at(rings - 2, s)], axis=1))
+    tris = np.concatenate(tris)
+    return Mesh(unit * radius + np.asarray(center, dtype=np.float64), tris, unit[tris])
+
+
+def sphere_for_triangles(triangles: int, radius: float = 1.0, center=(0.0, 0.0, 0.0)) -> Mesh:
+    """A UV sphere with about `triangles` triangles (2 segments per ring)."""
+    rings = max(3, int(round(math.sqrt(triangles / 4.0))))
+    return uv_sphere(radius, center, segments=2 * rings, rings=rings)
+
+
+def _revolve(profile: np.ndarray, normals: np.ndarray, segments: int, center) -> Mesh:
+    """Surface of revolution about z of a closed profile (k,2) of (r, z)
+    points from the top axis to the bottom axis, with profile normals (k,2)
+    per point as (n_r, n_z). Each profile edge becomes a band of quads; an
+    edge ending on the axis becomes a fan."""
+    phi = np.linspace(0.0, 2.0 * math.pi, segments, endpoint=False)
+    cos, sin = np.cos(phi), np.sin(phi)
+    verts, norms, tris = [], [], []
+    for (r0, z0), (r1, z1), (m0, n0) in zip(profile[:-1], profile[1:], normals):
+        band = []
+        for r, z in ((r0, z0), (r1, z1)):
+            band.append(np.stack([r * cos, r * sin, np.full(segments, z)], axis=1))
+        normal = np.stack([m0 * cos, m0 * sin, np.full(segments, n0)], axis=1)
+        base = sum(len(v) for v in verts)
+        verts += band
+        norms += [normal, normal]
+        s = np.arange(segments)
+        a, b = base + s, base + (s + 1) % segments
+        c, d = base + segments + (s + 1) % segments, base + segments + s
+        tris += [np.stack([a, d, c], axis=1), np.stack([a, c, b], axis=1)]
+    verts, norms, tris = np.concatenate(verts), np.concatenate(norms), np.concatenate(tris)
+    corners = verts[tris]
+    keep = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1) > 0
+    tris = tris[keep]
+    return Mesh(verts + np.asarray(center, dtype=np.float64), tris, norms[tris])
+
+
+def cylinder(radius: float = 1.0, height: float = 1.0, center=(0.0, 0.0, 0.0), segments: int = 128) -> Mesh:
+    """A flat-based cylinder from z = center_z to center_z + height, smooth sides, flat caps."""
+    profile = np.array([[0.0, height], [radius, height], [radius, 0.0], [0.0, 0.0]])
+    normals = np.array([[0.0, 1.0], [1.0, 0.0], [0.0, -1.0]])
+    return _revolve(profile, normals, segments, center)
+
+
+def cone(radius: float = 1.0, height: float = 1.5, center=(0.0, 0.0, 0.0), segments: int = 128) -> Mesh:
+    """A pointed-based cone, point down at center, flat top cap at center_z + height."""
+    profile = np.array([[0.0, height], [radius, height], [0.0, 0.0]])
+    slant = np.array([height, -radius]) / math.hypot(height, radius)
+    normals = np.array([[0.0, 1.0], slant])
+    return _revolve(profile, normals, segments, center)
+
+
+def tube(radius: float = 1.0, height: float = 1.0, center=(0.0, 0.0, 0.0), segments: int = 256) -> Mesh:
+    """An open tube (no caps) about z from center_z to center_z + height,
+    smooth radial normals: a coffee cup's wall, or a ring."""
+    return _revolve(np.array([[radius, height], [radius, 0.0]]), np.array([[1.0, 0.0]]), segments, center)

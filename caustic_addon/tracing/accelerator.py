@@ -1,0 +1,268 @@
+"""One Embree scene per render, shared by the photon pass and the eye pass.
+
+embreex facts this module absorbs (see shared notes): tnear is always 0, so
+callers offset secondary origins with `offset()`; Embree's Ng is unnormalised
+and its sign follows Embree's winding, so we use our own outward face normals
+instead; `run` releases the GIL, so batches are split over worker threads.
+"""
+
+from __future__ import annotations
+
+import threading
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+from embreex import rtcore_scene
+from embreex.mesh_construction import TriangleMesh
+
+from ..scene import Object
+from ..util.vectors import length, normalize
+from .hits import MISS, Hits
+from .topology import open_edge_count, signed_volume, triangle_normals
+
+_MIN_SPLIT = 8192
+# Origins move this fraction of the scene's diagonal off a surface: well above
+# float32 hit-distance error (~1e-7 relative), well below features we resolve.
+EPSILON_FRACTION = 2e-6
+# Faces of closed meshes met from the side the ray's medium rules out are
+# passed, at most this many times per ray and call (see Accelerator.intersect).
+_MAX_SKIPS = 4
+# Triangles per closed dielectric probed for walls thinner than epsilon.
+_THICKNESS_PROBES = 1 << 13
+# Directions that `medium_at` looks along, and vote over: fixed, and unlikely
+# to line up with a mesh's edges.
+_PROBE_DIRS = normalize(np.array([[0.2672, 0.5345, 0.8018], [-0.7071, 0.1104, -0.6984], [0.5774, -0.8083, 0.1155]]))
+
+
+class Accelerator:
+    """The scene's triangles in one Embree BVH, with per-triangle shading data.
+
+    closed (m,) bool per object: a dielectric mesh without holes, whose
+    inside a ray's own state can track.
+
+    Per global triangle index (all objects' triangles, in object order):
+      corners        (N,3,3) world positions of the corners
+      face_normal    (N,3) unit geometric normal, facing out of closed meshes
+      corner_normal  (N,3,3) unit shading normals at the corners, same side
+      min_barycentric (N,3) the barycentric coordinate, per corner, of a point
+                     epsilon from the opposite edge (at most 0.3)
+      owner          (N,) index of the object the triangle belongs to
+    """
+
+    def __init__(self, objects: list[Object], extent: float, threads: int = 2):
+        self.objects = objects
+        self.epsilon = EPSILON_FRACTION * extent
+        self.threads = max(1, threads)
+        self.warnings: list[str] = []
+        self.rays_cast = 0
+        self._count_lock = threading.Lock()
+        self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
+        self._embree = rtcore_scene.EmbreeScene()
+
+        all_corners, face_normals, corner_normals, areas, owners, offsets = [], [], [], [], [], [0]
+        self.closed = np.zeros(len(objects), dtype=bool)
+        for index, obj in enumerate(objects):
+            mesh = obj.mesh
+            TriangleMesh(self._embree, mesh.vertices.astype(np.float32), mesh.triangles.astype(np.int32))
+            corners = mesh.corners
+            normals, area = triangle_normals(corners)
+            sign = 1.0
+            if obj.is_transparent:
+                self.closed[index] = open_edge_count(obj.mesh.triangles, obj.mesh.vertices) == 0
+                sign = self._outward_sign(obj, corners, self.closed[index])
+            normals *= sign
+            if mesh.corner_normals is None:
+                shading = np.repeat(normals[:, None, :], 3, axis=1)
+            else:
+                shading = mesh.corner_normals * sign
+            all_corners.append(corners)
+            face_normals.append(normals)
+            areas.append(area)
+            corner_normals.append(shading)
+            owners.append(np.full(len(normals), index, dtype=np.int64))
+            offsets.append(offsets[-1] + len(normals))
+
+        self.corners = np.concatenate(all_corners) if all_corners else np.zeros((0, 3, 3))
+        self.min_barycentric = self._min_barycentric(self.corners, np.concatenate(areas) if areas else np.zeros(0))
+        self.face_normal = np.concatenate(face_normals) if face_normals else np.zeros((0, 3))
+        self.corner_normal = np.concatenate(corner_normals) if corner_normals else np.zeros((0, 3, 3))
+        self.owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
+        self.prim_offset = np.asarray(offsets, dtype=np.int64)
+        for index in np.flatnonzero(self.closed):
+            self._warn_if_thin(index)
+        self.rays_cast = 0  # counts the passes' rays, not the probes'
+
+    def _min_barycentric(self, corners: np.ndarray, area: np.ndarray) -> np.ndarray:
+        """(N,3) epsilon / altitude onto each corner's opposite edge, where
+        altitude = 2 area / edge length; at most 0.3 (tiny triangles).
+        `area (N,)` of each triangle."""
+        opposite = np.stack([length(corners[:, (k + 1) % 3] - corners[:, (k + 2) % 3]) for k in range(3)], axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            fraction = self.epsilon * opposite / (2.0 * area[:, None])
+        return np.where(np.isfinite(fraction), np.minimum(fraction, 0.3), 0.3)
+
+    def _warn_if_thin(self, index: int) -> None:
+        """Warn when closed object `index` has a wall thinner than epsilon:
+        a ray offset off one side would start beyond the other. Probes from
+        up to _THICKNESS_PROBES face centres, evenly spread over the mesh,
+        half an epsilon inside, along the inward normal; on a larger mesh a
+        thin wall of only a few faces can go unprobed."""
+        first, end = self.prim_offset[index], self.prim_offset[index + 1]
+        prim = np.unique(np.linspace(first, end - 1, min(end - first, _THICKNESS_PROBES)).astype(np.int64))
+        prim = prim[np.linalg.norm(self.face_normal[prim], axis=1) > 0.0]
+        inward = -self.face_normal[prim]
+        hits = self._closest(self.corners[prim].mean(axis=1) + 0.5 * self.epsilon * inward, inward)
+        if np.any((hits.obj == index) & (hits.t < 0.5 * self.epsilon)):
+            self.warnings.append(
+                f"'{self.objects[index].name}' is thinner than the tracing epsilon ({self.epsilon:.2g} m) in "
+                "places: light crosses such a wall as if it were one surface")
+
+    def _outward_sign(self, obj: Object, corners: np.ndarray, closed: bool) -> float:
+        """+1 if the mesh's winding faces out, -1 if it is inside out."""
+        if not closed:
+            self.warnings.append(
+                f"'{obj.name}' is not a closed mesh: inside and outside are guessed per hit "
+                "from its normals, so light may leak through its holes")
+            return 1.0
+        if signed_volume(corners) < 0.0:
+            self.warnings.append(f"'{obj.name}' has inverted normals; they were flipped for tracing")
+            return -1.0
+        return 1.0
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown()
+
+    def _run(self, origins: np.ndarray, dirs: np.ndarray, **kwargs) -> list[dict]:
+        """Embree over the batch, split across threads; one result dict per part."""
+        n = len(origins)
+        with self._count_lock:
+            self.rays_cast += n
+        o32 = np.ascontiguousarray(origins, dtype=np.float32)
+        d32 = np.ascontiguousarray(dirs, dtype=np.float32)
+        dists = kwargs.pop("dists", None)
+        if self._pool is None or n < _MIN_SPLIT:
+            return [self._embree.run(o32, d32, dists=dists, **kwargs)]
+        bounds = np.linspace(0, n, self.threads + 1).astype(int)
+        parts = [(bounds[i], bounds[i + 1]) for i in range(self.threads)]
+        futures = [self._pool.submit(self._embree.run, o32[a:b], d32[a:b],
+                                     dists=None if dists is None else dists[a:b], **kwargs)
+                   for a, b in parts]
+        return [f.result() for f in futures]
+
+    def intersect(self, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray | None = None) -> Hits:
+        """Closest hits of rays `origins (n,3)`, `dirs (n,3)` (unit), world space.
+
+        With `medium (n,)`, the closed object each ray is inside (MISS if
+        none), a face of a closed mesh met from the side the medium rules out
+        (entering the object the ray is in, or leaving one it is not in) is
+        passed: the ray goes on from just beyond it, and `t` adds up the legs.
+        Such hits are float32 artefacts: the neighbour of the face just
+        crossed, met again at t ~ 0 past a shared edge; a face turned away
+        from a ray that only touches a vertex; the far side of a crack in
+        Embree's non-watertight triangle test. Passing them keeps a ray's
+        medium true to the side of the surface it is on."""
+        hits = self._closest(origins, dirs)
+        if medium is None:
+            return hits
+        for _ in range(_MAX_SKIPS):
+            skip = np.flatnonzero(self._contradicts(hits, dirs, medium))
+            if len(skip) == 0:
+                break
+            face = np.take(self.face_normal, hits.prim[skip], axis=0)
+            start = self.offset(hits.points[skip], face, dirs[skip])
+            again = self._closest(start, dirs[skip])
+            again.t += hits.t[skip] + length(start - hits.points[skip])
+            hits.replace(skip, again)
+        return hits
+
+    def medium_at(self, points: np.ndarray) -> np.ndarray:
+        """(n,) the closed object each of `points (n,3)` is inside, MISS if
+        none: along each of three fixed directions, the first closed mesh
+        met from behind (its inside) holds the point; the three vote, so a
+        ray through a crack between triangles cannot decide alone."""
+        votes = []
+        for direction in _PROBE_DIRS:
+            dirs = np.broadcast_to(direction, points.shape)
+            origins = np.array(points, dtype=np.float64)
+            found = np.full(len(points), MISS, dtype=np.int64)
+            open_hit = np.arange(len(points))
+            for _ in range(_MAX_SKIPS):
+                hits = self._closest(origins[open_hit], dirs[open_hit])
+                closed = hits.hit.copy()
+                closed[closed] = self.closed[hits.obj[closed]]
+                behind = np.einsum("ij,ij->i", dirs[open_hit], self.face_normal[np.maximum(hits.prim, 0)]) > 0.0
+                found[open_hit[closed & behind]] = hits.obj[closed & behind]
+                through = hits.hit & ~closed
+                origins[open_hit[through]] = self.offset(hits.points[through], np.take(self.face_normal, hits.prim[through], axis=0),
+                                                         dirs[open_hit[through]])
+                open_hit = open_hit[through]
+                if len(open_hit) == 0:
+                    break
+            votes.append(found)
+        a, b, c = votes
+        return np.where((a == b) | (a == c), a, b)
+
+    def _contradicts(self, hits: Hits, dirs: np.ndarray, medium: np.ndarray) -> np.ndarray:
+        """(n,) bool: hits on closed meshes from the side the ray's medium rules out."""
+        closed = hits.hit.copy()
+        closed[closed] = self.closed[hits.obj[closed]]
+        index = np.flatnonzero(closed)
+        toward = np.einsum("ij,ij->i", dirs[index], np.take(self.face_normal, hits.prim[index], axis=0)) < 0.0
+        closed[index] = toward == (medium[index] == hits.obj[index])
+        return closed
+
+    def _closest(self, origins: np.ndarray, dirs: np.ndarray) -> Hits:
+        if len(origins) == 0:
+            empty = np.zeros(0)
+            return Hits(empty, empty.astype(np.int64), empty.astype(np.int64), empty, empty, np.zeros((0, 3)))
+        parts = self._run(origins, dirs, output=1)
+        geom = np.concatenate([p["geomID"] for p in parts]).astype(np.int64)
+        prim = np.concatenate([p["primID"] for p in parts]).astype(np.int64)
+        t = np.concatenate([p["tfar"] for p in parts]).astype(np.float64)
+        u = np.concatenate([p["u"] for p in parts]).astype(np.float64)
+        v = np.concatenate([p["v"] for p in parts]).astype(np.float64)
+        miss = geom < 0
+        t[miss] = np.inf
+        prim = np.where(miss, MISS, prim + self.prim_offset[np.maximum(geom, 0)])
+        points = origins.astype(np.float64, copy=True)
+        hit = np.flatnonzero(~miss)
+        points[hit] = self.surface_points(prim[hit], u[hit], v[hit])
+        return Hits(t, np.where(miss, MISS, geom), prim, u, v, points)
+
+    def surface_points(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """(n,3) float64 points of triangles `prim` at Embree's barycentrics,
+        each kept epsilon inside its triangle's edges. A float32 hit can fall
+        just past an edge; a ray leaving from there would already be beyond
+        the neighbouring face's plane and miss it."""
+        bary = np.stack([1.0 - u - v, u, v], axis=1)
+        bary = np.maximum(bary, np.take(self.min_barycentric, prim, axis=0))
+        bary /= (bary[:, 0] + bary[:, 1] + bary[:, 2])[:, None]
+        return np.einsum("ij,ijk->ik", bary, np.take(self.corners, prim, axis=0))
+
+    def occluded(self, origins: np.ndarray, dirs: np.ndarray, dists: np.ndarray) -> np.ndarray:
+        """(n,) bool: is anything between `origins` and `origins + dists * dirs`?"""
+        if len(origins) == 0:
+            return np.zeros(0, dtype=bool)
+        parts = self._run(origins, dirs, query="OCCLUDED",
+                          dists=np.ascontiguousarray(dists, dtype=np.float32))
+        return np.concatenate(parts) != MISS
+
+    def shading_normal(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """(n,3) unit shading normals, interpolated from the corner normals
+        with Embree's barycentrics; the face normal where they cancel out."""
+        w = 1.0 - u - v
+        c = np.take(self.corner_normal, prim, axis=0)
+        n = w[:, None] * c[:, 0] + u[:, None] * c[:, 1] + v[:, None] * c[:, 2]
+        size = length(n)
+        bad = ~(size > 1e-12)
+        n[bad] = self.face_normal[prim[bad]]
+        size[bad] = 1.0
+        return n / size[:, None]
+
+    def offset(self, points: np.ndarray, normals: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+        """Ray origins (n,3) nudged off the surface along the geometric normal
+        to the side `dirs` leave toward, so the new ray cannot hit it again."""
+        side = np.sign(np.einsum("ij,ij->i", normals, dirs))
+        side[side == 0] = 1.0
+        return points + (self.epsilon * side)[:, None] * normals

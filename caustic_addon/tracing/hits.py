@@ -1,0 +1,43 @@
+"""What a batch of rays hit."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..util.rows import take_rows
+
+# The object and triangle index of a ray that hit nothing.
+MISS = -1
+
+
+@dataclass
+class Hits:
+    """Closest hits of a batch of n rays.
+
+    t       (n,) float64 distance travelled to the hit, inf on a miss
+    obj     (n,) int64 object index into Accelerator.objects, MISS on a miss
+    prim    (n,) int64 global triangle index (over all objects), MISS on a miss
+    u, v    (n,) float64 Embree barycentrics: p = (1-u-v) p0 + u p1 + v p2
+    points  (n,3) float64 world hit points; the ray's origin on a miss
+    """
+
+    t: np.ndarray
+    obj: np.ndarray
+    prim: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    points: np.ndarray
+
+    @property
+    def hit(self) -> np.ndarray:
+        return self.obj != MISS
+
+    def select(self, mask: np.ndarray) -> "Hits":
+        return Hits(*take_rows(mask, self.t, self.obj, self.prim, self.u, self.v, self.points))
+
+    def replace(self, index: np.ndarray, other: "Hits") -> None:
+        """Overwrite the hits at `index (k,)` with `other`'s k hits."""
+        for name in ("t", "obj", "prim", "u", "v", "points"):
+            getattr(self, name)[index] = getattr(other, name)

@@ -1,0 +1,43 @@
+"""Mesh topology and measures: face normals and areas, enclosed volume, open edges."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..util.rows import row_ids
+from ..util.vectors import cross_rows, length
+
+
+def triangle_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(unit normals (nt,3), areas (nt,)) of triangles `corners (nt,3,3)`,
+    oriented by the right-hand rule on their winding. Degenerate triangles get
+    a zero normal and zero area."""
+    cross = cross_rows(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    double_area = length(cross)
+    return cross / np.where(double_area > 0, double_area, 1.0)[:, None], 0.5 * double_area
+
+
+def signed_volume(corners: np.ndarray) -> float:
+    """Volume enclosed by a closed mesh, positive when its normals face out
+    (divergence theorem: sum of p0 . (p1 x p2) / 6 over triangles)."""
+    return float(np.einsum("ij,ij->i", corners[:, 0], cross_rows(corners[:, 1], corners[:, 2])).sum() / 6.0)
+
+
+def open_edge_count(triangles: np.ndarray, vertices: np.ndarray) -> int:
+    """Number of edges not shared by exactly two triangles. Vertices at the
+    same position count as one, so meshes split for UVs or sharp edges still
+    read as closed; triangles that repeat a vertex, and copies of a
+    triangle, are left out."""
+    weld = row_ids(np.round(vertices, 9))
+    a, b, c = np.sort(weld[triangles], axis=1).T
+    # sorted, a triangle that repeats a vertex repeats it in neighbours
+    proper = (a != b) & (b != c)
+    a, b, c = a[proper], b[proper], c[proper]
+    n = int(weld.max(initial=0)) + 1
+    # a triangle's sorted corners as one number, up to 2^21 vertices
+    keys = (a * n + b) * n + c if n < 1 << 21 else row_ids(np.stack([a, b, c], axis=1))
+    first = np.unique(keys, return_index=True)[1]
+    a, b, c = a[first], b[first], c[first]
+    # with a <= b <= c each edge is already (low, high)
+    _, counts = np.unique(np.concatenate([a * n + b, b * n + c, a * n + c]), return_counts=True)
+    return int(np.count_nonzero(counts != 2))

@@ -1,0 +1,1 @@
+"""Row-wise numpy helpers that every stage uses."""
