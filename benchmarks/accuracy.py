@@ -1,6 +1,6 @@
 """Error against time on issue 4's ball-lens scene (benchmarks/ball_lens.py).
 
-    .venv/bin/python benchmarks/accuracy.py [--max-photons 1e6]
+    .venv/bin/python benchmarks/accuracy.py [--max-lamp-rays 1e6]
 
 For each density estimate of the engine, and photon counts from 1e4 up,
 renders the 320x240 view and measures the relative L2 error of the caustic
@@ -40,11 +40,11 @@ THRESHOLDS = (0.10, 0.05, 0.02)
 REPEATS = 3
 
 
-def engine_methods(max_photons: float) -> dict[str, tuple[dict, list[int]]]:
+def engine_methods(max_lamp_rays: float) -> dict[str, tuple[dict, list[int]]]:
     """Name -> (RenderSettings fields, photon counts) of each density
     estimate compared. Beams need far fewer paths, so they sweep lower
     counts (of the grid before refinement), in eighth decades."""
-    photons = [int(c) for c in 10 ** np.arange(4, np.log10(max_photons) + 0.01, 0.5)]
+    photons = [int(c) for c in 10 ** np.arange(4, np.log10(max_lamp_rays) + 0.01, 0.5)]
     beams = [int(c) for c in 10 ** np.arange(2.5, 5.01, 0.125)]
     methods = {"beam": (dict(density="beam"), beams),
                "beam, plain grid": (dict(density="beam", beam_refinement=0), beams)}
@@ -53,10 +53,10 @@ def engine_methods(max_photons: float) -> dict[str, tuple[dict, list[int]]]:
     return methods
 
 
-def run_engine(name: str, fields: dict, photon_counts: list[int], truth) -> list[dict]:
+def run_engine(name: str, fields: dict, lamp_ray_counts: list[int], truth) -> list[dict]:
     the_scene = ball_lens.scene()
     points = []
-    for photons in photon_counts:
+    for photons in lamp_ray_counts:
         settings = RenderSettings(lamp_rays=photons, spp=SPP, **fields)
         runs = []
         for _ in range(REPEATS):
@@ -79,12 +79,12 @@ def time_to_reach(points: list[dict], threshold: float):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--max-photons", type=float, default=1e6)
+    parser.add_argument("--max-lamp-rays", type=float, default=1e6)
     args = parser.parse_args()
 
     truth = ball_lens.pixel_reference(ball_lens.scene())
     curves = {name: run_engine(name, fields, counts, truth)
-              for name, (fields, counts) in engine_methods(args.max_photons).items()}
+              for name, (fields, counts) in engine_methods(args.max_lamp_rays).items()}
 
     table = {name: {f"{int(100 * t)}%": time_to_reach(points, t) for t in THRESHOLDS} for name, points in curves.items()}
     RESULTS.mkdir(exist_ok=True)

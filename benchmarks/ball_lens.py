@@ -18,8 +18,8 @@ import numpy as np
 
 import reference
 from caustic_addon import Camera, Dielectric, Diffuse, Object, PointLight, Scene, shapes
-from caustic_addon.tracing.accelerator import Accelerator
 from caustic_addon.passes.camera_rays import eye_rays
+from caustic_addon.tracing.accelerator import Accelerator
 
 RADIUS, IOR, CENTER_Z, LAMP_Z, POWER = 1.0, 1.5, 1.5, 6.0, 1000.0
 INTENSITY = POWER / (4 * math.pi)

@@ -57,7 +57,7 @@ BAR_SECONDS = 0.2
 def lamp_rays_for(error: float) -> int:
     """The fewest lamp rays on accuracy.json's Beam curve that reach `error`."""
     curve = json.loads((RESULTS / "accuracy.json").read_text())["curves"]["beam"]
-    return min(p["photons"] for p in curve if p["error"] <= error)
+    return min(p["lamp_rays"] for p in curve if p["error"] <= error)
 
 
 def upload_and_build(scene, repeats: int) -> tuple[float, float]:

@@ -63,8 +63,8 @@ import bpy  # noqa: E402
 from mathutils import Matrix  # noqa: E402
 
 import ball_lens  # noqa: E402
-from caustic_addon.tracing.accelerator import Accelerator  # noqa: E402
 from caustic_addon.passes.camera_rays import eye_rays  # noqa: E402
+from caustic_addon.tracing.accelerator import Accelerator  # noqa: E402
 from speed import machine  # noqa: E402
 
 RESULTS = HERE / "results"

@@ -35,7 +35,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 import paper_scenes as ps  # noqa: E402
 from caustic_addon import Dielectric, Object, RenderSettings, render, shapes  # noqa: E402
-from caustic_addon.emission.targets import Sphere  # noqa: E402
+from caustic_addon.emission.aims import Sphere  # noqa: E402
 from speed import machine  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"

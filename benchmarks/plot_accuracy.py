@@ -4,7 +4,7 @@ engine and, if measured, for Cycles.
     .venv/bin/python benchmarks/plot_accuracy.py
 
 Reads benchmarks/results/accuracy.json (benchmarks/accuracy.py: the engine's
-curves, points {photons, seconds, error}) and
+curves, points {lamp_rays, seconds, error}) and
 benchmarks/results/cycles_accuracy.json if present
 (benchmarks/cycles_accuracy.py: points {samples, seconds, error}), and
 writes benchmarks/results/accuracy.png: relative L2 error (%) against wall

@@ -20,7 +20,6 @@ On a machine other jobs load, the small savings are within its noise.
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import math
 import sys
@@ -37,13 +36,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import ball_lens  # noqa: E402
 from caustic_addon import (Camera, Dielectric, Diffuse, MapCache, Object, PointLight, RenderSettings,  # noqa: E402
-                           Scene, SpotLight, emission, eye_pass, lighting, render, shapes, transport)
+                           Scene, SpotLight, paper, render, shapes)
+from caustic_addon import renderer  # noqa: E402
+from caustic_addon.emission import aims  # noqa: E402
+from caustic_addon.passes import direct_light, eye, photon  # noqa: E402
 from caustic_addon.tracing.accelerator import Accelerator  # noqa: E402
 from caustic_addon.util.vectors import dot  # noqa: E402
 from speed import machine  # noqa: E402
 
-# the module; the package's `render` is its function
-render_module = importlib.import_module("caustic_addon.render")
 RESULTS = Path(__file__).resolve().parent / "results"
 PIXELS = (160, 120)
 
@@ -78,7 +78,7 @@ def rays(result) -> int:
 def row(name: str, scene_text: str, disabled_text: str, stage: str, on, off, effect: str = "",
         equal_quality: bool = True, **extra) -> dict:
     """One skip's figures: `on` and `off` are (seconds, result) with the
-    skip and without; `stage` ('bvh', 'photons', 'eye' or 'total') is the
+    skip and without; `stage` ('bvh', 'lamp_pass', 'eye' or 'total') is the
     time it changes; `effect`, what it does to the image. Without
     `equal_quality` the two differ in noise, and time alone is no saving."""
     (t_on, r_on), (t_off, r_off) = on, off
@@ -132,7 +132,7 @@ def lamps_out_of_view(repeats: int, quality: Quality) -> list[dict]:
     the glass, it takes a share of the photon budget for nothing, so the
     budget must grow to land as many photons (equal noise)."""
     spot = SpotLight((3.0, 0.0, 3.0), (0.0, 0.0, -1.0), 1000.0, math.radians(30.0), 0.1)
-    keep_all = partial(patched, emission, "visible_targets", lambda light, targets: list(targets))
+    keep_all = partial(patched, aims, "visible_targets", lambda light, targets: list(targets))
     alone = ball_scene()
     alone.lights = [spot]
     settings = RenderSettings(lamp_rays=1_000_000, **SPLAT)
@@ -140,7 +140,7 @@ def lamps_out_of_view(repeats: int, quality: Quality) -> list[dict]:
     with keep_all():
         off = timed(alone, settings, repeats)
     out = [row("no photons from a lamp that sees no glass", "ball lens under a spot lamp aimed 3 m from it; "
-               "1,000,000 photons", "`emission.visible_targets` keeps every glass", "photons", on, off,
+               "1,000,000 photons", "`aims.visible_targets` keeps every glass", "lamp_pass", on, off,
                "the same: nothing lands")]
 
     both = ball_scene([spot])
@@ -153,7 +153,7 @@ def lamps_out_of_view(repeats: int, quality: Quality) -> list[dict]:
     landed = (on[1].stats["landed"], off[1].stats["landed"])
     out.append(row("no photons from a lamp that sees no glass", f"ball lens, its point lamp and the spot lamp; "
                    f"{photons:,} photons", f"`visible_targets` keeps every glass; {count:,} photons land as many",
-                   "photons", on, off, f"landed {landed[0]:,} vs {landed[1]:,}; caustic noise "
+                   "lamp_pass", on, off, f"landed {landed[0]:,} vs {landed[1]:,}; caustic noise "
                    f"{100 * quality.noise(on[1]):.1f}% vs {100 * quality.noise(off[1]):.1f}%",
                    photons_without=count, landed_with=landed[0], landed_without=landed[1]))
     return out
@@ -176,7 +176,7 @@ def targeted_emission(repeats: int, quality: Quality) -> list[dict]:
         effect = (f"landed {landed:,} vs {off[1].stats['landed']:,}; "
                   f"caustic noise {100 * quality.noise(on[1]):.1f}% vs {100 * quality.noise(off[1]):.1f}%")
         out.append(row("photons only toward the glass", f"ball lens, {photons:,} photons",
-                       f"`emission='sphere'` (the paper's eq. 1), {label}: {count:,} photons", "photons", on, off,
+                       f"`emission='sphere'` (the paper's eq. 1), {label}: {count:,} photons", "lamp_pass", on, off,
                        effect, equal_quality=label != "equal photon count",
                        sphere_photons=count, landed_with=landed,
                        landed_without=off[1].stats["landed"]))
@@ -185,16 +185,16 @@ def targeted_emission(repeats: int, quality: Quality) -> list[dict]:
 
 def direct_radiance_shadowing_all(accel, lights, energy, points, shading, facing, view, albedo, specular, exponent,
                                   far):
-    """lighting.direct_radiance, after casting the shadow rays it skips:
+    """direct_light.direct_radiance, after casting the shadow rays it skips:
     one per point and lamp behind the surface."""
     for light in lights:
-        to_light, dist, _ = lighting.toward_light(light, energy, points, far)
+        to_light, dist, _ = direct_light.toward_light(light, energy, points, far)
         behind = ~((dot(shading, to_light) > 0.0) & (dot(facing, to_light) > 0.0))
         if behind.any():
             accel.occluded(accel.offset(points[behind], -facing[behind], to_light[behind]), to_light[behind],
                            dist[behind] - 2.0 * accel.epsilon)
-    return lighting.direct_radiance(accel, lights, energy, points, shading, facing, view, albedo, specular, exponent,
-                                    far)
+    return direct_light.direct_radiance(accel, lights, energy, points, shading, facing, view, albedo, specular, exponent,
+                                        far)
 
 
 def shadow_rays_behind(repeats: int) -> dict:
@@ -202,22 +202,22 @@ def shadow_rays_behind(repeats: int) -> dict:
     scene = ball_scene([PointLight((0.0, 0.0, -2.0), 1000.0)])
     settings = RenderSettings(lamp_rays=20_000, spp=4, density="adaptive")
     on = timed(scene, settings, repeats)
-    with patched(eye_pass, "direct_radiance", direct_radiance_shadowing_all):
+    with patched(eye, "direct_radiance", direct_radiance_shadowing_all):
         off = timed(scene, settings, repeats)
     same = float(np.abs(on[1].image - off[1].image).max())
     return row("no shadow ray toward a lamp behind the surface", "ball lens + a lamp under the floor, 4 spp",
                "a shadow ray per point and lamp", "eye", on, off, f"same image (max difference {same:.0e})")
 
 
-shade_opaque = eye_pass.EyePass._shade_opaque
+shade_opaque = eye.EyeTracer.arrived
 
 
 def shade_opaque_and_reflect(self, rays, hits):
-    """EyePass._shade_opaque, then a mirror ray from every opaque hit, as a
+    """EyeTracer.arrived, then a mirror ray from every opaque hit, as a
     Whitted tracer casts at any surface (it carries nothing from these
     diffuse materials); one level only, so a lower bound of the cost."""
     shade_opaque(self, rays, hits)
-    if len(rays.pixel) == 0:
+    if len(rays) == 0:
         return
     facing = np.take(self.accel.face_normal, hits.prim, axis=0)
     facing = np.where((dot(facing, rays.dirs) > 0.0)[:, None], -facing, facing)
@@ -229,7 +229,7 @@ def no_recursion_at_diffuse(repeats: int) -> dict:
     scene = ball_scene()
     settings = RenderSettings(lamp_rays=20_000, spp=4, density="adaptive")
     on = timed(scene, settings, repeats)
-    with patched(eye_pass.EyePass, "_shade_opaque", shade_opaque_and_reflect):
+    with patched(eye.EyeTracer, "arrived", shade_opaque_and_reflect):
         off = timed(scene, settings, repeats)
     return row("no recursion at diffuse surfaces", "ball lens, 4 spp",
                "a mirror ray at every diffuse hit (one level)", "eye", on, off, "same image")
@@ -246,11 +246,11 @@ def russian_roulette(repeats: int) -> dict:
         camera=Camera.from_paper(paper.FOV, *PIXELS, 1.0, paper.EYE, paper.TARGET))
     settings = RenderSettings(lamp_rays=500_000, spp=1, density="adaptive")
     on = timed(scene, settings, repeats)
-    with patched(transport, "_roulette", lambda flux, start, xi: (flux, flux.max(axis=1) > 0.0)):
+    with patched(photon, "roulette", lambda flux, threshold, xi: (flux, flux.max(axis=1) > 0.0)):
         off = timed(scene, settings, repeats)
     flux = (on[1].stats["flux_landed_w"][0], off[1].stats["flux_landed_w"][0])
     return row("Russian roulette below 5% of a photon's start flux", "diamond cone tinted 0.3, 500k photons",
-               "every photon traced to max depth (12) or escape", "photons", on, off,
+               "every photon traced to max depth (12) or escape", "lamp_pass", on, off,
                f"landed flux {flux[0]:.4g} vs {flux[1]:.4g} W", flux_landed_with=flux[0], flux_landed_without=flux[1])
 
 
@@ -262,7 +262,7 @@ def one_embree_scene(repeats: int) -> dict:
                  Object("Glass", shapes.uv_sphere(1.0, (0, 0, 1.5), 256, 128), Dielectric(1.5))],
         lights=[PointLight((0, 0, 6), 1000.0)],
         camera=Camera.look_at((0, -6, 5), (0, 0, 0.5), pixx=PIXELS[0], pixy=PIXELS[1]))
-    original = render_module.eye_pass
+    original = renderer.eye_pass
 
     def eye_pass_own_bvh(scene, settings, accel, materials, maps, monitor, start):
         own = Accelerator(scene.objects, scene.extent(), settings.threads)
@@ -274,7 +274,7 @@ def one_embree_scene(repeats: int) -> dict:
 
     settings = RenderSettings(lamp_rays=100_000, spp=1, density="adaptive")
     on = timed(scene, settings, repeats)
-    with patched(render_module, "eye_pass", eye_pass_own_bvh):
+    with patched(renderer, "eye_pass", eye_pass_own_bvh):
         off = timed(scene, settings, repeats)
     return row("one Embree scene for both passes", "65,536-triangle glass sphere, 100k photons",
                "a second BVH built for the eye pass", "total", on, off, "same image")
@@ -299,7 +299,7 @@ def map_cache(repeats: int) -> dict:
 def markdown(rows: list[dict]) -> str:
     lines = ["| skip | scene | without it | time with / without | rays with / without | saving | image |",
              "|---|---|---|---|---|---|---|"]
-    stage = {"bvh": "BVH", "photons": "photon pass", "eye": "eye pass", "total": "render"}
+    stage = {"bvh": "BVH", "lamp_pass": "photon pass", "eye": "eye pass", "total": "render"}
     for r in rows:
         t_on, t_off = r["seconds_with"][r["stage"]], r["seconds_without"][r["stage"]]
         saving = (f"{r['saving_seconds']:.2f} s ({100 * r['saving_fraction']:.0f}%)" if r["equal_quality"]

@@ -8,11 +8,8 @@ Two modes:
   on a grid of u in [0, 2 pi), v in [-pi/2, pi/2]; a photon carries the
   intensity times the solid angle of its (u,v) cell, so a uniform lamp stays
   uniform.
-- 'targeted': only into the cones (point, spot) or over the discs (sun) that
-  hold the casters' (transparent and reflecting objects') bounding spheres, on a low-discrepancy
-  sequence. Where cones overlap, a photon's flux is divided by the summed
-  sample density of all cones that contain it (the balance heuristic), so the
-  expected irradiance equals that of full-sphere emission.
+- 'targeted': only toward the casters (transparent and reflecting objects),
+  over the lamps' aims (aims.py), on a low-discrepancy sequence.
 """
 
 from __future__ import annotations
@@ -23,10 +20,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..sampling.sequences import r2_sequence
-from ..sampling.warps import orthonormal_basis, sample_cone, sample_disc
+from ..sampling.warps import sample_disc
 from ..scene import Light, SunLight
 from . import radiometry
-from .targets import Sphere, target_cone, visible_targets
+from .aims import Aim, Sphere, aims, balance_density, share
 
 
 def sphere_grid(count: int) -> tuple[int, int]:
@@ -53,7 +50,6 @@ class Emitter:
     in all; its photons' ids start at `id_base`."""
 
     count: int
-    flux_toward_targets: float
     id_base: int = 0
 
     def emit(self, start: int, stop: int) -> Photons:
@@ -72,7 +68,6 @@ class PointSphereEmitter(Emitter):
         self.light, self.energy = light, energy
         self.nu, self.nv = sphere_grid(count)
         self.count = self.nu * self.nv
-        self.flux_toward_targets = float(light.power * energy)
 
     def emit(self, start: int, stop: int) -> Photons:
         i = np.arange(start, stop)
@@ -87,100 +82,61 @@ class PointSphereEmitter(Emitter):
         return _kept(origins, dirs, flux, i + self.id_base)
 
 
-class PointConeEmitter(Emitter):
-    """Into the cones from a point or spot lamp that hold the target spheres."""
+class AimedEmitter(Emitter):
+    """Photons over a lamp's aims: `counts (k,)` of them over each, on the
+    R2 sequence mapped onto the unit disc in polar form (r = sqrt(u), phi =
+    2 pi v: uniform in area), then onto the aim. A photon's flux is what the
+    lamp sends its way over the balance density of the aims."""
 
-    def __init__(self, light: Light, energy: float, count: int, targets: list[Sphere], shift: np.ndarray):
-        self.light, self.energy, self.shift = light, energy, shift
-        axes, cos_max = zip(*(target_cone(light.position, sphere) for sphere in targets))
-        self.axes, self.cos_max = np.array(axes), np.array(cos_max)
-        solid_angles = 2.0 * math.pi * (1.0 - self.cos_max)
-        self.counts = np.maximum(1, np.round(count * solid_angles / solid_angles.sum())).astype(np.int64)
-        self.starts = np.concatenate([[0], np.cumsum(self.counts)])
+    def __init__(self, light: Light, energy: float, aims: list[Aim], counts: np.ndarray, shift: np.ndarray):
+        self.light, self.energy, self.aims, self.shift = light, energy, aims, shift
+        self.starts = np.concatenate([[0], np.cumsum(counts)])
         self.count = int(self.starts[-1])
-        # photons per steradian of each cone
-        self.density = self.counts / solid_angles
-        self.flux_toward_targets = float(light.power * energy * min(solid_angles.sum(), 4.0 * math.pi)
-                                         / (4.0 * math.pi))
+        self.density = counts / np.array([aim.measure for aim in aims])
 
     def emit(self, start: int, stop: int) -> Photons:
         i = np.arange(start, stop)
-        cone = np.searchsorted(self.starts, i, side="right") - 1
-        uv = r2_sequence(i - self.starts[cone], self.shift)
-        dirs = np.empty((len(i), 3))
-        for k in np.unique(cone):
-            sel = cone == k
-            dirs[sel] = sample_cone(self.axes[k], self.cos_max[k], uv[sel])
-        inside = (dirs @ self.axes.T) >= self.cos_max[None, :] - 1e-12
-        density = inside.astype(np.float64) @ self.density
-        flux = radiometry.intensity(self.light, self.energy, dirs) / density[:, None]
-        origins = np.broadcast_to(self.light.position, dirs.shape)
+        which = np.searchsorted(self.starts, i, side="right") - 1
+        disc = sample_disc(1.0, r2_sequence(i - self.starts[which], self.shift))
+        origins, dirs = np.empty((len(i), 3)), np.empty((len(i), 3))
+        for k in np.unique(which):
+            sel = which == k
+            origins[sel], dirs[sel] = self.aims[k].rays(disc[sel])
+        density = balance_density(self.aims, self.density, origins, dirs)
+        flux = self.aims[0].emitted(self.energy, dirs) / density[:, None]
         return _kept(origins, dirs, flux, i + self.id_base)
 
 
-class SunDiscEmitter(Emitter):
-    """Parallel rays over the discs, seen along the sun, of the target spheres.
-    Origins start upstream of everything (`start_distance` before each centre)."""
-
-    def __init__(self, light: SunLight, energy: float, count: int, targets: list[Sphere],
-                 start_distance: float, shift: np.ndarray):
-        self.light, self.energy, self.shift = light, energy, shift
-        self.targets, self.start_distance = targets, start_distance
-        self.tangent, self.bitangent = orthonormal_basis(light.direction)
-        areas = np.array([math.pi * s.radius ** 2 for s in targets])
-        self.counts = np.maximum(1, np.round(count * areas / areas.sum())).astype(np.int64)
-        self.starts = np.concatenate([[0], np.cumsum(self.counts)])
-        self.count = int(self.starts[-1])
-        self.density = self.counts / areas
-        self.flux_toward_targets = float(light.strength * energy * areas.sum())
-
-    def _plane_coords(self, points: np.ndarray) -> np.ndarray:
-        return np.stack([points @ self.tangent, points @ self.bitangent], axis=1)
-
-    def emit(self, start: int, stop: int) -> Photons:
-        i = np.arange(start, stop)
-        disc = np.searchsorted(self.starts, i, side="right") - 1
-        uv = r2_sequence(i - self.starts[disc], self.shift)
-        radii = np.array([s.radius for s in self.targets])
-        centers = np.array([s.center for s in self.targets])
-        xy = sample_disc(1.0, uv) * radii[disc][:, None]
-        origins = (centers[disc] + xy[:, :1] * self.tangent + xy[:, 1:] * self.bitangent
-                   - self.start_distance * self.light.direction)
-        offsets = self._plane_coords(origins)[:, None, :] - self._plane_coords(centers)[None, :, :]
-        inside = np.einsum("nkj,nkj->nk", offsets, offsets) <= (radii ** 2)[None, :] * (1.0 + 1e-12)
-        density = inside.astype(np.float64) @ self.density
-        flux = radiometry.sun_irradiance(self.light, self.energy)[None, :] / density[:, None]
-        dirs = np.broadcast_to(self.light.direction, origins.shape)
-        return _kept(origins, np.ascontiguousarray(dirs), flux, i + self.id_base)
-
-
 def make_emitters(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere, mode: str,
-                  energy: float, photons: int, seed: int) -> list[Emitter]:
-    """One emitter per lamp that can light a target, with the photon budget
-    shared in proportion to the flux each sends toward its targets."""
+                  energy: float, lamp_rays: int, seed: int) -> list[Emitter]:
+    """One emitter per lamp that sends light to a target, with the
+    `lamp_rays` shared among the aims in proportion to the flux each
+    receives. In
+    'sphere' mode a point or spot lamp sends its share everywhere (the
+    paper's eq. 1), and a sun over the whole scene's disc."""
     rng = np.random.default_rng(seed)
-    start_distance = 2.0 * scene_sphere.radius + 1.0
-    candidates = []
-    for light in lights:
-        aimed = [scene_sphere] if mode == "sphere" else visible_targets(light, targets)
-        if not aimed or not targets:
-            continue
-        candidates.append((light, aimed))
-
-    def build(light, aimed, count):
-        shift = rng.random(2)
-        if isinstance(light, SunLight):
-            return SunDiscEmitter(light, energy, count, aimed, start_distance, shift)
-        if mode == "sphere":
-            return PointSphereEmitter(light, energy, count)
-        return PointConeEmitter(light, energy, count, aimed, shift)
-
-    probes = [build(light, aimed, 1) for light, aimed in candidates]
-    weights = np.array([p.flux_toward_targets for p in probes], dtype=np.float64)
-    if len(probes) == 0 or weights.sum() <= 0:
+    if not targets:
         return []
-    shares = np.maximum(1, np.round(photons * weights / weights.sum())).astype(int)
-    emitters = [build(light, aimed, int(n)) for (light, aimed), n in zip(candidates, shares)]
+    per_light = []
+    for light in lights:
+        if mode == "sphere":
+            aimed = aims(light, [scene_sphere], scene_sphere)
+            if not isinstance(light, SunLight):
+                aimed = aimed[:1]
+        else:
+            aimed = aims(light, targets, scene_sphere)
+        if aimed and sum(aim.flux(energy) for aim in aimed) > 0:
+            per_light.append((light, aimed))
+    if not per_light:
+        return []
+    fluxes = [np.array([aim.flux(energy) for aim in aimed]) for _, aimed in per_light]
+    counts = np.split(share(lamp_rays, np.concatenate(fluxes)), np.cumsum([len(f) for f in fluxes])[:-1])
+    emitters = []
+    for (light, aimed), n in zip(per_light, counts):
+        if mode == "sphere" and not isinstance(light, SunLight):
+            emitters.append(PointSphereEmitter(light, energy, int(n.sum())))
+        else:
+            emitters.append(AimedEmitter(light, energy, aimed, n, rng.random(2)))
     for k in range(1, len(emitters)):
         emitters[k].id_base = emitters[k - 1].id_base + emitters[k - 1].count
     return emitters

@@ -1,6 +1,6 @@
 """Illumination maps kept between renders: moving the camera, or changing
-only the eye pass (samples, ambient, background), must not re-run the photon
-pass. Maps are found by a hash of everything the photon pass reads."""
+only the eye pass (samples, ambient, background), must not re-run the pass
+from the lamps. Maps are found by a hash of everything that pass reads."""
 
 from __future__ import annotations
 
@@ -14,13 +14,13 @@ import numpy as np
 
 from ..scene import RenderSettings, Scene
 
-# RenderSettings fields that change nothing in the photon pass's maps.
+# RenderSettings fields that change nothing in the maps.
 _EYE_ONLY = {"spp", "threads", "chunk_size"}
 
 
-def photon_pass_key(scene: Scene, settings: RenderSettings) -> str:
+def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
     """SHA-1 of the objects in order (name, geometry, material), the lamps
-    and the photon-pass settings: equal keys give equal maps. The band count
+    and the lamp pass's settings: equal keys give equal maps. The band count
     counts only if a material disperses."""
     digest = hashlib.sha1()
 
@@ -50,8 +50,8 @@ def photon_pass_key(scene: Scene, settings: RenderSettings) -> str:
 
 
 class MapCache:
-    """The photon passes of the last `capacity` distinct scenes: key ->
-    (maps, photon stats). Safe to share between threads."""
+    """The lamp passes of the last `capacity` distinct scenes: key ->
+    (maps, their figures, their warnings). Safe to share between threads."""
 
     def __init__(self, capacity: int = 2):
         self.capacity = capacity

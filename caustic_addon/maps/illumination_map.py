@@ -73,18 +73,11 @@ class IlluminationMap:
         """(n,2) continuous (row, col) positions, cell centres at integers."""
         return (xy[:, ::-1] - self.chart.origin[::-1]) / self.cell - 0.5
 
-    def deposit(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray, points: np.ndarray,
-                flux: np.ndarray) -> None:
-        """Store photons (flux (n,3) W at world `points (n,3)` on local
-        triangles `prim`). They are splatted in large batches, when the
-        pending ones outnumber the map's cells or the map is read. Safe to call
-        from several threads."""
-        xy = self.chart.coords(prim, u, v, points)
-        self.add_photons(xy, flux, self.chart.area_scale(prim))
-
     def add_photons(self, xy: np.ndarray, flux: np.ndarray, scale: np.ndarray) -> None:
         """Hold photons given in chart coordinates `xy (n,2)`, with flux
-        (n,3) W and chart area per world area `scale (n,)`."""
+        (n,3) W and chart area per world area `scale (n,)`. They are
+        splatted in large batches, when the pending ones outnumber the map's
+        cells or the map is read. Safe to call from several threads."""
         with self._lock:
             self._pending.append((xy, flux * scale[:, None]))
             self._pending_count += len(xy)

@@ -1,20 +1,28 @@
-"""What both passes do where a ray meets a specular surface, a dielectric or
-a reflector: orient the normals, then refract or reflect. Kept in one place
-so the photon pass, the beams and the eye pass cannot disagree about the
-physics. A reflector is a surface whose Fresnel reflectance is 1: it always
-reflects, and its colour (applied by the caller) is its reflectance."""
+"""The one bounce every pass makes, photons, beam vertices and eye rays
+alike: cast, attenuate inside a medium, arrive at an opaque surface, or
+orient the normals at a specular one (a dielectric or a reflector) and
+reflect or refract. The passes differ only in what they do on arrival, with
+the paths that leave the scene, and in how they scatter: one branch chosen
+by its Fresnel probability (photons), or both branches with their Fresnel
+weights (beams, eye rays). A reflector is a surface whose Fresnel
+reflectance is 1: it always reflects, and its colour is its reflectance."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
+from ..optics.media import beer_lambert
 from ..optics.specular import fresnel_dielectric, reflect, refract
 from ..scene.material_table import Materials
 from ..tracing.accelerator import Accelerator
-from ..tracing.hits import Hits
-from ..util.vectors import dot, normalize
+from ..tracing.hits import MISS, Hits
+from ..util.vectors import dot, max_channel, normalize
+from .paths import Paths
+
+_FAMILY_PRIME = np.uint64(0x100000001B3)
 
 
 @dataclass
@@ -38,12 +46,12 @@ class Interface:
     fresnel: np.ndarray
 
 
-def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, points: np.ndarray,
-           materials: Materials, medium: np.ndarray, band=None) -> Interface:
+def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, materials: Materials, medium: np.ndarray,
+           band=None) -> Interface:
     """Orient the hits' normals against `dirs (n,3)` and evaluate Fresnel
     (1 at reflectors, which reflect everything). Dielectrics refract with
-    their IOR in wavelength band `band` (an int, or (n,) per ray), or at
-    587.6 nm (n_d) when it is None.
+    their IOR in wavelength band `band` ((n,) per ray), or at 587.6 nm (n_d)
+    when it is None.
 
     Entering or leaving: for a closed mesh, the ray's own state `medium (n,)`
     (the object it is inside, or MISS) decides, since a hit at an edge or a
@@ -64,7 +72,7 @@ def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, points: np.ndarray,
     ior = materials.ior[hits.obj] if band is None else materials.ior_bands[hits.obj, band]
     eta = np.where(entering, 1.0 / ior, ior)
     fresnel = np.where(materials.reflector[hits.obj], 1.0, fresnel_dielectric(-dot(dirs, shading), eta))
-    return Interface(points, facing, shading, entering, eta, fresnel)
+    return Interface(hits.points, facing, shading, entering, eta, fresnel)
 
 
 def scatter(surface: Interface, dirs: np.ndarray, reflect_mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -88,3 +96,84 @@ def scatter(surface: Interface, dirs: np.ndarray, reflect_mask: np.ndarray) -> t
         mirror[wrong] |= redo_tir
         out[wrong] = np.where(mirror[wrong][:, None], reflect(d, n), redo_refract)
     return normalize(out), ~mirror
+
+
+def crossed_medium(surface: Interface, crossed: np.ndarray, obj: np.ndarray, medium: np.ndarray) -> np.ndarray:
+    """(n,) the medium after the bounce: the object entered, MISS after
+    leaving it, or `medium (n,)` where the path did not cross."""
+    return np.where(crossed, np.where(surface.entering, obj, MISS), medium)
+
+
+def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, surface: Interface) -> Paths:
+    """Both branches of every path at its specular hit: the reflected one
+    with weight F and the refracted one with weight 1 - F (dielectrics
+    only), each times the surface's tint. A branch whose weight falls below
+    its path's floor stops. With families, each branch records its event."""
+    tint = np.take(materials.color, hits.obj, axis=0)
+    branches = []
+    for event, mirror in ((0, True), (1, False)):
+        dirs, crossed = scatter(surface, paths.dirs, np.full(len(paths), mirror))
+        share = surface.fresnel if mirror else np.where(crossed, 1.0 - surface.fresnel, 0.0)
+        weight = paths.weight * tint * share[:, None]
+        family = None if paths.family is None else _next_family(paths.family, hits.obj, event)
+        branch = Paths(accel.offset(surface.points, surface.facing, dirs), dirs, weight,
+                       crossed_medium(surface, crossed, hits.obj, paths.medium), paths.ids, paths.floor,
+                       np.ones(len(paths), dtype=bool), paths.band, family)
+        exists = mirror | materials.dielectric[hits.obj]
+        branches.append(branch.select(exists & (max_channel(weight) >= paths.floor)))
+    return Paths.concat(branches)
+
+
+def _next_family(family: np.ndarray, obj: np.ndarray, event: int) -> np.ndarray:
+    """(n,) uint64 signatures of paths that add (object, event) to `family`."""
+    with np.errstate(over="ignore"):
+        return (family * _FAMILY_PRIME) ^ (obj.astype(np.uint64) * np.uint64(4) + np.uint64(event + 1))
+
+
+class Tracer(Protocol):
+    """What a pass does where the bounce leaves the choice to it."""
+
+    def escaped(self, paths: Paths) -> None:
+        """`paths` left the scene."""
+
+    def arrived(self, paths: Paths, hits: Hits) -> None:
+        """`paths` met an opaque surface at `hits`."""
+
+    def scattered(self, paths: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
+        """The paths that go on from the specular hits `hits`, at bounce `depth`."""
+
+
+def trace(accel: Accelerator, materials: Materials, paths: Paths, max_depth: int, tracer: Tracer) -> None:
+    """Follow `paths` through up to `max_depth` specular bounces, handing
+    `tracer` what each bounce leaves to it."""
+    for depth in range(max_depth + 1):
+        if len(paths) == 0:
+            return
+        hits = accel.intersect(paths.origins, paths.dirs, paths.medium)
+        tracer.escaped(paths.select(~hits.hit))
+        paths, hits = paths.select(hits.hit), hits.select(hits.hit)
+        inside = paths.medium != MISS
+        if inside.any():
+            paths.weight[inside] *= beer_lambert(np.take(materials.absorption, paths.medium[inside], axis=0),
+                                                 hits.t[inside])
+        specular = materials.specular_surface[hits.obj]
+        tracer.arrived(paths.select(~specular), hits.select(~specular))
+        paths, hits = paths.select(specular), hits.select(specular)
+        if len(paths) == 0:
+            return
+        surface = orient(accel, hits, paths.dirs, materials, paths.medium, paths.band)
+        paths = tracer.scattered(paths, hits, surface, depth)
+
+
+def on_maps(accel: Accelerator, maps: dict, paths: Paths, hits: Hits):
+    """Where the paths that have met a specular surface land on a
+    receiver's map (`maps`: object index -> IlluminationMap), one receiver
+    at a time: (object index, rows (k,) of `paths`, xy (k,2) chart metres,
+    scale (k,) chart area per world area)."""
+    land = np.flatnonzero(paths.specular & np.isin(hits.obj, list(maps)))
+    for index in np.unique(hits.obj[land]):
+        rows = land[hits.obj[land] == index]
+        local = np.take(hits.prim, rows) - accel.prim_offset[index]
+        chart = maps[index].chart
+        xy = chart.coords(local, np.take(hits.u, rows), np.take(hits.v, rows), np.take(hits.points, rows, axis=0))
+        yield int(index), rows, xy, chart.area_scale(local)

@@ -19,61 +19,39 @@ through it is not.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from ..maps.charts import PlaneChart
 from ..maps.illumination_map import IlluminationMap
-from ..optics.media import beer_lambert
-from ..scene import Scene
+from ..scene import RenderSettings, Scene
 from ..scene.material_table import Materials
 from ..tracing.accelerator import Accelerator
-from ..tracing.hits import MISS
+from ..tracing.hits import Hits
+from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.rows import take_rows
-from ..util.vectors import dot, max_channel
-from .bounce import orient, scatter
-from .camera_rays import ray_differentials
+from ..util.vectors import dot
+from .bounce import Interface, split, trace
+from .camera_rays import eye_rays, pixel_offsets, ray_differentials
 from .direct_light import direct_radiance
+from .paths import Paths, relative_floor
 
 PASSES = ("direct", "caustic", "ambient")
-# A ray whose weight (max channel) drops below this is not traced further.
-MIN_WEIGHT = 1e-4
 
 
-@dataclass
-class EyeRays:
-    """n eye rays in flight: origins (n,3), dirs (n,3), weight (n,3)
-    throughput, pixel (n,) flat pixel index, medium (n,) object inside or
-    MISS. `primary`: these are camera rays, each through its own pixel
-    stratum."""
-
-    origins: np.ndarray
-    dirs: np.ndarray
-    weight: np.ndarray
-    pixel: np.ndarray
-    medium: np.ndarray
-    primary: bool = False
-
-    def select(self, mask: np.ndarray) -> "EyeRays":
-        return EyeRays(*take_rows(mask, self.origins, self.dirs, self.weight, self.pixel, self.medium), self.primary)
-
-    @staticmethod
-    def concat(parts: list["EyeRays"]) -> "EyeRays":
-        return EyeRays(*(np.concatenate([getattr(p, f) for p in parts])
-                         for f in ("origins", "dirs", "weight", "pixel", "medium")))
-
-
-class EyePass:
-    """Shades eye rays of the flat pixels [first_pixel, end_pixel) into pass
-    buffers, each (end_pixel - first_pixel, 3). Each camera ray stands for a
-    square stratum of its pixel, `stratum` pixels wide."""
+class EyeTracer:
+    """The eye pass's choices in the bounce (bounce.trace), for the eye rays
+    of the flat pixels [first_pixel, end_pixel) (a path's id is its pixel):
+    the background where a ray escapes, shading where it meets an opaque
+    surface, both branches at a specular one. Pass buffers are each
+    (end_pixel - first_pixel, 3). A camera ray (one with no specular event
+    yet) stands for a square stratum of its pixel, `stratum` pixels wide."""
 
     def __init__(self, accel: Accelerator, scene: Scene, materials: Materials,
-                 maps: dict[int, IlluminationMap], energy: float, max_depth: int, stratum: float,
-                 first_pixel: int, end_pixel: int):
+                 maps: dict[int, IlluminationMap], energy: float, stratum: float, first_pixel: int, end_pixel: int):
         self.accel, self.scene, self.materials, self.maps = accel, scene, materials, maps
-        self.energy, self.max_depth, self.stratum = energy, max_depth, stratum
+        self.energy, self.stratum = energy, stratum
         self.first_pixel, self.end_pixel = int(first_pixel), int(end_pixel)
         self.far = 4.0 * scene.extent() + float(np.abs(scene.camera.position).max())
         self.buffers = {name: np.zeros((self.end_pixel - self.first_pixel, 3)) for name in PASSES}
@@ -83,25 +61,11 @@ class EyePass:
         for c in range(3):
             self.buffers[name][:, c] += np.bincount(pixel - self.first_pixel, weights=radiance[:, c], minlength=size)
 
-    def trace(self, rays: EyeRays) -> None:
-        for _ in range(self.max_depth + 1):
-            if len(rays.pixel) == 0:
-                return
-            hits = self.accel.intersect(rays.origins, rays.dirs, rays.medium)
-            missed = ~hits.hit
-            self._add("ambient", rays.pixel[missed], rays.weight[missed] * self.scene.background)
-            rays, hits = rays.select(~missed), hits.select(~missed)
-            inside = rays.medium != MISS
-            if inside.any():
-                rays.weight[inside] *= beer_lambert(np.take(self.materials.absorption, rays.medium[inside], axis=0),
-                                                    hits.t[inside])
+    def escaped(self, rays: Paths) -> None:
+        self._add("ambient", rays.ids, rays.weight * self.scene.background)
 
-            bounce = self.materials.specular_surface[hits.obj]
-            self._shade_opaque(rays.select(~bounce), hits.select(~bounce))
-            rays = self._split_at_specular(rays.select(bounce), hits.select(bounce))
-
-    def _shade_opaque(self, rays: EyeRays, hits) -> None:
-        if len(rays.pixel) == 0:
+    def arrived(self, rays: Paths, hits: Hits) -> None:
+        if len(rays) == 0:
             return
         m, accel = self.materials, self.accel
         view = -rays.dirs
@@ -114,8 +78,8 @@ class EyePass:
         points = hits.points
         direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view,
                                  albedo, np.take(m.specular, hits.obj, axis=0), m.exponent[hits.obj], self.far)
-        self._add("direct", rays.pixel, rays.weight * direct)
-        self._add("ambient", rays.pixel, rays.weight * self.scene.ambient * albedo)
+        self._add("direct", rays.ids, rays.weight * direct)
+        self._add("ambient", rays.ids, rays.weight * self.scene.ambient * albedo)
 
         for index, imap in self.maps.items():
             on_map = hits.obj == index
@@ -125,29 +89,50 @@ class EyePass:
             xy = imap.chart.coords(at.prim - accel.prim_offset[index], at.u, at.v, at.points)
             irradiance = np.empty((len(xy), 3))
             spread = np.zeros(len(xy), dtype=bool)
-            if here.primary and isinstance(imap.chart, PlaneChart):
-                lo, hi, spread = imap.chart.footprint(here.origins, here.dirs,
-                                                      *ray_differentials(self.scene.camera, here.dirs), self.stratum)
-                irradiance[spread] = imap.mean_over(lo[spread], hi[spread])
+            primary = np.flatnonzero(~here.specular)
+            if len(primary) and isinstance(imap.chart, PlaneChart):
+                origins, dirs = np.take(here.origins, primary, axis=0), np.take(here.dirs, primary, axis=0)
+                lo, hi, ok = imap.chart.footprint(origins, dirs, *ray_differentials(self.scene.camera, dirs),
+                                                  self.stratum)
+                spread[primary[ok]] = True
+                irradiance[spread] = imap.mean_over(lo[ok], hi[ok])
             irradiance[~spread] = imap.irradiance_at(xy[~spread])
             radiance = irradiance * take_rows(on_map, albedo)[0] / math.pi
-            self._add("caustic", here.pixel, here.weight * radiance)
+            self._add("caustic", here.ids, here.weight * radiance)
 
-    def _split_at_specular(self, rays: EyeRays, hits) -> EyeRays:
-        """The reflected children of rays at dielectric and reflector hits,
-        and the refracted children at dielectric hits."""
-        if len(rays.pixel) == 0:
-            return rays
-        points = hits.points
-        surface = orient(self.accel, hits, rays.dirs, points, self.materials, rays.medium)
-        tint = np.take(self.materials.color, hits.obj, axis=0)
-        children = []
-        for mirror in (True, False):
-            dirs, crossed = scatter(surface, rays.dirs, np.full(len(rays.pixel), mirror))
-            share = surface.fresnel if mirror else np.where(crossed, 1.0 - surface.fresnel, 0.0)
-            weight = rays.weight * tint * share[:, None]
-            medium = np.where(crossed, np.where(surface.entering, hits.obj, MISS), rays.medium)
-            origins = self.accel.offset(points, surface.facing, dirs)
-            child = EyeRays(origins, dirs, weight, rays.pixel, medium)
-            children.append(child.select(max_channel(weight) >= MIN_WEIGHT))
-        return EyeRays.concat(children)
+    def scattered(self, rays: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
+        return split(self.accel, self.materials, rays, hits, surface)
+
+
+def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
+             maps: dict[int, IlluminationMap], monitor: Monitor, start: float) -> dict[str, np.ndarray]:
+    """Trace `spp` eye rays through every pixel, chunk by chunk, reporting
+    progress from `start` to 1. Returns the pass buffers, each (pixels, 3)."""
+    cam = scene.camera
+    pixels = cam.pixx * cam.pixy
+    offsets = pixel_offsets(settings.spp, settings.seed)
+    samples = pixels * settings.spp
+    camera_medium = int(accel.medium_at(cam.position[None])[0])
+    size = chunk_size(samples, settings.chunk_size, settings.threads)
+
+    def job(first: int) -> EyeTracer:
+        sample = np.arange(first, min(first + size, samples))
+        pixel = sample // settings.spp
+        origins, dirs = eye_rays(cam, pixel, offsets[sample % settings.spp])
+        weight = np.full((len(sample), 3), 1.0 / settings.spp)
+        # each sample stands for a square stratum of its pixel, 1/spp of its area
+        tracer = EyeTracer(accel, scene, materials, maps, settings.energy, 1.0 / np.sqrt(settings.spp),
+                           pixel[0], pixel[-1] + 1)
+        trace(accel, materials, Paths.start(origins, dirs, weight, pixel, camera_medium, relative_floor(weight)),
+              settings.max_depth, tracer)
+        return tracer
+
+    jobs = [partial(job, first) for first in range(0, samples, size)]
+    buffers = {name: np.zeros((pixels, 3)) for name in PASSES}
+
+    def add(tracer: EyeTracer) -> None:
+        for name in PASSES:
+            buffers[name][tracer.first_pixel:tracer.end_pixel] += tracer.buffers[name]
+
+    run_chunks(jobs, settings.threads, monitor, start, 1.0 - start, "eye pass", add)
+    return buffers

@@ -20,108 +20,102 @@ count, and the cost, stay the same.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
-from ..emission.photons import Photons
-from ..maps.illumination_map import IlluminationMap
-from ..optics.media import beer_lambert
+from ..emission.aims import casters_and_bounds
+from ..emission.photons import Emitter, Photons, make_emitters
+from ..maps.deposits import Deposits
 from ..optics.spectrum import photon_band
 from ..sampling.hash import hash_uniform
+from ..scene import RenderSettings, Scene
 from ..scene.material_table import Materials
 from ..tracing.accelerator import Accelerator
-from ..tracing.hits import MISS
-from ..util.rows import take_rows
+from ..tracing.hits import MISS, Hits
+from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.vectors import DIVISION_FLOOR, max_channel
-from .bounce import orient, scatter
+from .bounce import Interface, crossed_medium, on_maps, scatter, trace
+from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
+from .paths import Paths
 
 # Below this fraction of its starting flux (max channel), a photon plays
 # Russian roulette and survives with probability flux / threshold.
 ROULETTE_FRACTION = 0.05
 
 
-@dataclass
-class TransportStats:
-    """rays cast; paths emitted, of which `refined` were added by beam
-    refinement; photons or beams landed; flux landed (3,) W."""
+class PhotonTracer:
+    """The photon pass's choices in the bounce (bounce.trace): land on the
+    receivers' maps after a specular event; at a specular hit, reflect with
+    probability F, else refract, then play Russian roulette. A photon's
+    random numbers come from its id, bounce and `seed`."""
 
-    rays: int = 0
-    emitted: int = 0
-    refined: int = 0
-    landed: int = 0
-    flux_landed: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    def __init__(self, accel: Accelerator, materials: Materials, maps: dict, seed: int):
+        self.accel, self.materials, self.maps, self.seed = accel, materials, maps, seed
+        self.deposits = Deposits()
+        self.landed = 0
 
-    def add(self, other: "TransportStats") -> None:
-        self.rays += other.rays
-        self.emitted += other.emitted
-        self.refined += other.refined
-        self.landed += other.landed
-        self.flux_landed = self.flux_landed + other.flux_landed
+    def escaped(self, paths: Paths) -> None:
+        pass
+
+    def arrived(self, paths: Paths, hits: Hits) -> None:
+        for obj, rows, xy, scale in on_maps(self.accel, self.maps, paths, hits):
+            self.deposits.add_photons(obj, xy, np.take(paths.weight, rows, axis=0), scale)
+            self.landed += len(rows)
+
+    def scattered(self, paths: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
+        dirs, crossed = scatter(surface, paths.dirs, hash_uniform(paths.ids, 2 * depth, self.seed) < surface.fresnel)
+        weight = paths.weight * np.take(self.materials.color, hits.obj, axis=0)
+        weight, alive = roulette(weight, paths.floor, hash_uniform(paths.ids, 2 * depth + 1, self.seed))
+        paths = Paths(self.accel.offset(surface.points, surface.facing, dirs), dirs, weight,
+                      crossed_medium(surface, crossed, hits.obj, paths.medium), paths.ids, paths.floor,
+                      np.ones(len(paths), dtype=bool), paths.band)
+        return paths.select(alive)
 
 
-def trace_photons(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap],
-                  photons: Photons, max_depth: int, seed: int, start_medium: int = MISS) -> TransportStats:
+def trace_photons(accel: Accelerator, materials: Materials, maps: dict, photons: Photons, max_depth: int,
+                  seed: int, start_medium: int = MISS) -> JobResult:
     """Trace one batch of photons, which start inside object `start_medium`
-    (MISS: in air), and splat the ones that land into `maps` (keyed by
-    receiver object index). Returns what it did."""
-    stats = TransportStats(emitted=len(photons.flux))
-    origins, dirs, ids = photons.origins, photons.dirs, photons.ids
-    band = photon_band(ids, materials.band_count, seed)
+    (MISS: in air), to where they land on `maps` (receiver object index ->
+    map). Each carries its wavelength band's share of the flux, K times the
+    band's weight."""
+    band = photon_band(photons.ids, materials.band_count, seed)
     flux = photons.flux * (materials.band_count * materials.band_weights[band])
-    start_flux = max_channel(flux)
-    medium = np.full(len(flux), start_medium, dtype=np.int64)
-    specular = np.zeros(len(flux), dtype=bool)
+    tracer = PhotonTracer(accel, materials, maps, seed)
+    paths = Paths.start(photons.origins, photons.dirs, flux, photons.ids, start_medium,
+                        ROULETTE_FRACTION * max_channel(flux), band)
+    trace(accel, materials, paths, max_depth, tracer)
+    deposits = tracer.deposits
+    return JobResult(deposits, LampPassStats(len(photons.ids), 0, tracer.landed, deposits.flux))
 
-    for depth in range(max_depth + 1):
-        if len(flux) == 0:
-            break
-        hits = accel.intersect(origins, dirs, medium)
-        stats.rays += len(flux)
-        keep = hits.hit
-        origins, dirs, flux, start_flux, medium, specular, ids, band = take_rows(
-            keep, origins, dirs, flux, start_flux, medium, specular, ids, band)
-        hits = hits.select(keep)
-        points = hits.points
 
-        inside = medium != MISS
-        if inside.any():
-            flux[inside] *= beer_lambert(np.take(materials.absorption, medium[inside], axis=0), hits.t[inside])
+def photon_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
+                maps: dict, monitor: Monitor, share: float) -> LampPassStats:
+    """Emit and trace every photon, chunk by chunk, onto `maps`."""
+    emitters = make_emitters(scene.lights, *casters_and_bounds(scene), settings.emission, settings.energy,
+                             settings.lamp_rays, settings.seed)
 
-        land = specular & materials.receiver[hits.obj]
-        for index in np.unique(hits.obj[land]):
-            sel = land & (hits.obj == index)
-            local = hits.prim[sel] - accel.prim_offset[index]
-            maps[index].deposit(local, hits.u[sel], hits.v[sel], points[sel], flux[sel])
-            stats.landed += int(sel.sum())
-            stats.flux_landed = stats.flux_landed + flux[sel].sum(axis=0)
+    def job(emitter: Emitter, start: int, stop: int, medium: int) -> JobResult:
+        return trace_photons(accel, materials, maps, emitter.emit(start, stop), settings.max_depth, settings.seed,
+                             medium)
 
-        bounce = materials.specular_surface[hits.obj]
-        origins, dirs, flux, start_flux, medium, ids, band = take_rows(
-            bounce, origins, dirs, flux, start_flux, medium, ids, band)
-        hits = hits.select(bounce)
-        points = hits.points
-        if len(flux) == 0:
-            break
-
-        surface = orient(accel, hits, dirs, points, materials, medium, band)
-        dirs, crossed = scatter(surface, dirs, hash_uniform(ids, 2 * depth, seed) < surface.fresnel)
-        flux *= np.take(materials.color, hits.obj, axis=0)
-        medium = np.where(crossed, np.where(surface.entering, hits.obj, MISS), medium)
-        specular = np.ones(len(flux), dtype=bool)
-        origins = accel.offset(points, surface.facing, dirs)
-
-        flux, alive = _roulette(flux, start_flux, hash_uniform(ids, 2 * depth + 1, seed))
-        origins, dirs, flux, start_flux, medium, specular, ids, band = take_rows(
-            alive, origins, dirs, flux, start_flux, medium, specular, ids, band)
+    jobs = []
+    for emitter in emitters:
+        size = chunk_size(emitter.count, settings.chunk_size, settings.threads)
+        medium = lamp_medium(accel, emitter.light)
+        jobs += [partial(job, emitter, start, min(start + size, emitter.count), medium)
+                 for start in range(0, emitter.count, size)]
+    stats, deliver = deliverer(maps)
+    run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass", deliver)
+    stats.lamp_rays = sum(e.count for e in emitters)
     return stats
 
 
-def _roulette(flux: np.ndarray, start_flux: np.ndarray, xi: np.ndarray):
-    """Russian roulette on photons below ROULETTE_FRACTION of their starting
-    flux: survive with probability q = flux / threshold, flux /= q. `xi (n,)`
-    are uniform random numbers. Returns (flux (n,3), alive (n,) bool)."""
-    threshold = ROULETTE_FRACTION * start_flux
+def roulette(flux: np.ndarray, threshold: np.ndarray, xi: np.ndarray):
+    """Russian roulette on photons whose flux (max channel) is below
+    `threshold (n,)`: survive with probability q = flux / threshold, flux
+    /= q. `xi (n,)` are uniform random numbers. Returns (flux (n,3), alive
+    (n,) bool)."""
     peak = max_channel(flux)
     low = peak < threshold
     if not low.any():

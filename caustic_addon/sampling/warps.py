@@ -17,16 +17,6 @@ def orthonormal_basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             np.array([b, sign + axis[1] ** 2 * a, -axis[1]]))
 
 
-def sample_cone(axis: np.ndarray, cos_max: float, uv: np.ndarray) -> np.ndarray:
-    """Unit directions (n,3) uniform in solid angle within `acos(cos_max)` of
-    `axis`: cos(theta) = 1 - u (1 - cos_max), phi = 2 pi v."""
-    cos_t = 1.0 - uv[:, 0] * (1.0 - cos_max)
-    sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t * cos_t))
-    phi = 2.0 * math.pi * uv[:, 1]
-    t, b = orthonormal_basis(axis)
-    return (sin_t * np.cos(phi))[:, None] * t + (sin_t * np.sin(phi))[:, None] * b + cos_t[:, None] * axis
-
-
 def sample_disc(radius: float, uv: np.ndarray) -> np.ndarray:
     """(n,2) points uniform over a disc: r = R sqrt(u), phi = 2 pi v."""
     r = radius * np.sqrt(uv[:, 0])

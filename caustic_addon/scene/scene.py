@@ -50,10 +50,6 @@ class Scene:
         self.background = rgb(self.background)
 
     @property
-    def transparent(self) -> list[Object]:
-        return [o for o in self.objects if o.is_transparent]
-
-    @property
     def casters(self) -> list[Object]:
         """The objects that cast caustics: dielectrics and reflectors."""
         return [o for o in self.objects if o.is_caster]

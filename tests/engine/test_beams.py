@@ -7,10 +7,10 @@ import pytest
 
 from caustic_addon import Scene, render
 from caustic_addon.maps.beam_map import BeamMap
-from caustic_addon.sampling.warps import concentric_disc
 from caustic_addon.maps.charts import PlaneChart
 from caustic_addon.maps.illumination_map import MapEstimate
 from caustic_addon.maps.raster import signed_areas
+from caustic_addon.sampling.warps import concentric_disc
 from metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
 

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from caustic_addon import Camera, SpotLight
-from caustic_addon.passes.camera_rays import eye_rays, ray_differentials
+from caustic_addon.emission.radiometry import spot_attenuation
 from caustic_addon.maps.charts import PlaneChart
 from caustic_addon.maps.grid import as_rgb, bilinear_splat, channel_tables, rect_means
 from caustic_addon.maps.illumination_map import IlluminationMap, MapEstimate
-from caustic_addon.emission.radiometry import spot_attenuation
+from caustic_addon.passes.camera_rays import eye_rays, ray_differentials
 
 
 def test_perspective_rays_span_the_field_of_view_along_the_fitted_side():
@@ -68,7 +68,7 @@ def test_uniform_photons_read_back_as_their_irradiance(k):
     n = 400_000
     xy = rng.random((n, 2))
     points = np.c_[xy, np.zeros(n)]
-    imap.deposit(np.zeros(n, int), np.zeros(n), np.zeros(n), points, np.full((n, 3), 2.0 / n))
+    imap.add_photons(imap.chart.coords(None, None, None, points), np.full((n, 3), 2.0 / n), np.ones(n))
     assert imap.flux.sum() == pytest.approx(3 * 2.0)
     probe = 0.2 + 0.6 * rng.random((2000, 2)) + imap.chart.origin
     e = imap.irradiance_at(probe)
@@ -82,7 +82,7 @@ def test_map_scale_sets_the_cell_and_the_paper_scheme_splats_to_four_cells():
     assert imap.shape == (10, 10)
     # one photon between four cell centres lands a quarter in each
     point = np.array([[0.5, 0.5, 0.0]])
-    imap.deposit(np.zeros(1, int), np.zeros(1), np.zeros(1), point, np.ones((1, 3)))
+    imap.add_photons(imap.chart.coords(None, None, None, point), np.ones((1, 3)), np.ones(1))
     imap.prepare()
     np.testing.assert_allclose(imap.count[4:6, 4:6], 0.25)
     assert imap.count.sum() == pytest.approx(1.0)

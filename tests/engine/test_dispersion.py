@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from caustic_addon import Dielectric, Diffuse, Object, RenderSettings, Scene, SceneError, render, shapes
+from caustic_addon.maps.illumination_map import IlluminationMap
 from caustic_addon.optics.dispersion import LAMBDA_C, LAMBDA_D, LAMBDA_F, cauchy_ior
 from caustic_addon.optics.media import absorption_from_color, volume_absorption
-from caustic_addon.scene import SunLight
 from caustic_addon.optics.spectrum import XYZ_TO_REC709, bands, cie_xyz, photon_band
-from caustic_addon.maps.illumination_map import IlluminationMap
+from caustic_addon.scene import SunLight
 import slab
 from scenes import ball_lens, quick, shadow_radius, top_camera, unobstructed_irradiance
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from caustic_addon import PointLight, SpotLight, SunLight
-from caustic_addon.emission.photons import PointConeEmitter, PointSphereEmitter, SunDiscEmitter, make_emitters
-from caustic_addon.emission.targets import Sphere
-from caustic_addon.sampling.warps import sample_cone
+from caustic_addon.emission.aims import Aim, Sphere
+from caustic_addon.emission.photons import PointSphereEmitter, make_emitters
+from caustic_addon.sampling.warps import sample_disc
 
 
 def test_sphere_mode_carries_the_whole_power_uniformly():
@@ -29,7 +29,7 @@ def test_targeted_flux_is_the_intensity_times_the_cones_union():
     counting uniform directions that fall in either cone."""
     light = PointLight((0, 0, 5), 4 * math.pi)  # I = 1 W/sr
     targets = [Sphere(np.array([0.0, 0.0, 0.0]), 1.0), Sphere(np.array([0.8, 0.0, 0.0]), 1.0)]
-    emitter = PointConeEmitter(light, 1.0, 200_000, targets, np.array([0.3, 0.7]))
+    (emitter,) = make_emitters([light], targets, Sphere(np.zeros(3), 10.0), "targeted", 1.0, 200_000, 0)
     flux = emitter.emit(0, emitter.count).flux[:, 0].sum()
 
     rng = np.random.default_rng(5)
@@ -48,7 +48,8 @@ def test_cone_samples_stay_in_the_cone_and_are_uniform():
     axis = np.array([0.0, 0.6, -0.8])
     cos_max = math.cos(0.3)
     uv = np.random.default_rng(2).random((100_000, 2))
-    dirs = sample_cone(axis, cos_max, uv)
+    origins, dirs = Aim(PointLight((1, 2, 3), 1.0), axis, cos_max=cos_max).rays(sample_disc(1.0, uv))
+    np.testing.assert_array_equal(origins, np.tile([1.0, 2.0, 3.0], (len(uv), 1)))
     cos = dirs @ axis
     assert cos.min() >= cos_max - 1e-12
     np.testing.assert_allclose(np.linalg.norm(dirs, axis=1), 1.0, atol=1e-12)
@@ -60,7 +61,7 @@ def test_cone_samples_stay_in_the_cone_and_are_uniform():
 def test_sun_discs_carry_irradiance_times_area():
     sun = SunLight((0, 0, -1), 3.0)
     target = Sphere(np.array([0.0, 0.0, 1.0]), 0.5)
-    emitter = SunDiscEmitter(sun, 1.0, 10_000, [target], 10.0, np.array([0.1, 0.2]))
+    (emitter,) = make_emitters([sun], [target], Sphere(np.zeros(3), 4.5), "targeted", 1.0, 10_000, 0)
     photons = emitter.emit(0, emitter.count)
     assert photons.flux[:, 0].sum() == pytest.approx(3.0 * math.pi * 0.25, rel=1e-9)
     np.testing.assert_allclose(photons.dirs, np.tile([0.0, 0.0, -1.0], (len(photons.dirs), 1)))
@@ -81,7 +82,8 @@ def test_photon_budget_follows_the_flux_each_lamp_sends_to_the_targets():
     far = PointLight((0, 0, 30), 100.0)
     emitters = make_emitters([near, far], targets, targets[0], "targeted", 1.0, 100_000, 0)
     counts = [e.count for e in emitters]
-    fluxes = [e.flux_toward_targets for e in emitters]
+    # each lamp's flux toward the sphere: P / (4 pi) times its cone's solid angle
+    fluxes = [1.0 - math.sqrt(1.0 - (1.0 / d) ** 2) for d in (3.0, 30.0)]
     assert counts[0] / counts[1] == pytest.approx(fluxes[0] / fluxes[1], rel=0.01)
     ids = np.concatenate([e.emit(0, e.count).ids for e in emitters])
     assert len(np.unique(ids)) == len(ids)

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from caustic_addon import render
-from caustic_addon.emission.targets import Sphere
-from caustic_addon.renderer import _Monitor, run_chunks
+from caustic_addon.emission.aims import Sphere
+from caustic_addon.util.parallel import Monitor, run_chunks
 from scenes import ball_lens, floor_points, quick, shadow_radius, unobstructed_irradiance
 
 
@@ -134,4 +134,6 @@ def test_chunks_come_back_in_the_order_of_their_jobs():
     """The first job finishes last, yet the results keep the jobs' order, so
     what a pass sums from them (beams onto a map) sums the same every time."""
     jobs = [partial(lambda k: (time.sleep(0.03 * (3 - k)), k)[1], k) for k in range(4)]
-    assert run_chunks(jobs, 2, _Monitor(None, None), 0.0, 1.0, "test") == [0, 1, 2, 3]
+    consumed = []
+    run_chunks(jobs, 2, Monitor(), 0.0, 1.0, "test", consumed.append)
+    assert consumed == [0, 1, 2, 3]

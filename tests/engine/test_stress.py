@@ -19,16 +19,18 @@ from hypothesis import HealthCheck, example, given, settings, strategies as st
 
 from caustic_addon import (Dielectric, Diffuse, Mesh, Object, PointLight, RenderSettings, Scene, SpotLight,
                            SunLight, render, shapes)
+from caustic_addon.emission.aims import Sphere
+from caustic_addon.emission.photons import Photons
+from caustic_addon.maps.charts import make_chart
+from caustic_addon.maps.illumination_map import IlluminationMap, MapEstimate
+from caustic_addon.optics.specular import fresnel_dielectric, refract
+from caustic_addon.passes.bounce import orient, scatter
+from caustic_addon.passes.photon import trace_photons
+from caustic_addon.sampling.hash import hash_uniform
+from caustic_addon.scene.material_table import Materials
 from caustic_addon.tracing.accelerator import Accelerator
 from caustic_addon.tracing.hits import Hits, MISS
-from caustic_addon.emission.photons import Photons
-from caustic_addon.emission.targets import Sphere
-from caustic_addon.sampling.hash import hash_uniform
-from caustic_addon.passes.bounce import orient, scatter
-from caustic_addon.scene.material_table import Materials
-from caustic_addon.optics.specular import fresnel_dielectric, refract
 from caustic_addon.util.vectors import dot
-from caustic_addon.passes.photon import trace_photons
 from metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius, top_camera, unobstructed_irradiance
 
@@ -163,7 +165,7 @@ def feature_rays(mesh: Mesh, rng: np.random.Generator, per_target: int, distance
 
 
 # --------------------------------------------------------------------------------------------
-# The photon loop of transport.trace_photons, step for step, with bookkeeping
+# The photon loop of passes.photon.trace_photons, step for step, with bookkeeping
 
 
 class Paths:
@@ -197,7 +199,7 @@ class Paths:
 
 def follow(accel: Accelerator, materials: Materials, origins: np.ndarray, dirs: np.ndarray, max_depth: int,
            glass_side=None, seed: int = 0) -> Paths:
-    """Trace photons exactly as transport.trace_photons does (intersect, stop
+    """Trace photons exactly as passes.photon.trace_photons does (intersect, stop
     on opaque objects, orient, Fresnel roulette on hash_uniform, scatter,
     offset), keeping per photon the bookkeeping of `Paths`. There is no
     absorption and no tint, so Russian roulette never fires. Photon ids
@@ -219,7 +221,7 @@ def follow(accel: Accelerator, materials: Materials, origins: np.ndarray, dirs: 
         paths.fate[alive[~glass]] = "landed"
         alive, points, dirs, hits = alive[glass], points[glass], dirs[glass], hits.select(glass)
 
-        surface = orient(accel, hits, dirs, points, materials, paths.medium[alive])
+        surface = orient(accel, hits, dirs, materials, paths.medium[alive])
         dirs, crossed = scatter(surface, dirs, hash_uniform(alive + 1, 2 * depth, seed) < surface.fresnel)
         inside = paths.medium[alive] != MISS
         paths.double_entries[alive] += surface.entering & inside
@@ -378,7 +380,7 @@ def test_scatter_with_shading_normals_tilted_against_the_geometry(tilt, azimuth,
 
     points = np.stack([-1 + 2 * u + v, -1 + 2 * v, np.zeros(m)], axis=1)  # anywhere on the sheet
     hits = Hits(np.ones(m), np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64), u, v, points)
-    surface = orient(accel, hits, d, points, materials, np.full(m, MISS))
+    surface = orient(accel, hits, d, materials, np.full(m, MISS))
     assert np.all(dot(d, surface.facing) < 0.0)
     assert np.all(dot(d, surface.shading) < 0.0)
     assert np.all((surface.fresnel >= 0.0) & (surface.fresnel <= 1.0))
@@ -519,19 +521,20 @@ def test_phantom_exits_pass_the_glass_unrefracted():
     assert 0 < np.count_nonzero(hits.obj == 0) < 0.02 * len(aimed)
 
 
-class Recorder:
-    """Stands in for a receiver's IlluminationMap and keeps every photon that lands."""
+def floor_map(objects):
+    """The floor's (object 0's) illumination map, for trace_photons to land on."""
+    return {0: IlluminationMap("Floor", make_chart(objects[0]), 0.1, MapEstimate())}
 
-    def __init__(self):
-        self.points, self.flux = [], []
 
-    def deposit(self, prim, u, v, points, flux):
-        self.points.append(points.copy())
-        self.flux.append(flux.copy())
+def landed_photons(maps, result):
+    """(world points (n,3), flux (n,3)) of the photons `result` landed on the floor."""
+    parts = result.deposits.photons[0]
+    xy, flux = np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+    return maps[0].chart.world(xy), flux
 
 
 def test_transport_absorbs_each_photon_over_its_exact_chord_through_vertices_and_edges():
-    """transport.trace_photons itself, with index-matched absorbing glass
+    """passes.photon.trace_photons itself, with index-matched absorbing glass
     (IOR 1, sigma = 0.8/m in red): photons aimed at the icosahedron's
     vertices and edges travel straight and land with flux exp(-sigma L), L
     the exact chord. A photon that lost track of being inside would be
@@ -552,13 +555,12 @@ def test_transport_absorbs_each_photon_over_its_exact_chord_through_vertices_and
     n = len(origins)
     tag = np.arange(1.0, n + 1.0)
     flux = np.stack([np.ones(n), tag, np.zeros(n)], axis=1)
-    recorder = Recorder()
+    maps = floor_map(objects)
     ids = np.arange(1, n + 1)  # not 0: see test_photon_zero_is_not_forced_to_reflect
-    stats = trace_photons(accel, materials, {0: recorder}, Photons(origins, dirs, flux, ids), 12, 0)
+    result = trace_photons(accel, materials, maps, Photons(origins, dirs, flux, ids), 12, 0)
     accel.close()
-    assert stats.landed == n
-    landed = np.concatenate(recorder.flux)
-    points = np.concatenate(recorder.points)
+    assert result.stats.landed == n
+    points, landed = landed_photons(maps, result)
     i = np.rint(landed[:, 1]).astype(int) - 1
     assert np.array_equal(np.sort(i), np.arange(n))
     # Each of the two offsets shifts the line by epsilon along a normal, and
@@ -585,10 +587,10 @@ def test_photon_zero_is_not_forced_to_reflect():
     xy = np.random.default_rng(5).uniform(-0.6, 0.6, (n, 2))
     xy[0] = (0.998, 0.0)
     photons = Photons(np.c_[xy, np.full(n, 3.0)], np.tile([0.0, 0.0, -1.0], (n, 1)), np.ones((n, 3)), np.arange(n))
-    recorder = Recorder()
-    stats = trace_photons(accel, Materials.of(objects), {0: recorder}, photons, 12, seed=0)
-    assert stats.landed == n
-    landed = np.concatenate(recorder.points)[:, :2]
+    maps = floor_map(objects)
+    result = trace_photons(accel, Materials.of(objects), maps, photons, 12, seed=0)
+    assert result.stats.landed == n
+    landed = landed_photons(maps, result)[0][:, :2]
     off_course = np.linalg.norm(landed[:, None, :] - xy[None, :, :], axis=2).min(axis=1)
     assert off_course.max() < 10 * accel.epsilon
 

@@ -1,0 +1,60 @@
+"""What the two passes from the lamps, photons and beams, share: what a job
+hands back, the pass's figures, and where a lamp's paths start."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..maps.deposits import Deposits
+from ..scene import Light, SunLight
+from ..tracing.accelerator import Accelerator
+from ..tracing.hits import MISS
+
+
+@dataclass
+class LampPassStats:
+    """lamp_rays: paths traced from the lamps (photons, or beam grid points
+    and those refinement added); refined: of them, added by refinement;
+    landed: photons or beams that reached a receiver; flux_landed (3,) W."""
+
+    lamp_rays: int = 0
+    refined: int = 0
+    landed: int = 0
+    flux_landed: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    def add(self, other: "LampPassStats") -> None:
+        self.lamp_rays += other.lamp_rays
+        self.refined += other.refined
+        self.landed += other.landed
+        self.flux_landed = self.flux_landed + other.flux_landed
+
+
+@dataclass
+class JobResult:
+    """One job's light for the maps and its figures."""
+
+    deposits: Deposits
+    stats: LampPassStats
+
+
+def deliverer(maps: dict) -> tuple[LampPassStats, Callable[[JobResult], None]]:
+    """(the pass's figures, what adds each job's light to `maps` and its
+    figures to the pass's), for util.parallel.run_chunks."""
+    stats = LampPassStats()
+
+    def deliver(part: JobResult) -> None:
+        part.deposits.into(maps)
+        stats.add(part.stats)
+
+    return stats, deliver
+
+
+def lamp_medium(accel: Accelerator, light: Light) -> int:
+    """The closed glass a lamp sits in, where its paths start; MISS for a
+    sun (its paths start far upstream) or a lamp in air."""
+    if isinstance(light, SunLight):
+        return MISS
+    return int(accel.medium_at(light.position[None])[0])

@@ -1,0 +1,75 @@
+"""Paths in flight: one struct of arrays for the photons, beam vertices and
+eye rays that a pass traces (after pbrt-v4's RayWorkItem)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Optional
+
+import numpy as np
+
+from ..util.rows import take_rows
+from ..util.vectors import max_channel
+
+# A branch of a beam vertex or an eye ray whose weight (max channel) falls
+# below this share of its starting weight is not traced further.
+MIN_BRANCH_WEIGHT = 1e-4
+
+
+@dataclass
+class Paths:
+    """n paths.
+
+    origins   (n,3) world
+    dirs      (n,3) unit, world
+    weight    (n,3) flux, W (photons), or throughput (beam vertices, eye rays)
+    medium    (n,) int64 the closed object each path is inside, MISS in air
+    ids       (n,) int64 the photon's id (it seeds the photon's random
+              numbers), the beam vertex's grid key, or the eye ray's pixel
+    floor     (n,) the weight (max channel) below which a branch stops
+              (beams, eye rays) or a photon plays Russian roulette
+    specular  (n,) bool: the path has met a specular surface
+    band      (n,) int64 wavelength band, or None: refract at 587.6 nm
+    family    (n,) uint64 the sequence of (surface, event) so far, or None
+              where no one asks (beam mode asks)
+    """
+
+    origins: np.ndarray
+    dirs: np.ndarray
+    weight: np.ndarray
+    medium: np.ndarray
+    ids: np.ndarray
+    floor: np.ndarray
+    specular: np.ndarray
+    band: Optional[np.ndarray] = None
+    family: Optional[np.ndarray] = None
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    @staticmethod
+    def start(origins: np.ndarray, dirs: np.ndarray, weight: np.ndarray, ids: np.ndarray, medium: int,
+              floor: np.ndarray, band: Optional[np.ndarray] = None, family: bool = False) -> "Paths":
+        """Paths leaving a lamp or the camera from inside object `medium`
+        (MISS: in air), with no specular event yet."""
+        n = len(ids)
+        return Paths(origins, dirs, weight, np.full(n, medium, dtype=np.int64), ids, floor,
+                     np.zeros(n, dtype=bool), band, np.zeros(n, dtype=np.uint64) if family else None)
+
+    def _columns(self) -> list[str]:
+        return [f.name for f in fields(self) if getattr(self, f.name) is not None]
+
+    def select(self, mask: np.ndarray) -> "Paths":
+        """The paths where `mask (n,)` is True."""
+        names = self._columns()
+        return Paths(**dict(zip(names, take_rows(mask, *(getattr(self, name) for name in names)))))
+
+    @staticmethod
+    def concat(parts: list["Paths"]) -> "Paths":
+        names = parts[0]._columns()
+        return Paths(**{name: np.concatenate([getattr(p, name) for p in parts]) for name in names})
+
+
+def relative_floor(weight: np.ndarray) -> np.ndarray:
+    """(n,) MIN_BRANCH_WEIGHT of each path's starting weight `weight (n,3)`."""
+    return MIN_BRANCH_WEIGHT * max_channel(weight)
