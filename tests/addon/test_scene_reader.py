@@ -12,7 +12,7 @@ import blender_scenes as scenes
 
 
 def read(addon):
-    return addon.operators.scene_reader.read_scene(bpy.context)
+    return addon.export.read_scene(bpy.context)
 
 
 def engine_object(result, name):

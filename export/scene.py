@@ -13,7 +13,7 @@ import numpy as np
 
 from ..caustic_addon import Camera, Mesh, Object, PointLight, Scene, SpotLight, SunLight
 from .errors import InputError
-from .material_reader import Surface, engine_material, read_surface
+from .materials import Surface, engine_material, read_surface
 
 # Object types with geometry the engine cannot take.
 UNSUPPORTED_GEOMETRY = {'CURVE', 'SURFACE', 'META', 'FONT', 'VOLUME', 'CURVES', 'POINTCLOUD', 'GPENCIL',
