@@ -6,10 +6,10 @@ import bpy
 import numpy as np
 
 from ..export import InputError, SceneRead, read_scene, render_settings
-from ..export.settings import record_run
 from ..jobs import RenderJob
 from ..writeback.bake_group import baked_nodes, make_group, material_output, unwire, wire
 from ..writeback.images import write_image
+from ..writeback.results import record_run
 from .render import no_render_running
 
 IMAGE_PREFIX = "Caustic Map "

@@ -8,11 +8,11 @@ import bpy
 import numpy as np
 
 from ..export import InputError, read_scene, render_settings
-from ..export.settings import record_run
 from ..jobs import RenderJob
 from ..reference.cycles import render_cycles
 from ..reference.metrics import caustic_region, psnr, relative_l2
 from ..writeback.images import show_image, write_image
+from ..writeback.results import record_run
 from .render import RESULT_IMAGE, no_render_running
 
 REFERENCE_IMAGE = "Cycles Reference"

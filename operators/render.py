@@ -7,9 +7,9 @@ execute()."""
 import bpy
 
 from ..export import InputError, SceneRead, read_scene, render_settings
-from ..export.settings import record_run
 from ..jobs import RenderJob
 from ..writeback.images import show_image, write_image
+from ..writeback.results import record_run
 
 RESULT_IMAGE = "Caustic Render"
 
