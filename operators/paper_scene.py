@@ -1,6 +1,6 @@
 """CAUSTIC_OT_add_paper_scene: one of the paper's scenes (section 4), added
-to the current scene from the engine's own builders (caustic_addon.shapes),
-so that benchmarks/paper.py and Blender render the same geometry."""
+to the current scene from the engine's own builders (its shapes and paper
+layout), so that benchmarks/paper.py and Blender render the same geometry."""
 
 import math
 
