@@ -1,9 +1,10 @@
-"""Caustics for Blender: registers the add-on's properties, operators and
-panels. The rendering engine is `caustic_addon`, which never imports bpy."""
+"""Caustics for Blender: registers the add-on's properties, operators, panels
+and the handlers that keep its images right through undo. The rendering engine
+is `caustic_addon`, which never imports bpy."""
 
-from . import operators, panels, properties
+from . import operators, panels, properties, writeback
 
-_MODULES = (properties, operators, panels)
+_MODULES = (properties, operators, writeback, panels)
 
 
 def register():

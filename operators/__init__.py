@@ -2,14 +2,13 @@
 
 import bpy
 
-from . import images
 from .bake import CAUSTIC_OT_bake, CAUSTIC_OT_unbake
 from .compare import CAUSTIC_OT_compare_cycles
 from .paper_scene import CAUSTIC_OT_add_paper_scene
 from .presets import CAUSTIC_OT_apply_preset
 from .render import CAUSTIC_OT_render
 
-_register_classes, _unregister_classes = bpy.utils.register_classes_factory((
+register, unregister = bpy.utils.register_classes_factory((
     CAUSTIC_OT_render,
     CAUSTIC_OT_bake,
     CAUSTIC_OT_unbake,
@@ -17,13 +16,3 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory((
     CAUSTIC_OT_apply_preset,
     CAUSTIC_OT_add_paper_scene,
 ))
-
-
-def register():
-    _register_classes()
-    images.register()
-
-
-def unregister():
-    images.unregister()
-    _unregister_classes()

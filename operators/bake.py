@@ -1,17 +1,16 @@
 """CAUSTIC_OT_bake and CAUSTIC_OT_unbake: each receiver's illumination map
 as a packed float image, shown by its material through one node group (see
-bake_nodes); unbake takes all of it out again."""
+writeback.bake_group); unbake takes all of it out again."""
 
 import bpy
 import numpy as np
 
-from .bake_nodes import baked_nodes, make_group, material_output, unwire, wire
-from .errors import InputError
-from .images import write_image
-from .job import RenderJob
+from ..export import InputError, SceneRead, read_scene, render_settings
+from ..jobs import RenderJob
+from ..writeback.bake_group import baked_nodes, make_group, material_output, unwire, wire
+from ..writeback.images import write_image
+from ..writeback.results import record_run
 from .render import no_render_running
-from .scene_reader import SceneRead, read_scene
-from .settings import record_run, render_settings
 
 IMAGE_PREFIX = "Caustic Map "
 GROUP_PREFIX = "Caustic Bake "

@@ -7,14 +7,13 @@ report says so."""
 import bpy
 import numpy as np
 
-from .cycles_reference import render_cycles
-from .errors import InputError
-from .images import show_image, write_image
-from .job import RenderJob
-from .metrics import caustic_region, psnr, relative_l2
+from ..export import InputError, read_scene, render_settings
+from ..jobs import RenderJob
+from ..reference.cycles import render_cycles
+from ..reference.metrics import caustic_region, psnr, relative_l2
+from ..writeback.images import show_image, write_image
+from ..writeback.results import record_run
 from .render import RESULT_IMAGE, no_render_running
-from .scene_reader import read_scene
-from .settings import record_run, render_settings
 
 REFERENCE_IMAGE = "Cycles Reference"
 DIFFERENCE_IMAGE = "Difference"

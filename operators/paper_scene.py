@@ -1,6 +1,6 @@
 """CAUSTIC_OT_add_paper_scene: one of the paper's scenes (section 4), added
-to the current scene from the engine's own builders (caustic_addon.shapes),
-so that benchmarks/paper.py and Blender render the same geometry."""
+to the current scene from the engine's own builders (its shapes and paper
+layout), so that benchmarks/paper.py and Blender render the same geometry."""
 
 import math
 
@@ -8,7 +8,8 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-from ..caustic_addon import Mesh, paper, shapes
+from ..caustic_addon import paper, shapes
+from ..writeback.paper_scene import blender_mesh, node_material
 
 COLLECTION = "Paper scene"
 # key -> (label, IOR, description)
@@ -22,37 +23,6 @@ SHAPE_ITEMS = [
     ('FLAT', "Flat Base", "A cylinder (radius 0.5 m, 0.8 m tall): the paper's table 2"),
     ('POINTED', "Pointed Base", "A cone (radius 0.5 m, 1 m tall), point down: the paper's table 3"),
 ]
-
-
-def _blender_mesh(name: str, mesh: Mesh, origin: np.ndarray):
-    """A new Blender mesh of the engine's `mesh` moved by -`origin (3,)`:
-    corners at one position welded into one vertex, the engine's corner
-    normals as custom normals and its corner UVs as the UV map, so the
-    add-on reads back the triangles and normals the engine built."""
-    _, first, weld = np.unique(np.round(mesh.vertices, 9), axis=0, return_index=True, return_inverse=True)
-    data = bpy.data.meshes.new(name)
-    data.from_pydata(mesh.vertices[first] - origin, [], weld.reshape(-1)[mesh.triangles])
-    data.shade_smooth()
-    data.normals_split_custom_set(mesh.corner_normals.reshape(-1, 3))
-    if mesh.corner_uvs is not None:
-        data.uv_layers.new(name="UVMap").data.foreach_set("uv", mesh.corner_uvs.reshape(-1))
-    return data
-
-
-def _material(name: str, kind: str, **inputs):
-    """A new node material: one `kind` shader with `inputs` into the output."""
-    material = bpy.data.materials.new(name)
-    if material.node_tree is None:
-        material.use_nodes = True
-    nodes = material.node_tree.nodes
-    nodes.clear()
-    shader = nodes.new(kind)
-    for socket, value in inputs.items():
-        shader.inputs[socket].default_value = value
-    output = nodes.new('ShaderNodeOutputMaterial')
-    output.location = (300.0, 0.0)
-    material.node_tree.links.new(shader.outputs[0], output.inputs['Surface'])
-    return material
 
 
 class CAUSTIC_OT_add_paper_scene(bpy.types.Operator):
@@ -102,13 +72,14 @@ class CAUSTIC_OT_add_paper_scene(bpy.types.Operator):
             collection.objects.link(ob)
             return ob
 
-        floor = add("Floor", _blender_mesh("Floor", shapes.plane(paper.FLOOR_SIZE), np.zeros(3)), cursor)
-        floor.data.materials.append(_material("Paper Floor", 'ShaderNodeBsdfDiffuse',
-                                              Color=(*[paper.FLOOR_ALBEDO] * 3, 1.0)))
+        floor = add("Floor", blender_mesh("Floor", shapes.plane(paper.FLOOR_SIZE), np.zeros(3)), cursor)
+        floor.data.materials.append(node_material("Paper Floor", 'ShaderNodeBsdfDiffuse',
+                                                  Color=(*[paper.FLOOR_ALBEDO] * 3, 1.0)))
         mesh = paper.glass(self.shape.lower(), paper.RAISED if self.raised else 0.0)
         origin = np.array([0.0, 0.0, mesh.vertices[:, 2].min()])
-        glass = add(self.shape.title(), _blender_mesh(self.shape.title(), mesh, origin), cursor + origin)
-        glass.data.materials.append(_material(f"{label} {ior:g}", 'ShaderNodeBsdfGlass', IOR=ior, Roughness=0.0))
+        glass = add(self.shape.title(), blender_mesh(self.shape.title(), mesh, origin), cursor + origin)
+        glass.data.materials.append(node_material(f"{label} {ior:g}", 'ShaderNodeBsdfGlass', IOR=ior,
+                                                  Roughness=0.0))
 
         light = bpy.data.lights.new("Lamp", 'POINT')
         light.energy = paper.LAMP_POWER

@@ -6,11 +6,10 @@ execute()."""
 
 import bpy
 
-from .errors import InputError
-from .images import show_image, write_image
-from .job import RenderJob
-from .scene_reader import SceneRead, read_scene
-from .settings import record_run, render_settings
+from ..export import InputError, SceneRead, read_scene, render_settings
+from ..jobs import RenderJob
+from ..writeback.images import show_image, write_image
+from ..writeback.results import record_run
 
 RESULT_IMAGE = "Caustic Render"
 

@@ -93,8 +93,8 @@ def test_baked_caustic_renders_like_the_caustic_pass(addon, tmp_path, floor_kind
     assert bpy.ops.caustic.bake() == {'FINISHED'}
     chart_input = 'ShaderNodeUVMap' if floor_kind == "bent" else 'ShaderNodeNewGeometry'
     assert any(node.bl_idname == chart_input for node in bpy.data.node_groups[0].nodes)
-    read = addon.operators.scene_reader.read_scene(bpy.context)
-    settings = addon.operators.settings.render_settings(bpy.context.scene.caustic, spp=64)
+    read = addon.export.read_scene(bpy.context)
+    settings = addon.export.render_settings(bpy.context.scene.caustic, spp=64)
     caustic = addon.caustic_addon.render(read.scene, settings).passes["caustic"]
 
     ball.hide_render = lamp.hide_render = True

@@ -11,10 +11,10 @@ import blender_scenes as scenes
 
 def job_for_scene(addon, lamp_rays):
     scenes.ball_lens_scene(64, 48, lamp_rays=lamp_rays, segments=32, rings=16)
-    read = addon.operators.scene_reader.read_scene(bpy.context)
-    settings = addon.operators.settings.render_settings(bpy.context.scene.caustic)
+    read = addon.export.read_scene(bpy.context)
+    settings = addon.export.render_settings(bpy.context.scene.caustic)
     settings.chunk_size = 1 << 14  # many chunks: progress moves, and the cancel is seen soon
-    return addon.operators.job.RenderJob(read.scene, settings)
+    return addon.jobs.RenderJob(read.scene, settings)
 
 
 def test_job_runs_on_a_thread_to_the_end(addon):

@@ -68,7 +68,7 @@ def test_becomes_the_scene_camera_only_when_there_is_none():
 def test_the_addon_reads_back_the_engines_geometry(addon, shape, raised):
     bpy.context.scene.cursor.location = (0.3, -0.2, 0.1)
     bpy.ops.caustic.add_paper_scene(shape=shape, raised=raised)
-    read = addon.operators.scene_reader.read_scene(bpy.context)
+    read = addon.export.read_scene(bpy.context)
     objects = {ob.name: ob for ob in read.scene.objects}
     cursor = np.array([0.3, -0.2, 0.1])
     engine = paper.glass(shape.lower(), 1.0 if raised else 0.0)

@@ -1,5 +1,4 @@
-"""Scene.caustic turned into the engine's RenderSettings, and a finished
-run's figures written back into it."""
+"""Scene.caustic turned into the engine's RenderSettings."""
 
 import os
 
@@ -25,10 +24,3 @@ def render_settings(props, spp: int | None = None) -> RenderSettings:
         spp=props.spp if spp is None else spp,
         threads=max(1, os.cpu_count() or 1),
     )
-
-
-def record_run(props, job) -> None:
-    """Show the finished `job`'s time and lamp rays in Scene.caustic `props`."""
-    props.last_seconds = job.seconds
-    props.last_lamp_rays = job.result.stats["lamp_rays"]
-    props.last_refined = job.result.stats["lamp_rays_refined"]

@@ -11,9 +11,9 @@ import time
 import bpy
 import numpy as np
 
-from .images import read_pixels
+from ..export import SceneRead
+from ..writeback.images import read_pixels
 from .overrides import Overrides
-from .scene_reader import SceneRead
 
 RENDER_RESULT = "Render Result"
 

@@ -12,7 +12,7 @@ import blender_scenes as scenes
 
 
 def read(addon):
-    return addon.operators.scene_reader.read_scene(bpy.context)
+    return addon.export.read_scene(bpy.context)
 
 
 def engine_object(result, name):
@@ -232,7 +232,7 @@ def volume(material, kind='ShaderNodeVolumeAbsorption', **inputs):
 
 def test_no_blender_glass_has_a_dispersion_input():
     """Checked on 4.2, 4.5 and 5.3: dispersion comes from Object.caustic.abbe
-    alone. If Blender adds the input, material_reader should read it."""
+    alone. If Blender adds the input, export/materials.py should read it."""
     for kind in ('ShaderNodeBsdfGlass', 'ShaderNodeBsdfPrincipled', 'ShaderNodeBsdfRefraction'):
         node = scenes.glass_material().node_tree.nodes.new(kind)
         assert "Dispersion" not in node.inputs

@@ -1,5 +1,6 @@
-"""One engine render, run here or on a worker thread. Nothing in this module
-touches bpy: the scene comes in as numpy, the result goes out as numpy."""
+"""One engine render, run here or on a worker thread, and the illumination
+maps kept between renders. Nothing in this module touches bpy: the scene
+comes in as numpy, the result goes out as numpy."""
 
 from __future__ import annotations
 

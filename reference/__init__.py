@@ -1,0 +1,1 @@
+"""The Cycles reference: the same view rendered by Cycles, and the caustic render's error against it."""
