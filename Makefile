@@ -33,11 +33,11 @@ $(VENV)/.installed: requirements/blender-$(NEWEST).txt
 
 venv: $(VENV)/.installed $(foreach v,$(OLDER),.venv-$(v)/.installed)
 
-# The paper's scene through Blender, with a Cycles render beside it, then
-# the same scene through the engine's command line, all into out/.
+# The paper's scene three ways side by side (beams, the paper's splat map,
+# Cycles), then through the engine's command line, all into out/.
 demo: $(VENV)/.installed
-	$(VENV)/bin/python tests/paper_scene.py --compare
-	$(VENV)/bin/python -m caustic_addon render examples/paper.toml examples/round.obj -o out/paper_cli.png
+	$(VENV)/bin/python examples/demo.py
+	$(VENV)/bin/python -m caustic_addon render examples/paper.toml examples/round.obj -o out/paper_cli.png --exposure 2
 
 test-engine: venv
 	$(foreach v,$(NEWEST) $(OLDER),$(call venv_of,$(v))/bin/python -m pytest -c tests/pytest.ini tests/engine &&) true

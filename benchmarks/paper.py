@@ -34,16 +34,16 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 import paper_scenes as ps  # noqa: E402
-from caustic_addon import Dielectric, Object, RenderSettings, render, shapes  # noqa: E402
+from caustic_addon import Dielectric, Object, RenderSettings, paper, render, shapes  # noqa: E402
 from caustic_addon.emission.aims import Sphere  # noqa: E402
 from speed import machine  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
 # Index 1.5 (glass) and the heights between resting and RAISED are not in the
 # paper; they show where its trends turn.
-WATER, ZIRCONIA, DIAMOND = ps.INDICES.values()
+WATER, ZIRCONIA, DIAMOND = paper.INDICES.values()
 IORS = (WATER, ps.GLASS_IOR, ZIRCONIA, DIAMOND)
-HEIGHTS = (0.0, 0.25, 0.5, ps.RAISED, 2.0)
+HEIGHTS = (0.0, 0.25, 0.5, paper.RAISED, 2.0)
 COMPLEXITY_SIZES = (1_000, 4_000, 16_000, 64_000, 256_000, 1_000_000)
 ENERGY = ps.PAPER_DEFAULTS["energy"]
 # Linear radiance of the unobstructed floor under the lamp on display.
@@ -60,7 +60,7 @@ def exposure(scene, energy: float) -> float:
     """Multiplier that shows the floor right under the lamp, lit by `energy`, at FLOOR_GREY."""
     lamp = scene.lights[0]
     under = ps.unobstructed_irradiance(scene, energy, lamp.position[None, :2])[0]
-    return FLOOR_GREY / (ps.FLOOR_ALBEDO * under / math.pi)
+    return FLOOR_GREY / (paper.FLOOR_ALBEDO * under / math.pi)
 
 
 def shot(scene, settings: RenderSettings, patch: tuple[np.ndarray, float] | None = None) -> dict:
@@ -110,8 +110,8 @@ def save_grid(path: Path, title: str, images: list[list[np.ndarray]], rows: list
 def shape_sweeps(photons: int, heights: tuple[float, ...]) -> dict[tuple, dict]:
     """Every (shape, ior, height) of tables 1-3 and 7: all IORS at rest and
     at RAISED, glass at every height. Returns case -> shot."""
-    cases = {(s, n, h) for s in ps.SHAPES for h in heights
-             for n in (IORS if h in (0.0, ps.RAISED) else (ps.GLASS_IOR,))}
+    cases = {(s, n, h) for s in paper.SHAPES for h in heights
+             for n in (IORS if h in (0.0, paper.RAISED) else (ps.GLASS_IOR,))}
     shots = {}
     for shape, ior, height in sorted(cases):
         scene = ps.paper_scene(shape, ior, height)
@@ -144,16 +144,16 @@ def caption(c: ps.Caustic) -> str:
 def shape_galleries(shots: dict[tuple, dict], heights: tuple[float, ...]) -> None:
     """paper_ior_<shape>.png (rest and RAISED x IORS) and paper_height.png (shapes x heights, glass)."""
     gain = exposure(ps.paper_scene("round"), ENERGY)
-    for shape in ps.SHAPES:
-        grid = [[shots[shape, n, h] for n in IORS] for h in (0.0, ps.RAISED)]
+    for shape in paper.SHAPES:
+        grid = [[shots[shape, n, h] for n in IORS] for h in (0.0, paper.RAISED)]
         save_grid(RESULTS / f"paper_ior_{shape}.png",
                   f"Table {ps.PAPER_TABLES['ior_' + shape]}: {shape} base, index of refraction",
-                  [[o["image"] for o in row] for row in grid], ["resting", f"raised {ps.RAISED} m"],
+                  [[o["image"] for o in row] for row in grid], ["resting", f"raised {paper.RAISED} m"],
                   [f"n = {n}" for n in IORS], [[caption(o["caustic"]) for o in row] for row in grid], gain)
-    grid = [[shots[s, ps.GLASS_IOR, h] for h in heights] for s in ps.SHAPES]
+    grid = [[shots[s, ps.GLASS_IOR, h] for h in heights] for s in paper.SHAPES]
     save_grid(RESULTS / "paper_height.png",
               f"Table {ps.PAPER_TABLES['height']}: object height (n = {ps.GLASS_IOR})",
-              [[o["image"] for o in row] for row in grid], list(ps.SHAPES), [f"{h} m" for h in heights],
+              [[o["image"] for o in row] for row in grid], list(paper.SHAPES), [f"{h} m" for h in heights],
               [[caption(o["caustic"]) for o in row] for row in grid], gain)
 
 
@@ -188,7 +188,7 @@ def photon_sweep(counts: tuple[int, ...]) -> dict:
         lenses.append(lens)
         slabs.append(slab)
         print(f"  {count:>10,} rays: noise {slab['noise']:.4f}; {caption(lens['caustic'])}", flush=True)
-    save_grid(RESULTS / "paper_photons.png", f"Table {ps.PAPER_TABLES['photons']}: lamp rays (splat map, 5 mm)",
+    save_grid(RESULTS / "paper_photons.png", f"Table {ps.PAPER_TABLES['lamp_rays']}: lamp rays (splat map, 5 mm)",
               [[o["image"] for o in lenses], [o["image"] for o in slabs]], ["round", "flat"],
               [f"{c:,} rays" for c in counts],
               [[caption(o["caustic"]) for o in lenses], [f"noise {o['noise']:.3f}" for o in slabs]],
@@ -250,7 +250,7 @@ def map_scale_sweep(counts: tuple[int, ...]) -> dict:
 def complexity_scene(triangles: int):
     """The resting glass ball as a UV sphere of about `triangles` triangles, seen at 320x240."""
     scene = ps.paper_scene("round")
-    mesh = shapes.sphere_for_triangles(triangles, ps.RADIUS, (0.0, 0.0, ps.GAP + ps.RADIUS))
+    mesh = shapes.sphere_for_triangles(triangles, paper.RADIUS, (0.0, 0.0, paper.GAP + paper.RADIUS))
     scene.objects[1] = Object("Glass", mesh, Dielectric(ps.GLASS_IOR))
     return scene
 
@@ -314,21 +314,21 @@ def main() -> None:
     args = parser.parse_args()
     start = time.perf_counter()
     photons = 200_000 if args.quick else 1_000_000
-    heights = (0.0, 0.25, ps.RAISED) if args.quick else HEIGHTS
-    counts = ps.PAPER_SWEEPS["photons"][:-1] if args.quick else ps.PAPER_SWEEPS["photons"]
+    heights = (0.0, 0.25, paper.RAISED) if args.quick else HEIGHTS
+    counts = ps.PAPER_SWEEPS["lamp_rays"][:-1] if args.quick else ps.PAPER_SWEEPS["lamp_rays"]
     RESULTS.mkdir(exist_ok=True)
 
     report = {"date": date.today().isoformat(), "machine": machine(), "quick": args.quick,
-              "scene": {"lamp": ps.LAMP_POSITION, "lamp_power_w": ps.LAMP_POWER, "radius": ps.RADIUS,
-                        "cylinder_height": ps.CYLINDER_HEIGHT, "cone_height": ps.CONE_HEIGHT, "gap": ps.GAP,
-                        "floor": ps.FLOOR_SIZE, "resting_floor": ps.RESTING_FLOOR, "eye": ps.EYE, "target": ps.TARGET,
-                        "fov": ps.FOV},
+              "scene": {"lamp": paper.LAMP_POSITION, "lamp_power_w": paper.LAMP_POWER, "radius": paper.RADIUS,
+                        "cylinder_height": paper.CYLINDER_HEIGHT, "cone_height": paper.CONE_HEIGHT, "gap": paper.GAP,
+                        "floor": paper.FLOOR_SIZE, "resting_floor": ps.RESTING_FLOOR, "eye": paper.EYE, "target": paper.TARGET,
+                        "fov": paper.FOV},
               "seconds": {}}
     steps = [
         ("shapes", lambda: shape_results(photons, heights)),
         ("photons", lambda: photon_sweep(counts)),
-        ("energy", lambda: energy_sweep(ps.PAPER_DEFAULTS["photons"])),
-        ("map_scale", lambda: map_scale_sweep((ps.PAPER_DEFAULTS["photons"], photons))),
+        ("energy", lambda: energy_sweep(ps.PAPER_DEFAULTS["lamp_rays"])),
+        ("map_scale", lambda: map_scale_sweep((ps.PAPER_DEFAULTS["lamp_rays"], photons))),
         ("complexity", lambda: complexity(COMPLEXITY_SIZES[:4] if args.quick else COMPLEXITY_SIZES, photons,
                                           1 if args.quick else 2)),
     ]

@@ -18,63 +18,39 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from caustic_addon import Camera, Dielectric, Diffuse, Mesh, Object, PointLight, RenderSettings, Scene, paper, shapes
+from caustic_addon import Mesh, RenderSettings, Scene, paper
 from caustic_addon.maps.illumination_map import IlluminationMap
 import reference
 
-SHAPES = paper.SHAPES
-INDICES = paper.INDICES
 GLASS_IOR = 1.5
-RADIUS = paper.RADIUS
-CYLINDER_HEIGHT = paper.CYLINDER_HEIGHT
-CONE_HEIGHT = paper.CONE_HEIGHT
-GAP = paper.GAP
-RAISED = paper.RAISED
-FLOOR_SIZE = paper.FLOOR_SIZE
 # m: enough for the caustics of resting objects, for the 5 mm maps
 RESTING_FLOOR = 8.0
-# mm: the cells the shape and height sweeps measure on, over FLOOR_SIZE
+# mm: the cells the shape and height sweeps measure on, over paper.FLOOR_SIZE
 SHAPE_MAP_SCALE = 10.0
-FLOOR_ALBEDO = paper.FLOOR_ALBEDO
-LAMP_POSITION = paper.LAMP_POSITION
-LAMP_POWER = paper.LAMP_POWER
-EYE = paper.EYE
-TARGET = paper.TARGET
-FOV = paper.FOV
 GALLERY_PIXELS = (320, 240)
 
 # The paper's experiments: the values each table varies, and the defaults
 # (its 40,000 lamp rays, energy 10, map scale 5 mm on the bilinear map).
-PAPER_DEFAULTS = {"ior": GLASS_IOR, "height": 0.0, "photons": 40_000, "energy": 10.0, "map_scale": 5.0,
-                  "density": "splat"}
+PAPER_DEFAULTS = {"ior": GLASS_IOR, "height": 0.0, "lamp_rays": paper.LAMP_RAYS, "energy": paper.ENERGY,
+                  "map_scale": paper.MAP_SCALE, "density": "splat"}
 PAPER_SWEEPS = {
-    "ior": tuple(INDICES.values()),
-    "photons": (10_000, 40_000, 160_000, 1_000_000, 10_000_000),
+    "ior": tuple(paper.INDICES.values()),
+    "lamp_rays": (10_000, 40_000, 160_000, 1_000_000, 10_000_000),
     "energy": (10.0, 20.0),
     "map_scale": (5.0, 40.0),
-    "height": (0.0, RAISED),
+    "height": (0.0, paper.RAISED),
 }
 # The paper's table for each experiment: tables 1-3 are the index of
 # refraction for the round, flat and pointed base.
-PAPER_TABLES = {"ior_round": 1, "ior_flat": 2, "ior_pointed": 3, "photons": 4, "energy": 5, "map_scale": 6,
+PAPER_TABLES = {"ior_round": 1, "ior_flat": 2, "ior_pointed": 3, "lamp_rays": 4, "energy": 5, "map_scale": 6,
                 "height": 7}
 
 
-def paper_camera(pixx: int, pixy: int) -> Camera:
-    """The paper's pinhole: FOV 40 degrees across pixx x pixy pixels, screen S = 1, in front and above."""
-    return Camera.from_paper(FOV, pixx, pixy, 1.0, EYE, TARGET)
-
-
 def paper_scene(shape: str, ior: float = GLASS_IOR, height: float = 0.0, pixels: tuple[int, int] = GALLERY_PIXELS,
-                floor: float = FLOOR_SIZE) -> Scene:
-    """Clear glass of base `shape` and index `ior` at `height` m over a
-    `floor` m square, lit by a LAMP_POWER W point lamp."""
-    return Scene(
-        objects=[Object("Floor", shapes.plane(floor), Diffuse(albedo=FLOOR_ALBEDO)),
-                 Object("Glass", paper.glass(shape, height), Dielectric(ior))],
-        lights=[PointLight(LAMP_POSITION, LAMP_POWER)],
-        camera=paper_camera(*pixels),
-    )
+                floor: float = paper.FLOOR_SIZE) -> Scene:
+    """The paper's scene (caustic_addon.paper), by default of glass at the
+    benchmarks' gallery size."""
+    return paper.scene(shape, ior, height, pixels, floor)
 
 
 def splat_settings(scene: Scene, map_scale: float, **kwargs) -> RenderSettings:
@@ -187,11 +163,11 @@ def measure(imap: IlluminationMap, scene: Scene, energy: float) -> Caustic:
 
 def flat_patch(scene: Scene) -> tuple[np.ndarray, float]:
     """(centre (2,), radius m) of a disc of even caustic light under the
-    resting cylinder: radius 0.3 RADIUS, centred 0.4 RADIUS from the base's
+    resting cylinder: radius 0.3 paper.RADIUS, centred 0.4 paper.RADIUS from the base's
     centre toward the lamp, clear of the crescent that total internal
     reflection at the far wall folds back and of the base's rim."""
     toward = scene.lights[0].position[:2] / np.linalg.norm(scene.lights[0].position[:2])
-    return 0.4 * RADIUS * toward, 0.3 * RADIUS
+    return 0.4 * paper.RADIUS * toward, 0.3 * paper.RADIUS
 
 
 def noise(imap: IlluminationMap, centre: np.ndarray, radius: float) -> float:
@@ -215,7 +191,7 @@ def paraxial_image_distance(scene: Scene) -> float:
     through it), s the lamp's distance from the centre."""
     glass = scene.objects[1]
     n = glass.material.ior
-    f = n * RADIUS / (2.0 * (n - 1.0))
+    f = n * paper.RADIUS / (2.0 * (n - 1.0))
     s = float(np.linalg.norm(scene.lights[0].position - volume_centroid(glass.mesh)))
     return 1.0 / (1.0 / f - 1.0 / s)
 
@@ -238,6 +214,6 @@ def reference_r50(scene: Scene, step: float = 1e-3) -> float:
     lamp_distance = float(np.linalg.norm(scene.lights[0].position - volume_centroid(glass.mesh)))
     half = 0.5 * np.ptp(scene.objects[0].mesh.vertices[:, 0])
     edges = np.linspace(0.0, half, int(round(half / step)) + 1)
-    exact = reference.ball_lens_irradiance(RADIUS, glass.material.ior, centre_z, centre_z + lamp_distance, 1.0, edges)
+    exact = reference.ball_lens_irradiance(paper.RADIUS, glass.material.ior, centre_z, centre_z + lamp_distance, 1.0, edges)
     held = np.cumsum(exact.caustic * reference.annulus_areas(edges))
     return float(np.interp(0.5 * held[-1], held, edges[1:]))

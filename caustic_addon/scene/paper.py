@@ -1,6 +1,6 @@
-"""The paper's scenes (section 4), so that
-benchmarks/paper_scenes.py and the add-on's caustic.add_paper_scene build
-the same geometry: a clear object of base SHAPES over a diffuse floor
+"""The paper's scene (section 4), the one that the demo, the command line's
+example (examples/paper.toml), the add-on's caustic.add_paper_scene and the
+benchmarks all build: a clear object of base SHAPES over a diffuse floor
 facing +z at z = 0, under one point lamp above, slightly to the side and
 behind, so that shadows and caustics fall toward the paper's camera, which
 looks down from in front. Lengths in metres:
@@ -12,12 +12,22 @@ looks down from in front. Lengths in metres:
 
 from __future__ import annotations
 
+from .camera import Camera
 from .geometry import Mesh
-from .shapes import cone, cylinder, uv_sphere
+from .lights import PointLight
+from .materials import Dielectric, Diffuse
+from .scene import Object, Scene
+from .shapes import cone, cylinder, plane, uv_sphere
 
 SHAPES = ("round", "flat", "pointed")
 # The paper's indices of refraction: water, cubic zirconia, diamond.
 INDICES = {"water": 1.33, "cubic zirconia": 1.9, "diamond": 2.41}
+# The paper's lamp rays, lamp energy (10 makes LAMP_POWER the paper's 100 W)
+# and map scale (mm), and its image.
+LAMP_RAYS = 40_000
+ENERGY = 10.0
+MAP_SCALE = 5.0
+PIXELS = (640, 480)
 RADIUS = 0.5
 CYLINDER_HEIGHT = 0.8
 CONE_HEIGHT = 1.0
@@ -48,3 +58,20 @@ def glass(shape: str, height: float = 0.0) -> Mesh:
     if shape == "pointed":
         return cone(RADIUS, CONE_HEIGHT, (0.0, 0.0, bottom))
     raise ValueError(f"shape must be one of {SHAPES}, got {shape!r}")
+
+
+def camera(pixx: int = PIXELS[0], pixy: int = PIXELS[1]) -> Camera:
+    """The paper's pinhole: FOV degrees across pixx x pixy pixels, screen S = 1."""
+    return Camera.from_paper(FOV, pixx, pixy, 1.0, EYE, TARGET)
+
+
+def scene(shape: str = "round", ior: float = INDICES["water"], height: float = 0.0,
+          pixels: tuple[int, int] = PIXELS, floor: float = FLOOR_SIZE) -> Scene:
+    """Clear glass of base `shape` and index `ior` at `height` m over a
+    `floor` m square of albedo FLOOR_ALBEDO, lit by a LAMP_POWER W point lamp."""
+    return Scene(
+        objects=[Object("Floor", plane(floor), Diffuse(albedo=FLOOR_ALBEDO)),
+                 Object("Glass", glass(shape, height), Dielectric(ior))],
+        lights=[PointLight(LAMP_POSITION, LAMP_POWER, name="Lamp")],
+        camera=camera(*pixels),
+    )

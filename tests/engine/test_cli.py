@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from caustic_addon import Reflector, RenderSettings, SceneError, render, shapes
-from caustic_addon.cli import config
+from caustic_addon import Reflector, RenderSettings, SceneError, paper, render, shapes
+from caustic_addon.cli import config, obj
 from caustic_addon.cli import main as cli
 from caustic_addon.cli.image_io import read_exr, read_png, srgb_encode, write_image
 from caustic_addon.cli.obj import ObjError, parse_obj, read_obj, write_obj
@@ -221,14 +221,23 @@ def test_progress_bar_draws_in_place_only_on_a_terminal():
 # --- the scene file ------------------------------------------------------------------------------------------
 
 
-def test_the_example_scene_is_the_papers_and_well_exposed():
+def test_the_example_scene_is_the_papers():
+    """examples/paper.toml with examples/round.obj is caustic_addon.paper's
+    scene: the one the demo, the add-on and the benchmarks build."""
     cfg = config.load(EXAMPLES / "paper.toml")
     s = cfg.settings
-    assert (s.lamp_rays, s.energy, s.map_scale, s.density) == (40_000, 10.0, 5.0, "splat")
-    # radiance of the plane under the lamp: albedo * E / pi, E = energy * power / (4 pi h^2)
-    height = cfg.lamp.position[2] - cfg.floor.mesh.vertices[0, 2]
-    irradiance = s.energy * cfg.lamp.power / (4 * math.pi * height ** 2)
-    assert 0.3 <= cfg.floor.material.albedo[0] * irradiance / math.pi <= 0.6
+    assert (s.lamp_rays, s.energy, s.density) == (paper.LAMP_RAYS, paper.ENERGY, RenderSettings().density)
+    ours = cfg.scene(obj.read_obj(EXAMPLES / "round.obj"), "round")
+    theirs = paper.scene("round", paper.INDICES["water"])
+    for mine, expected in zip(ours.objects, theirs.objects):
+        np.testing.assert_allclose(np.sort(mine.mesh.vertices, axis=0), np.sort(expected.mesh.vertices, axis=0),
+                                   atol=1e-6)
+        assert type(mine.material) is type(expected.material)
+    assert ours.objects[1].material.ior == theirs.objects[1].material.ior
+    np.testing.assert_allclose(ours.lights[0].position, theirs.lights[0].position)
+    assert ours.lights[0].power == theirs.lights[0].power
+    np.testing.assert_allclose(ours.camera.matrix, theirs.camera.matrix, atol=1e-12)
+    assert (ours.camera.fov, ours.camera.pixx, ours.camera.pixy) == (theirs.camera.fov, *paper.PIXELS)
 
 
 def test_scene_file_defaults_and_placement():
@@ -354,12 +363,11 @@ def test_obj_round_trip_keeps_corners_normals_and_uvs(tmp_path):
             np.testing.assert_allclose(back.corner_uvs, mesh.corner_uvs, atol=1e-6)
 
 
-def test_example_objects_are_the_shapes_they_claim():
-    for name, expected in (("round", shapes.uv_sphere(0.5, (0.0, 0.0, 0.5), 64, 32)),
-                           ("flat", shapes.cylinder(0.5, 0.5, segments=128)),
-                           ("pointed", shapes.cone(0.5, 0.75, segments=128))):
+def test_example_objects_are_the_papers_resting_at_the_origin():
+    for name in paper.SHAPES:
+        expected = paper.glass(name, -paper.GAP)
         path = EXAMPLES / f"{name}.obj"
-        assert path.stat().st_size < 400_000
+        assert path.stat().st_size < 1_100_000
         mesh = read_obj(path)
         np.testing.assert_allclose(mesh.corners, expected.corners, atol=1e-6)
         np.testing.assert_allclose(mesh.corner_normals, expected.corner_normals, atol=2e-6)

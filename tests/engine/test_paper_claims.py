@@ -14,13 +14,13 @@ import numpy as np
 import pytest
 
 import paper_scenes as ps
-from caustic_addon import render
+from caustic_addon import paper, render
 
 PHOTONS = 300_000
 TINY = (8, 8)
-WATER, ZIRCONIA, DIAMOND = ps.INDICES.values()
+WATER, ZIRCONIA, DIAMOND = paper.INDICES.values()
 ENERGY = ps.PAPER_DEFAULTS["energy"]
-PAPER_RAYS = ps.PAPER_DEFAULTS["photons"]
+PAPER_RAYS = ps.PAPER_DEFAULTS["lamp_rays"]
 SMALL_MM, LARGE_MM = ps.PAPER_SWEEPS["map_scale"]
 # The floor is tilted 15 (resting) to 21 degrees (raised) from square to the
 # lamp's axis through the ball, which stretches the caustic by up to
@@ -39,7 +39,7 @@ def render_floor(shape: str, ior: float, height: float, floor: float, map_scale:
 @lru_cache(maxsize=None)
 def caustic(shape: str, ior: float = ps.GLASS_IOR, height: float = 0.0) -> ps.Caustic:
     """The measured caustic of a shape-sweep scene, as paper.py measures it."""
-    scene, imap = render_floor(shape, ior, height, ps.FLOOR_SIZE, ps.SHAPE_MAP_SCALE, PHOTONS)
+    scene, imap = render_floor(shape, ior, height, paper.FLOOR_SIZE, ps.SHAPE_MAP_SCALE, PHOTONS)
     return ps.measure(imap, scene, ENERGY)
 
 
@@ -84,11 +84,11 @@ def test_raised_round_base_spreads_and_dims_as_the_index_rises():
     falls on it, zirconia's (0.66 m) and diamond's (0.51 m) far above it,
     so the higher the index, the farther past its focus the light has
     diverged when it lands: a wider, dimmer caustic."""
-    water, zirconia, diamond = (caustic("round", n, ps.RAISED) for n in (WATER, ZIRCONIA, DIAMOND))
+    water, zirconia, diamond = (caustic("round", n, paper.RAISED) for n in (WATER, ZIRCONIA, DIAMOND))
     assert water.r50 < zirconia.r50 < diamond.r50
     assert water.whiteness > zirconia.whiteness > diamond.whiteness
     assert_follows_reference([water, zirconia, diamond],
-                             [exact_r50(n, ps.RAISED) for n in (WATER, ZIRCONIA, DIAMOND)])
+                             [exact_r50(n, paper.RAISED) for n in (WATER, ZIRCONIA, DIAMOND)])
 
 
 def test_flat_base_at_rest_spreads_into_a_larger_circle_as_the_index_rises():
@@ -171,7 +171,7 @@ def test_raising_flat_and_pointed_bases_spreads_their_caustics():
     leaving the cylinder's bottom face and the cone's facets diverges from
     the lamp's side of the glass; the farther it falls, the wider it lands."""
     for shape in ("flat", "pointed"):
-        assert caustic(shape, height=ps.RAISED).r50 > caustic(shape).r50
+        assert caustic(shape, height=paper.RAISED).r50 > caustic(shape).r50
 
 
 def test_raising_the_round_base_gathers_its_caustic_until_the_floor_reaches_the_focus():
@@ -181,7 +181,7 @@ def test_raising_the_round_base_gathers_its_caustic_until_the_floor_reaches_the_
     brings the floor to the focus and gathers the caustic; from there on,
     as the paper says, raising it spreads the caustic. The exact ball lens
     agrees."""
-    heights = (0.0, 0.25, ps.RAISED)
+    heights = (0.0, 0.25, paper.RAISED)
     resting, focused, raised = (caustic("round", height=h) for h in heights)
     assert focused.r50 < resting.r50 and focused.whiteness > resting.whiteness
     assert raised.r50 > focused.r50 and raised.whiteness < focused.whiteness
