@@ -9,8 +9,8 @@ import numpy as np
 
 from ..export import InputError, read_scene, render_settings
 from ..jobs import RenderJob
-from ..reference.cycles import render_cycles
-from ..reference.metrics import caustic_region, psnr, relative_l2
+from ..comparison.cycles import render_cycles
+from ..comparison.metrics import caustic_region, psnr, relative_l2
 from ..writeback.images import show_image, write_image
 from ..writeback.results import record_run
 from .render import RESULT_IMAGE, no_render_running

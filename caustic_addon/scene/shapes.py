@@ -1,7 +1,8 @@
-"""Procedural meshes for tests, benchmarks and the paper's experiments: a
-sphere, a cylinder, a cone (point down), a plane, and an open tube (a mirror
-ring). All but the tube are closed; all are wound counter-clockwise seen from
-outside, with smooth corner normals (flat on caps and the plane)."""
+"""Procedural meshes for tests, benchmarks, the gallery and the paper's
+experiments: a sphere, a cylinder, a cone (point down), a plane, an open
+tube (a mirror ring) and a slab of water with a wavy top. All but the tube
+are closed; all are wound counter-clockwise seen from outside, with smooth
+corner normals (flat on caps, walls and the plane)."""
 
 from __future__ import annotations
 
@@ -95,3 +96,47 @@ def tube(radius: float = 1.0, height: float = 1.0, center=(0.0, 0.0, 0.0), segme
     """An open tube (no caps) about z from center_z to center_z + height,
     smooth radial normals: a coffee cup's wall, or a ring."""
     return _revolve(np.array([[radius, height], [radius, 0.0]]), np.array([[1.0, 0.0]]), segments, center)
+
+
+def wavy_slab(size: float = 2.0, depth: float = 0.3, waves=((0.02, 0.5, 0.0), (0.015, 0.37, 1.1)),
+              cells: int = 128, center=(0.0, 0.0, 0.0)) -> Mesh:
+    """A closed square slab of water, `size` across and `depth` deep, its
+    top the height field depth + sum of a cos(k . (x, y)) over `waves`
+    (amplitude a m, wavelength m, direction radians), sampled on `cells` x
+    `cells` quads with the field's own normals (-dh/dx, -dh/dy, 1), smooth;
+    flat bottom and sides. `center` is the middle of its bottom face."""
+    ticks = np.linspace(-0.5 * size, 0.5 * size, cells + 1)
+    x, y = np.meshgrid(ticks, ticks, indexing="ij")
+    h, dx, dy = np.full_like(x, depth), np.zeros_like(x), np.zeros_like(x)
+    for amplitude, wavelength, angle in waves:
+        k = 2.0 * math.pi / wavelength * np.array([math.cos(angle), math.sin(angle)])
+        phase = k[0] * x + k[1] * y
+        h += amplitude * np.cos(phase)
+        dx -= amplitude * k[0] * np.sin(phase)
+        dy -= amplitude * k[1] * np.sin(phase)
+    n = cells + 1
+    top = np.stack([x, y, h], axis=-1).reshape(-1, 3)
+    top_normals = np.stack([-dx, -dy, np.ones_like(x)], axis=-1).reshape(-1, 3)
+    top_normals /= np.linalg.norm(top_normals, axis=1, keepdims=True)
+    i, j = np.meshgrid(np.arange(cells), np.arange(cells), indexing="ij")
+    a, b, c, d = i * n + j, (i + 1) * n + j, (i + 1) * n + j + 1, i * n + j + 1
+    top_tris = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    # the rim walked counter-clockwise seen from above: y = -half, x = +half, y = +half, x = -half
+    grid = np.arange(n * n).reshape(n, n)
+    rim = np.concatenate([grid[:-1, 0], grid[-1, :-1], grid[:0:-1, -1], grid[0, :0:-1]])
+    rim_top = top[rim]
+    rim_bottom = rim_top * np.array([1.0, 1.0, 0.0])
+    m = len(rim)
+    # the walls: a quad (top k, bottom k, bottom k+1, top k+1) per rim step,
+    # facing out along the side's axis; the bottom: a fan from its centre
+    side = np.repeat(np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]), cells, axis=0)
+    k, k1 = np.arange(m), (np.arange(m) + 1) % m
+    t, b, centre = len(top) + k, len(top) + m + k, len(top) + 2 * m
+    t1, b1 = len(top) + k1, len(top) + m + k1
+    walls = np.concatenate([np.stack([t, b, b1], 1), np.stack([t, b1, t1], 1)])
+    bottom = np.stack([np.full(m, centre), b1, b], 1)
+    verts = np.concatenate([top, rim_top, rim_bottom, [[0.0, 0.0, 0.0]]])
+    tris = np.concatenate([top_tris, walls, bottom])
+    normals = np.concatenate([top_normals[top_tris], np.repeat(np.tile(side, (2, 1))[:, None], 3, axis=1),
+                              np.tile([0.0, 0.0, -1.0], (m, 3, 1))])
+    return Mesh(verts + np.asarray(center, dtype=np.float64), tris, normals)

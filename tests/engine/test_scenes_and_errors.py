@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from caustic_addon import (Cancelled, Dielectric, Diffuse, MapCache, Mesh, Object, PointLight, RenderSettings,
-                           Scene, SceneError, SpotLight, SunLight, render)
+                           Scene, SceneError, SpotLight, SunLight, render, shapes)
+from caustic_addon.tracing.topology import open_edge_count, signed_volume, triangle_normals
 from metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
 
@@ -159,3 +160,18 @@ def test_a_camera_move_reuses_the_illumination_maps():
     scene.objects[1].material = Dielectric(1.33, abbe=55.7)
     assert not render(scene, quick(lamp_rays=60_000, bands=3), cache=cache).stats["maps_cached"]
     assert not render(scene, quick(lamp_rays=60_000, bands=4), cache=cache).stats["maps_cached"]
+
+
+def test_the_wavy_slab_is_closed_faces_out_and_holds_its_volume():
+    """Its height field over [-1, 1]^2 integrates in closed form: depth plus
+    a cos(k.x) integrates to a sin(kx L/2) sin(ky L/2) (2 / kx)(2 / ky)."""
+    waves = ((0.02, 0.5, 0.3), (0.015, 0.37, 1.1))
+    mesh = shapes.wavy_slab(2.0, 0.3, waves, cells=256)
+    assert open_edge_count(mesh.triangles, mesh.vertices) == 0
+    exact = 4.0 * 0.3
+    for amplitude, wavelength, angle in waves:
+        kx, ky = 2 * math.pi / wavelength * math.cos(angle), 2 * math.pi / wavelength * math.sin(angle)
+        exact += amplitude * (2 * math.sin(kx) / kx) * (2 * math.sin(ky) / ky)
+    assert signed_volume(mesh.corners) == pytest.approx(exact, rel=1e-4)
+    normals, _ = triangle_normals(mesh.corners)
+    assert np.all(np.einsum("ij,ij->i", normals, mesh.corner_normals.mean(axis=1)) > 0.5)

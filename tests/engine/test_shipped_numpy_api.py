@@ -11,7 +11,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[2]
 # What the extension's zip holds: everything but what blender_manifest.toml leaves out.
 SHIPPED = [REPO / "__init__.py"] + [path for folder in ("caustic_addon", "export", "jobs", "operators", "panels",
-                                                   "properties", "reference", "writeback")
+                                                   "properties", "comparison", "writeback")
                                     for path in sorted((REPO / folder).rglob("*.py"))]
 
 

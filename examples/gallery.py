@@ -1,0 +1,110 @@
+"""The README's gallery: four caustics the engine renders at its default
+settings (40,000 lamp rays as beams, 4 samples per pixel), each written to
+docs/gallery/<name>.png with its render time in docs/gallery/gallery.json.
+
+    .venv/bin/python examples/gallery.py
+
+- ball_lens: a glass ball (n = 1.5) under a point lamp focuses its light
+  into a bright disc ringed by the fold of the caustic.
+- mirror_ring: a polished ring on a table under a low sun: the cardioid of a
+  coffee cup, its cusp at half the ring's radius.
+- wavy_water: sunlight through a rippled slab of water: the network of lines
+  on a pool's floor.
+- dispersive_gem: a facetted gem of strongly dispersive glass (n = 2.0,
+  Abbe number 20): each facet throws a beam that the spectrum fans out.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import platform
+import sys
+import time
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from caustic_addon import (Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector, RenderSettings,  # noqa: E402
+                           Scene, SunLight, render, shapes)
+from caustic_addon.cli.image_io import write_image  # noqa: E402
+
+OUT = REPO / "docs" / "gallery"
+PIXELS = (480, 360)
+
+
+def ball_lens() -> Scene:
+    return Scene(
+        objects=[Object("Floor", shapes.plane(8.0), Diffuse(albedo=0.8)),
+                 Object("Ball", shapes.uv_sphere(1.0, (0.0, 0.0, 1.5), 256, 128), Dielectric(1.5))],
+        lights=[PointLight((0.0, 0.0, 6.0), 1000.0)],
+        camera=Camera.look_at((0.0, -6.5, 3.6), (0.0, 0.0, 0.6), pixx=PIXELS[0], pixy=PIXELS[1],
+                              fov=math.radians(40.0)),
+        background=0.05)
+
+
+def mirror_ring() -> Scene:
+    sun = (math.cos(math.radians(25.0)), 0.0, -math.sin(math.radians(25.0)))
+    return Scene(
+        objects=[Object("Table", shapes.plane(3.0), Diffuse(albedo=0.8)),
+                 Object("Ring", shapes.tube(0.5, 0.25, segments=512), Reflector(0.9))],
+        lights=[SunLight(sun, 3.0)],
+        camera=Camera.look_at((-0.3, -1.2, 1.6), (0.05, 0.0, 0.0), pixx=PIXELS[0], pixy=PIXELS[1],
+                              fov=math.radians(45.0)),
+        background=0.05)
+
+
+def wavy_water() -> Scene:
+    water = shapes.wavy_slab(2.4, 0.25, ((0.012, 0.45, 0.3), (0.009, 0.31, 1.4), (0.006, 0.23, 2.5)), 192,
+                             (0.0, 0.0, 0.35))
+    return Scene(
+        objects=[Object("Pool floor", shapes.plane(4.0), Diffuse(albedo=0.7)),
+                 Object("Water", water, Dielectric(1.33))],
+        lights=[SunLight((0.15, 0.1, -1.0), 4.0)],
+        camera=Camera.look_at((0.0, -1.6, 2.2), (0.0, 0.15, 0.0), pixx=PIXELS[0], pixy=PIXELS[1],
+                              fov=math.radians(40.0)),
+        background=0.05)
+
+
+def dispersive_gem() -> Scene:
+    cone = shapes.cone(0.4, 0.55, (0.0, 0.0, 0.45), segments=10)
+    gem = Mesh(cone.vertices, cone.triangles)  # flat facets: no corner normals
+    return Scene(
+        objects=[Object("Floor", shapes.plane(4.0), Diffuse(albedo=0.6)),
+                 Object("Gem", gem, Dielectric(2.0, abbe=20.0))],
+        lights=[PointLight((0.6, 0.3, 3.0), 600.0)],
+        camera=Camera.look_at((0.0, -2.6, 2.4), (-0.1, 0.1, 0.25), pixx=PIXELS[0], pixy=PIXELS[1],
+                              fov=math.radians(40.0)),
+        background=0.05)
+
+
+# name -> (scene, exposure of its PNG in stops)
+SCENES = {"ball_lens": (ball_lens, -1.0), "mirror_ring": (mirror_ring, -1.0), "wavy_water": (wavy_water, -1.5),
+          "dispersive_gem": (dispersive_gem, -1.2)}
+
+
+def main() -> None:
+    OUT.mkdir(parents=True, exist_ok=True)
+    settings = RenderSettings()
+    times = {}
+    for name, (build, exposure) in SCENES.items():
+        scene = build()
+        start = time.perf_counter()
+        result = render(scene, settings)
+        seconds = time.perf_counter() - start
+        write_image(OUT / f"{name}.png", result.image, exposure)
+        times[name] = dict(seconds=round(seconds, 2), lamp_rays=result.stats["lamp_rays"],
+                           triangles=result.stats["triangles"], warnings=result.warnings)
+        print(f"{name:16s} {seconds:5.2f} s  {result.stats['lamp_rays']:,} lamp rays", flush=True)
+    (OUT / "gallery.json").write_text(json.dumps(dict(
+        date=date.today().isoformat(), machine=f"{platform.processor() or platform.machine()}, Python "
+                                               f"{platform.python_version()}",
+        pixels=list(PIXELS), spp=settings.spp, renders=times), indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()

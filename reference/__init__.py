@@ -1,1 +1,0 @@
-"""The Cycles reference: the same view rendered by Cycles, and the caustic render's error against it."""
