@@ -30,7 +30,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from caustic_addon import (Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector, RenderSettings,  # noqa: E402
-                           Scene, SunLight, render, shapes)
+                           Scene, SunLight, World, render, shapes)
 from caustic_addon.cli.image_io import write_image  # noqa: E402
 
 OUT = REPO / "docs" / "gallery"
@@ -44,7 +44,7 @@ def ball_lens() -> Scene:
         lights=[PointLight((0.0, 0.0, 6.0), 1000.0)],
         camera=Camera.look_at((0.0, -6.5, 3.6), (0.0, 0.0, 0.6), pixx=PIXELS[0], pixy=PIXELS[1],
                               fov=math.radians(40.0)),
-        background=0.05)
+        world=World(0.05))
 
 
 def mirror_ring() -> Scene:
@@ -55,7 +55,7 @@ def mirror_ring() -> Scene:
         lights=[SunLight(sun, 3.0)],
         camera=Camera.look_at((-0.3, -1.2, 1.6), (0.05, 0.0, 0.0), pixx=PIXELS[0], pixy=PIXELS[1],
                               fov=math.radians(45.0)),
-        background=0.05)
+        world=World(0.05))
 
 
 def wavy_water() -> Scene:
@@ -67,7 +67,7 @@ def wavy_water() -> Scene:
         lights=[SunLight((0.15, 0.1, -1.0), 4.0)],
         camera=Camera.look_at((0.0, -1.6, 2.2), (0.0, 0.15, 0.0), pixx=PIXELS[0], pixy=PIXELS[1],
                               fov=math.radians(40.0)),
-        background=0.05)
+        world=World(0.05))
 
 
 def dispersive_gem() -> Scene:
@@ -79,7 +79,7 @@ def dispersive_gem() -> Scene:
         lights=[PointLight((0.6, 0.3, 3.0), 600.0)],
         camera=Camera.look_at((0.0, -2.6, 2.4), (-0.1, 0.1, 0.25), pixx=PIXELS[0], pixy=PIXELS[1],
                               fov=math.radians(40.0)),
-        background=0.05)
+        world=World(0.05))
 
 
 # name -> (scene, exposure of its PNG in stops)

@@ -32,10 +32,13 @@ MIRROR_ROUGHNESS = 0.2
 class Surface:
     """How a material reads: `transparent` (glass) or `reflector` (mirror,
     metal) pick the engine material; neither is a diffuse receiver.
-    `color` is the glass tint or the reflectance."""
+    `color` is the glass tint or the reflectance; `emission` the radiance
+    it gives off (an Emission shader, or a Principled BSDF's emission),
+    which the engine shows but does not yet light anything with."""
 
     transparent: bool
     reflector: bool = False
+    emission: np.ndarray = field(default_factory=lambda: np.zeros(3))
     ior: float = 1.5
     color: np.ndarray = field(default_factory=lambda: np.ones(3))
     albedo: np.ndarray = field(default_factory=lambda: np.full(3, DEFAULT_ALBEDO))
@@ -98,9 +101,15 @@ def read_surface(material) -> Surface:
         warnings.append(f"{what}: rough metal (Roughness above {MIRROR_ROUGHNESS}) is rendered as diffuse and "
                         "casts no caustics")
     if kind == 'ShaderNodeBsdfPrincipled':
-        return Surface(transparent=False, albedo=_value(shader, "Base Color", what, warnings), warnings=warnings)
+        emission = _value(shader, "Emission Color", what, warnings) * _value(shader, "Emission Strength", what,
+                                                                              warnings)
+        return Surface(transparent=False, albedo=_value(shader, "Base Color", what, warnings), emission=emission,
+                       warnings=warnings)
     if kind == 'ShaderNodeBsdfDiffuse':
         return Surface(transparent=False, albedo=_value(shader, "Color", what, warnings), warnings=warnings)
+    if kind == 'ShaderNodeEmission':
+        return Surface(transparent=False, albedo=np.zeros(3), warnings=warnings,
+                       emission=_value(shader, "Color", what, warnings) * _value(shader, "Strength", what, warnings))
     return Surface(transparent=False, albedo=viewport,
                    warnings=[f"{what}: a '{shader.name}' shader is not understood; it is rendered as diffuse "
                              "with the material's viewport colour"])
@@ -139,7 +148,7 @@ def engine_material(surface: Surface, settings) -> Dielectric | Diffuse | Reflec
     transparent = role == 'TRANSPARENT' or (role == 'AUTO' and surface.transparent)
     if not transparent:
         opaque = not (surface.transparent or surface.reflector)
-        return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO)
+        return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO, emission=surface.emission)
     ior = settings.ior if settings.use_ior else (surface.ior if surface.transparent else 1.5)
     color = surface.color if surface.transparent else np.ones(3)
     if settings.absorption_from == 'COLOR':

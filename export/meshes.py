@@ -88,4 +88,7 @@ def mesh_object(ob, name: str, matrix: np.ndarray, surfaces: dict, warnings: lis
     if key not in surfaces:
         surfaces[key] = read_surface(material)
         warnings += surfaces[key].warnings
+    if np.any(surfaces[key].emission > 0.0):
+        warnings.append(f"'{name}': its material '{key}' emits light; the caustic render shows it but lights "
+                        "nothing with it and casts no caustics from it yet (a lamp in its place would)")
     return Object(name, local.transformed(matrix), engine_material(surfaces[key], ob.original.caustic)), key

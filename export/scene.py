@@ -17,7 +17,7 @@ from .lamps import engine_light
 from .materials import Surface
 from .matrices import numpy_matrix
 from .meshes import mesh_object, renderable_objects
-from .world import background
+from .world import engine_world
 
 # Object types with geometry the engine cannot take.
 UNSUPPORTED_GEOMETRY = {'CURVE', 'SURFACE', 'META', 'FONT', 'VOLUME', 'CURVES', 'POINTCLOUD', 'GPENCIL',
@@ -42,7 +42,8 @@ class SceneRead:
 
 def read_scene(context, with_camera: bool = True) -> SceneRead:
     """The engine scene of the context's view layer. Raises InputError if it
-    has no camera (when `with_camera`), no lamp or no receiver."""
+    has no camera (when `with_camera`), no light (neither a lamp nor a
+    world) or no receiver."""
     scene = context.scene
     depsgraph = context.evaluated_depsgraph_get()
     camera = read_camera(scene, depsgraph) if with_camera else dummy_camera()
@@ -50,7 +51,7 @@ def read_scene(context, with_camera: bool = True) -> SceneRead:
     renderable = renderable_objects(context.view_layer)
     read = SceneRead(Scene(objects=[], lights=[], camera=camera), warnings)
     surfaces: dict[Optional[str], Surface] = {}
-    seen, skipped_lamps = set(), False
+    seen = set()
     for number, inst in enumerate(depsgraph.object_instances):
         ob = inst.object
         source = ob.original
@@ -60,11 +61,8 @@ def read_scene(context, with_camera: bool = True) -> SceneRead:
         name = f"{source.name} [{inst.parent.original.name} #{number}]" if inst.is_instance else source.name
         matrix = numpy_matrix(inst.matrix_world)
         if ob.type == 'LIGHT':
-            light = engine_light(ob, matrix, name, warnings)
-            skipped_lamps |= light is None
-            if light is not None:
-                read.scene.lights.append(light)
-                read.sources[name] = source.name
+            read.scene.lights.append(engine_light(ob, matrix, name, warnings))
+            read.sources[name] = source.name
         elif ob.type in UNSUPPORTED_GEOMETRY:
             warnings.append(f"'{name}': {ob.type.lower()} objects are not supported; convert it to a mesh")
         elif ob.type == 'MESH' and source.caustic.role != 'IGNORE':
@@ -76,11 +74,10 @@ def read_scene(context, with_camera: bool = True) -> SceneRead:
                     read.instanced.add(name)
     hidden = sorted(n for n in renderable - seen if bpy.data.objects[n].type in {'MESH', 'LIGHT'})
     warnings += [f"'{n}' is hidden in the viewport, so it was left out; unhide it to render it" for n in hidden]
-    read.scene.background = background(scene.world, warnings)
+    read.scene.world = engine_world(scene.world, warnings)
     read.scene.ambient = np.array(scene.caustic.ambient[:], dtype=np.float64)
-    if not read.scene.lights:
-        raise InputError("The scene has no point, spot or sun lamp" +
-                         (" (area lamps are not supported)" if skipped_lamps else ""))
+    if not read.scene.lights and read.scene.world.is_black:
+        raise InputError("Nothing lights the scene: it has no lamp, and its world is black")
     if not read.scene.receivers:
         raise InputError("No object receives caustics: give a mesh a diffuse material or set its "
                          "Caustics role to Receiver")

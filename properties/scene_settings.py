@@ -62,6 +62,16 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
         name="Samples",
         description="Eye rays per pixel (anti-aliasing)",
         default=4, min=1, soft_max=64)
+    lamp_samples: IntProperty(
+        name="Lamp Samples",
+        description="Shadow rays per eye sample toward each lamp with a size (a radius, an area or a sun's "
+                    "angle), spread evenly over the pixel: more give smoother soft shadows",
+        default=8, min=1, soft_max=64)
+    world_samples: IntProperty(
+        name="World Samples",
+        description="Directions per eye sample toward the world, spread evenly over the pixel: more give "
+                    "smoother light from the sky",
+        default=8, min=1, soft_max=64)
     ambient: FloatVectorProperty(
         name="Ambient",
         description="Uniform ambient radiance (W/m^2/sr) a surface reflects times its colour",

@@ -72,7 +72,9 @@ Colours are linear RGB, a number (grey) or [r, g, b]. Positions are metres.
   max_depth    specular bounces per photon and eye ray, integer >= 1 [12]
   ambient      ambient light: diffuse surfaces add ambient * albedo to
                their radiance, W/(m^2 sr), colour >= 0 [0.0]
-  background   radiance of eye rays that leave the scene, colour >= 0 [0.0]
+  world        the world's radiance, W/(m^2 sr): eye rays that leave the
+               scene see it, and it lights the surfaces, as Cycles' world;
+               colour >= 0 [0.0]
   seed         random seed, integer >= 0 [0]
   threads      worker threads, integer >= 1 [2]
 """
@@ -90,7 +92,7 @@ import numpy as np
 
 from ..optics.media import absorption_from_color
 from ..scene import (Camera, Dielectric, Diffuse, Light, Mesh, Object, PointLight, Reflector, RenderSettings, Scene,
-                     SpotLight, SunLight, shapes)
+                     SpotLight, SunLight, World, shapes)
 from ..scene.color import RGB
 from ..scene.settings import MAX_BEAM_REFINEMENT
 
@@ -243,7 +245,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "spp": integer(1, 4),
         "max_depth": integer(1, 12),
         "ambient": triple(">= 0", _non_negative, np.zeros(3)),
-        "background": triple(">= 0", _non_negative, np.zeros(3)),
+        "world": triple(">= 0", _non_negative, np.zeros(3)),
         "seed": integer(0, 0),
         "threads": integer(1, 2),
     },
@@ -251,7 +253,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
 
 # The keys each object material takes.
 # Keys of earlier versions: (table, old key) -> the key that took its place.
-RENAMED = {("photons", "count"): "photons.lamp_rays"}
+RENAMED = {("photons", "count"): "photons.lamp_rays", ("render", "background"): "render.world"}
 
 OBJECT_KEYS = {
     "glass": ("material", "ior", "position", "scale", "color", "absorption", "absorption_color",
@@ -280,13 +282,13 @@ class Config:
     material: Dielectric | Reflector
     placement: np.ndarray
     ambient: RGB
-    background: RGB
+    world: RGB
     settings: RenderSettings
 
     def scene(self, mesh: Mesh, name: str = "Object") -> Scene:
         """The scene with `mesh`, given in its own coordinates, as the object."""
         glass = Object(name, mesh.transformed(self.placement), self.material)
-        return Scene([self.floor, glass], [self.lamp], self.camera, self.ambient, self.background)
+        return Scene([self.floor, glass], [self.lamp], self.camera, self.ambient, World(self.world))
 
 
 def load(path) -> Config:
@@ -334,7 +336,7 @@ def parse(text: str, name: str = "<config>") -> Config:
                   else Dielectric(obj["ior"], obj["color"], _glass_absorption(obj, document, name), obj["abbe"])),
         placement=placement,
         ambient=render["ambient"],
-        background=render["background"],
+        world=render["world"],
         settings=settings,
     )
 

@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
-from ..sampling.warps import orthonormal_basis
-from ..scene import Light, Scene, SpotLight, SunLight
+from ..sampling.warps import concentric_disc, cone_directions, frames, orthonormal_basis
+from ..scene import AreaLight, Light, Scene, SpotLight, SunLight
 from . import radiometry
 
 # Rays at an aim's edge count as inside it: cos(theta) this far below the
@@ -64,7 +65,7 @@ def target_cone(position: np.ndarray, sphere: Sphere) -> tuple[np.ndarray, float
 
 def visible_targets(light: Light, targets: list[Sphere]) -> list[Sphere]:
     """The target spheres a lamp can light: all of them, except those wholly
-    outside a spot lamp's cone."""
+    outside a spot lamp's cone from every point of the lamp."""
     if not isinstance(light, SpotLight):
         return list(targets)
     half = 0.5 * light.spot_size
@@ -72,23 +73,36 @@ def visible_targets(light: Light, targets: list[Sphere]) -> list[Sphere]:
     for sphere in targets:
         to_center = sphere.center - light.position
         dist = float(np.linalg.norm(to_center))
-        if dist <= sphere.radius:
+        radius = sphere.radius + light.radius
+        if dist <= radius:
             kept.append(sphere)
             continue
         angle = math.acos(np.clip(to_center @ light.direction / dist, -1.0, 1.0))
-        if angle - math.asin(sphere.radius / dist) < half:
+        if angle - math.asin(radius / dist) < half:
             kept.append(sphere)
     return kept
+
+
+def reach(light: Light) -> float:
+    """How far a lamp's emitting points lie from its centre, m: a point or
+    spot lamp's radius, an area lamp's half-diagonal; 0 for a sun."""
+    if isinstance(light, AreaLight):
+        return float(np.linalg.norm(light.axis_x) + np.linalg.norm(light.axis_y))
+    if isinstance(light, SunLight):
+        return 0.0
+    return float(light.radius)
 
 
 @dataclass
 class Aim:
     """One lamp's rays toward one target.
 
-    A cone (point and spot lamps): `axis (3,)` unit and `cos_max`, from the
-    lamp's position. A disc (suns): `axis` is the sun's direction, `center
-    (3,)` and `radius` the disc's, and its rays start `start_distance`
-    upstream of it. `tangent`, `bitangent` (3,) complete the axis to a frame.
+    A cone (point, spot and area lamps): `axis (3,)` unit and `cos_max`,
+    from the lamp's centre, wide enough that rays from any point of the lamp
+    toward the target lie in it. A disc (suns): `axis` is the sun's
+    direction, `center (3,)` and `radius` the disc's, and its rays start
+    `start_distance` upstream of it. `tangent`, `bitangent` (3,) complete
+    the axis to a frame.
     """
 
     light: Light
@@ -113,30 +127,41 @@ class Aim:
         return 2.0 * math.pi * (1.0 - self.cos_max)
 
     def flux(self, energy: float) -> float:
-        """The lamp's flux toward the aim, W, the spot's mask aside: what the
+        """The lamp's flux toward the aim, W, a spot's mask aside: what the
         lamp rays are shared by."""
+        light = self.light
         if self.is_disc:
-            return float(self.light.strength * energy * self.measure)
-        return float(self.light.power * energy * self.measure / (4.0 * math.pi))
+            return float(light.strength * energy * self.measure)
+        if isinstance(light, AreaLight):
+            facing = max(float(self.axis @ light.direction), 0.0)
+            return float(light.power * energy * self.measure * facing / math.pi)
+        return float(light.power * energy * self.measure / (4.0 * math.pi))
 
     def contains(self, origins: np.ndarray, dirs: np.ndarray) -> np.ndarray:
-        """(n,) bool: which rays `origins, dirs (n,3)` the aim holds."""
+        """(n,) bool: which rays `origins, dirs (n,3)` the aim holds: a
+        cone's by their direction, a disc's by where they cross its plane."""
         if self.is_disc:
             rel = origins - self.center
-            perp = rel - (rel @ self.axis)[:, None] * self.axis
-            return np.einsum("ij,ij->i", perp, perp) <= self.radius ** 2 * (1.0 + _EDGE_TOLERANCE)
+            along = dirs @ self.axis
+            with np.errstate(divide="ignore", invalid="ignore"):
+                crossing = rel - ((rel @ self.axis) / along)[:, None] * dirs
+            return np.einsum("ij,ij->i", crossing, crossing) <= self.radius ** 2 * (1.0 + _EDGE_TOLERANCE)
         return dirs @ self.axis >= self.cos_max - _EDGE_TOLERANCE
 
-    def rays(self, disc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def rays(self, disc: np.ndarray, lamp: Optional[np.ndarray] = None) -> tuple[np.ndarray, np.ndarray]:
         """(origins (n,3), dirs (n,3)) at points `disc (n,2)` of the unit
         disc, mapped so that a uniform density on the disc is uniform in the
-        aim's measure. A cone: cos(theta) = 1 - rho^2 (1 - cos_max) at
-        radius rho, the disc's azimuth about the axis (Archimedes' hat-box
-        theorem); a disc: center + radius (x t + y b)."""
+        aim's measure, from points `lamp (n,2)` of the unit square on the
+        lamp (None: its centre, for a lamp of size 0). A cone: directions
+        with cos(theta) = 1 - rho^2 (1 - cos_max) at radius rho, the disc's
+        azimuth about the axis (Archimedes' hat-box theorem); a disc: through
+        center + radius (x t + y b), along a direction of the sun's disc."""
         if self.is_disc:
-            origins = (self.center + self.radius * (disc[:, :1] * self.tangent + disc[:, 1:] * self.bitangent)
-                       - self.start_distance * self.axis)
-            return origins, np.broadcast_to(self.axis, origins.shape).copy()
+            through = self.center + self.radius * (disc[:, :1] * self.tangent + disc[:, 1:] * self.bitangent)
+            dirs = np.broadcast_to(self.axis, through.shape).copy()
+            if lamp is not None and self.light.angle > 0.0:
+                dirs = cone_directions(dirs, np.full(len(dirs), math.cos(0.5 * self.light.angle)), lamp)
+            return through - self.start_distance * dirs, dirs
         rho2 = np.einsum("ij,ij->i", disc, disc)
         cos_t = 1.0 - rho2 * (1.0 - self.cos_max)
         sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t * cos_t))
@@ -145,27 +170,52 @@ class Aim:
             c = np.where(rho > 0, disc[:, 0] / rho, 1.0)
             s = np.where(rho > 0, disc[:, 1] / rho, 0.0)
         dirs = (sin_t * c)[:, None] * self.tangent + (sin_t * s)[:, None] * self.bitangent + cos_t[:, None] * self.axis
-        return np.broadcast_to(self.light.position, dirs.shape).copy(), dirs
+        if lamp is None or reach(self.light) <= 0.0:
+            return np.broadcast_to(self.light.position, dirs.shape).copy(), dirs
+        return emitting_points(self.light, dirs, lamp), dirs
 
     def emitted(self, energy: float, dirs: np.ndarray) -> np.ndarray:
         """(n,3) what the lamp sends along `dirs (n,3)`: radiant intensity,
-        W/sr, from a cone's lamp; irradiance, W/m^2, across a disc."""
-        if self.is_disc:
-            return np.broadcast_to(radiometry.sun_irradiance(self.light, energy), dirs.shape).copy()
-        return radiometry.intensity(self.light, energy, dirs).copy()
+        W/sr, from a cone's lamp; irradiance, W/m^2, across a disc (a sun
+        with an angle: L x its disc's solid angle x cos of the tilt)."""
+        light = self.light
+        if not self.is_disc:
+            return radiometry.intensity(light, energy, dirs).copy()
+        if light.angle <= 0.0:
+            return np.broadcast_to(radiometry.sun_irradiance(light, energy), dirs.shape).copy()
+        solid_angle = 2.0 * math.pi * (1.0 - math.cos(0.5 * light.angle))
+        tilt = np.maximum(dirs @ self.axis, 0.0)
+        return (radiometry.sun_radiance(light, energy) * solid_angle)[None, :] * tilt[:, None]
+
+
+def emitting_points(light: Light, dirs: np.ndarray, lamp: np.ndarray) -> np.ndarray:
+    """(n,3) points `lamp (n,2)` of the unit square on a lamp with a size,
+    where rays along `dirs (n,3)` cross it: an area lamp's points uniform
+    over its surface; a point or spot lamp's on the disc through its centre
+    that faces each direction, the lines that a sphere of its radius sends
+    that way (its Soft Falloff disc, which Cycles turns toward each point it
+    lights, has that far field too)."""
+    if isinstance(light, AreaLight):
+        xy = concentric_disc(lamp) if light.shape == "ELLIPSE" else 2.0 * lamp - 1.0
+        return light.center + xy[:, :1] * light.axis_x + xy[:, 1:] * light.axis_y
+    t, b = frames(dirs)
+    disc = concentric_disc(lamp)
+    return light.position + light.radius * (disc[:, :1] * t + disc[:, 1:] * b)
 
 
 def aims(light: Light, targets: list[Sphere], scene_sphere: Sphere) -> list[Aim]:
-    """A lamp's aims at the targets it can light. A lamp inside a target
-    gets two hemispheres: one cone over the whole sphere of directions would
-    fold a grid's edge onto a single direction."""
+    """A lamp's aims at the targets it can light: cones from its centre
+    widened by its reach, or a sun's discs widened by its angle. A lamp
+    inside a target gets two hemispheres: one cone over the whole sphere of
+    directions would fold a grid's edge onto a single direction."""
     out = []
     for sphere in visible_targets(light, targets):
         if isinstance(light, SunLight):
-            out.append(Aim(light, light.direction, center=sphere.center, radius=sphere.radius,
+            widen = 1.0 / math.cos(0.5 * light.angle)
+            out.append(Aim(light, light.direction, center=sphere.center, radius=sphere.radius * widen,
                            start_distance=upstream_distance(scene_sphere)))
             continue
-        axis, cos_max = target_cone(light.position, sphere)
+        axis, cos_max = target_cone(light.position, Sphere(sphere.center, sphere.radius + reach(light)))
         if cos_max <= -1.0:
             out += [Aim(light, a, cos_max=0.0) for a in (axis, -axis)]
         else:

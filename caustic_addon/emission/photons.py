@@ -19,11 +19,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..sampling.hash import hash_uniform
 from ..sampling.sequences import r2_sequence
 from ..sampling.warps import sample_disc
 from ..scene import Light, SunLight
 from . import radiometry
 from .aims import Aim, Sphere, aims, balance_density, share
+
+
+# Hash streams of a photon's point on a lamp with a size (the transport uses
+# 0 .. 2 max_depth + 1, the wavelength band 1 << 20).
+_LAMP_STREAM = 1 << 21
 
 
 def sphere_grid(count: int) -> tuple[int, int]:
@@ -85,11 +91,14 @@ class PointSphereEmitter(Emitter):
 class AimedEmitter(Emitter):
     """Photons over a lamp's aims: `counts (k,)` of them over each, on the
     R2 sequence mapped onto the unit disc in polar form (r = sqrt(u), phi =
-    2 pi v: uniform in area), then onto the aim. A photon's flux is what the
-    lamp sends its way over the balance density of the aims."""
+    2 pi v: uniform in area), then onto the aim; a lamp with a size sends
+    each from a point of it hashed from the photon's id and `seed`. A
+    photon's flux is what the lamp sends its way over the balance density of
+    the aims."""
 
-    def __init__(self, light: Light, energy: float, aims: list[Aim], counts: np.ndarray, shift: np.ndarray):
-        self.light, self.energy, self.aims, self.shift = light, energy, aims, shift
+    def __init__(self, light: Light, energy: float, aims: list[Aim], counts: np.ndarray, shift: np.ndarray,
+                 seed: int):
+        self.light, self.energy, self.aims, self.shift, self.seed = light, energy, aims, shift, seed
         self.starts = np.concatenate([[0], np.cumsum(counts)])
         self.count = int(self.starts[-1])
         self.density = counts / np.array([aim.measure for aim in aims])
@@ -98,13 +107,16 @@ class AimedEmitter(Emitter):
         i = np.arange(start, stop)
         which = np.searchsorted(self.starts, i, side="right") - 1
         disc = sample_disc(1.0, r2_sequence(i - self.starts[which], self.shift))
+        ids = i + self.id_base
+        lamp = np.stack([hash_uniform(ids, _LAMP_STREAM, self.seed), hash_uniform(ids, _LAMP_STREAM + 1, self.seed)],
+                        axis=1)
         origins, dirs = np.empty((len(i), 3)), np.empty((len(i), 3))
         for k in np.unique(which):
             sel = which == k
-            origins[sel], dirs[sel] = self.aims[k].rays(disc[sel])
+            origins[sel], dirs[sel] = self.aims[k].rays(disc[sel], lamp[sel])
         density = balance_density(self.aims, self.density, origins, dirs)
         flux = self.aims[0].emitted(self.energy, dirs) / density[:, None]
-        return _kept(origins, dirs, flux, i + self.id_base)
+        return _kept(origins, dirs, flux, ids)
 
 
 def make_emitters(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere, mode: str,
@@ -136,7 +148,7 @@ def make_emitters(lights: list[Light], targets: list[Sphere], scene_sphere: Sphe
         if mode == "sphere" and not isinstance(light, SunLight):
             emitters.append(PointSphereEmitter(light, energy, int(n.sum())))
         else:
-            emitters.append(AimedEmitter(light, energy, aimed, n, rng.random(2)))
+            emitters.append(AimedEmitter(light, energy, aimed, n, rng.random(2), seed))
     for k in range(1, len(emitters)):
         emitters[k].id_base = emitters[k - 1].id_base + emitters[k - 1].count
     return emitters

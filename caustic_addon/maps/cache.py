@@ -15,12 +15,12 @@ import numpy as np
 from ..scene import RenderSettings, Scene
 
 # RenderSettings fields that change nothing in the maps.
-_EYE_ONLY = {"spp", "threads", "chunk_size"}
+_EYE_ONLY = {"spp", "lamp_samples", "world_samples", "threads", "chunk_size"}
 
 
 def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
-    """SHA-1 of the objects in order (name, geometry, material), the lamps
-    and the lamp pass's settings: equal keys give equal maps. The band count
+    """SHA-1 of the objects in order (name, geometry, material), the lamps,
+    the world and the lamp pass's settings: equal keys give equal maps. The band count
     counts only if a material disperses."""
     digest = hashlib.sha1()
 
@@ -38,7 +38,7 @@ def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
         for name, value in vars(obj.material).items():
             add(name)
             add(value if isinstance(value, np.ndarray) else np.asarray(value))
-    for light in scene.lights:
+    for light in [*scene.lights, scene.world]:
         add(type(light).__name__)
         for name, value in vars(light).items():
             add(name)

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..emission.aims import casters_and_bounds
 from ..emission.beam_sources import BeamSource, beam_sources
+from ..emission.lamp_points import beam_lamps
 from ..maps.deposits import Deposits
 from ..maps.illumination_map import IlluminationMap
 from ..maps.raster import signed_areas
@@ -175,19 +176,36 @@ def _cell_corners(row: np.ndarray, col: np.ndarray, size: np.ndarray, width: int
                      row * width + col + size, (row + size) * width + col + size], axis=1)
 
 
-def _diverging(lookup: _Lookup, corners: np.ndarray) -> np.ndarray:
-    """(n,) bool: cells whose paths diverge. Some but not all of a cell's
-    corners land in a family of throughput at least REFINE_THROUGHPUT (a
-    silhouette, total internal reflection), or its two triangles land with
-    opposite orientation (a fold of the caustic crosses it) or areas more
-    than REFINE_RATIO apart."""
+def _cell_halves(corners: np.ndarray, row: np.ndarray, col: np.ndarray, size: np.ndarray,
+                 width: int) -> tuple[np.ndarray, np.ndarray]:
+    """The two triangles (n,3) of each cell `corners (n,4)`, split along the
+    diagonal that points at the grid's centre. The concentric map that lays
+    the grid over an aim bends along the square's two diagonals, so a
+    triangle across one lands distorted: its beam comes out too bright and
+    its neighbour too dim, a dotted seam. Cut this way, no triangle crosses
+    them."""
+    half = 0.5 * (width - 1)
+    toward = (row + 0.5 * size - half) * (col + 0.5 * size - half) >= 0.0
+    main = np.stack([corners[:, [0, 1, 3]], corners[:, [0, 3, 2]]])
+    anti = np.stack([corners[:, [0, 1, 2]], corners[:, [1, 3, 2]]])
+    chosen = np.where(toward[None, :, None], main, anti)
+    return chosen[0], chosen[1]
+
+
+def _diverging(lookup: _Lookup, row: np.ndarray, col: np.ndarray, size: np.ndarray, width: int) -> np.ndarray:
+    """(n,) bool: the cells at `row, col (n,)` of `size (n,)` whose paths
+    diverge. Some but not all of a cell's corners land in a family of
+    throughput at least REFINE_THROUGHPUT (a silhouette, total internal
+    reflection), or its two triangles land with opposite orientation (a fold
+    of the caustic crosses it) or areas more than REFINE_RATIO apart."""
+    corners = _cell_corners(row, col, size, width)
     element, group, landing, count = lookup.pairs(corners)
     split = np.zeros(len(corners), dtype=bool)
     split[element[(count < 4) & (lookup.landings.throughput[landing] >= REFINE_THROUGHPUT)]] = True
     cell, group = lookup.first_of_each(element[count == 4], group[count == 4])
-    xy = [lookup.landings.xy[lookup.find(group, corners[cell, k])] for k in range(4)]
-    a = signed_areas(np.stack([xy[0], xy[1], xy[3]], axis=1))
-    b = signed_areas(np.stack([xy[0], xy[3], xy[2]], axis=1))
+    first, second = _cell_halves(corners[cell], row[cell], col[cell], size[cell], width)
+    a, b = (signed_areas(np.stack([lookup.landings.xy[lookup.find(group, tri[:, k])] for k in range(3)], axis=1))
+            for tri in (first, second))
     small, large = np.minimum(np.abs(a), np.abs(b)), np.maximum(np.abs(a), np.abs(b))
     split[cell[(a * b <= 0.0) | (large > REFINE_RATIO * small)]] = True
     return split
@@ -219,7 +237,7 @@ def band_beams(source: BeamSource, first_row: int, end_row: int, accel: Accelera
     owned = on_grid - (source.grid if end_row < source.grid else 0)
     landings = trace_vertices(traced)
     for _ in range(levels):
-        diverge = _diverging(_Lookup(landings, keys), _cell_corners(row, col, size, width)) & (size > 1)
+        diverge = _diverging(_Lookup(landings, keys), row, col, size, width) & (size > 1)
         if not diverge.any():
             break
         half = size[diverge] // 2
@@ -276,8 +294,8 @@ def _crack_free_triangles(row: np.ndarray, col: np.ndarray, size: np.ndarray, wi
     cr, cc = tri_centre // width, tri_centre % width
     ar, ac, br, bc = ring_key // width, ring_key % width, ring_next // width, ring_next % width
     fan_area = 0.5 * np.abs((ac - cc) * (br - cr) - (ar - cr) * (bc - cc)).astype(np.float64)
-    triangles = np.concatenate([corners[:, [0, 1, 3]], corners[:, [0, 3, 2]],
-                                np.stack([tri_centre, ring_key, ring_next], axis=1)])
+    first, second = _cell_halves(corners, row[~fan], col[~fan], size[~fan], width)
+    triangles = np.concatenate([first, second, np.stack([tri_centre, ring_key, ring_next], axis=1)])
     return triangles, np.concatenate([halves, halves, fan_area]), centres
 
 
@@ -328,10 +346,15 @@ def _beams_and_photons(lookup: _Lookup, triangles: np.ndarray, measure: np.ndarr
 def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials, maps: dict,
               monitor: Monitor, share: float) -> LampPassStats:
     """Trace every source's grid in bands of rows into beams on `maps`, once
-    per wavelength band, with the lamp rays shared among them. Neighbouring
-    bands of rows share a row, so every grid triangle is in one."""
+    per wavelength band, with the lamp rays shared among them; a lamp with
+    a size is points of it (lamp_points.py). Neighbouring bands of rows
+    share a row, so every grid triangle is in one."""
     count = materials.band_count
-    sources = beam_sources(scene.lights, *casters_and_bounds(scene), settings.energy, settings.lamp_rays // count)
+    targets, scene_sphere = casters_and_bounds(scene)
+    receivers = np.concatenate([o.mesh.vertices for o in scene.receivers])
+    lamps = beam_lamps(scene.lights, targets, (receivers.min(axis=0), receivers.max(axis=0)),
+                       min(imap.cell for imap in maps.values()))
+    sources = beam_sources(lamps, targets, scene_sphere, settings.energy, settings.lamp_rays // count)
     jobs = []
     for source in sources:
         # one band of rows per thread, of at most `chunk_size` points: a

@@ -1,16 +1,25 @@
-"""Direct light from the lamps at opaque surface points, with shadow rays.
+"""Direct light at opaque surface points, with shadow rays: from each lamp
+(emission/lamp_samples.py) and from the world.
 
-Radiance leaving a point toward the eye, per lamp of irradiance E at normal
-incidence and unit vector l toward it:
+Radiance leaving a point toward the eye, per sample of a lamp bringing
+irradiance E at normal incidence along the unit vector l:
 
     L = E cos(theta_l) * (albedo / pi + specular * (e + 8) / (8 pi) * (n.h)^e)
 
 the Lambert term (what a Cycles Diffuse BSDF returns) plus an
 energy-normalised Blinn-Phong lobe (Akenine-Moller et al., Real-Time
-Rendering, 4th ed., eq. 9.65 family). A lamp behind the surface gets no
-shadow ray. Dielectrics and reflectors block shadow rays: the light they
-redirect arrives through the illumination maps.
-"""
+Rendering, 4th ed., eq. 9.65 family). A lamp of size 0 takes one sample; a
+lamp with a size takes `samples`, stratified over a pixel: eye sample s of
+a pixel uses points s K .. s K + K - 1 of the R2 sequence, rotated by a hash
+of the pixel. A sample behind the surface gets no shadow ray. Dielectrics
+and reflectors block shadow rays: the light they redirect arrives through
+the illumination maps.
+
+The world lights a surface with E = int L(w) V(w) cos(theta) dw over the
+hemisphere, what Cycles computes with diffuse bounces at 0, estimated with
+a direction drawn by cos(theta) / pi (Malley) and, for an image, one drawn
+by the world's radiance (environment.py), weighted by the balance heuristic
+(Veach 1997)."""
 
 from __future__ import annotations
 
@@ -19,51 +28,84 @@ import math
 import numpy as np
 
 from ..emission import radiometry
-from ..scene import Light, SunLight
+from ..emission.environment import Environment
+from ..emission.lamp_samples import sample_lamp
+from ..sampling.hash import hash_uniform
+from ..sampling.sequences import r2_sequence
+from ..sampling.warps import cosine_hemisphere
+from ..scene import Light
 from ..tracing.accelerator import Accelerator
-from ..util.vectors import DIVISION_FLOOR, dot, length, max_channel, normalize
+from ..util.vectors import dot, max_channel, normalize
+
+# Hash streams of the strata's rotations: two per lamp, two for the world.
+_WORLD_STREAM = 1 << 16
 
 
-def toward_light(light: Light, energy: float, points: np.ndarray, far: float):
-    """For surface `points (n,3)`: unit vectors toward the lamp (n,3), the
-    distance a shadow ray must clear (n,), and the irradiance (n,3) W/m^2 on a
-    surface facing the lamp."""
-    if isinstance(light, SunLight):
-        to_light = np.broadcast_to(-light.direction, points.shape)
-        return to_light, np.full(len(points), far), np.broadcast_to(
-            radiometry.sun_irradiance(light, energy), points.shape)
-    offset = light.position - points
-    dist = length(offset)
-    to_light = offset / np.maximum(dist, DIVISION_FLOOR)[:, None]
-    intensity = radiometry.intensity(light, energy, -to_light)
-    return to_light, dist, intensity / np.maximum(dist * dist, DIVISION_FLOOR)[:, None]
+def strata(ids: np.ndarray, index: np.ndarray, stream: int, seed: int) -> np.ndarray:
+    """(n,2) points of the R2 sequence at `index (n,)`, rotated by a hash of
+    `ids (n,)`: a pixel's samples spread evenly over the unit square."""
+    return r2_sequence(index, np.stack([hash_uniform(ids, stream, seed), hash_uniform(ids, stream + 1, seed)], axis=1))
 
 
 def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,
                     shading: np.ndarray, facing: np.ndarray, view: np.ndarray, albedo: np.ndarray,
-                    specular: np.ndarray, exponent: np.ndarray, far: float) -> np.ndarray:
+                    specular: np.ndarray, exponent: np.ndarray, far: float, pixel: np.ndarray,
+                    first_stratum: np.ndarray, samples: int, seed: int) -> np.ndarray:
     """Radiance (n,3) toward the eye from all lamps' direct light.
 
     shading, facing   (n,3) shading and geometric normals, both on the eye's side
     view              (n,3) unit vectors from the points toward the eye
     albedo, specular  (n,3); exponent (n,)
+    pixel, first_stratum  (n,) the pixel each point is seen in, and the
+                      index of its first stratum there
     """
     out = np.zeros((len(points), 3))
-    for light in lights:
-        to_light, dist, irradiance = toward_light(light, energy, points, far)
-        cos = dot(shading, to_light)
-        lit = (cos > 0.0) & (dot(facing, to_light) > 0.0) & (max_channel(irradiance) > 0.0)
-        if not lit.any():
-            continue
-        idx = np.flatnonzero(lit)
-        origins = accel.offset(points[idx], facing[idx], to_light[idx])
-        blocked = accel.occluded(origins, to_light[idx], dist[idx] - 2.0 * accel.epsilon)
-        idx = idx[~blocked]
-        if len(idx) == 0:
-            continue
-        half = normalize(to_light[idx] + view[idx])
-        n_dot_h = np.clip(dot(shading[idx], half), 0.0, 1.0)
-        e = exponent[idx]
-        lobe = specular[idx] * ((e + 8.0) / (8.0 * math.pi) * n_dot_h ** e)[:, None]
-        out[idx] += irradiance[idx] * cos[idx, None] * (albedo[idx] / math.pi + lobe)
+    for number, light in enumerate(lights):
+        count = 1 if radiometry.is_delta(light) else samples
+        for k in range(count):
+            uv = strata(pixel, first_stratum * count + k, 2 * number, seed)
+            lamp = sample_lamp(light, energy, points, uv, far)
+            cos = dot(shading, lamp.dirs)
+            lit = (cos > 0.0) & (dot(facing, lamp.dirs) > 0.0) & (max_channel(lamp.irradiance) > 0.0)
+            idx = np.flatnonzero(lit)
+            if len(idx) == 0:
+                continue
+            dirs = np.take(lamp.dirs, idx, axis=0)
+            origins = accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), dirs)
+            blocked = accel.occluded(origins, dirs, np.take(lamp.dist, idx) - 2.0 * accel.epsilon)
+            idx, dirs = idx[~blocked], dirs[~blocked]
+            if len(idx) == 0:
+                continue
+            half = normalize(dirs + np.take(view, idx, axis=0))
+            n_dot_h = np.clip(dot(np.take(shading, idx, axis=0), half), 0.0, 1.0)
+            e = exponent[idx]
+            lobe = np.take(specular, idx, axis=0) * ((e + 8.0) / (8.0 * math.pi) * n_dot_h ** e)[:, None]
+            out[idx] += (np.take(lamp.irradiance, idx, axis=0) * (cos[idx] / count)[:, None]
+                         * (np.take(albedo, idx, axis=0) / math.pi + lobe))
+    return out
+
+
+def world_irradiance(accel: Accelerator, environment: Environment, points: np.ndarray, shading: np.ndarray,
+                     facing: np.ndarray, far: float, pixel: np.ndarray, first_stratum: np.ndarray, samples: int,
+                     seed: int) -> np.ndarray:
+    """(n,3) W/m^2 the world brings the points, shadows included, from
+    `samples` directions of each strategy per point."""
+    out = np.zeros((len(points), 3))
+    image = environment.world.environment is not None
+    for k in range(samples):
+        index = first_stratum * samples + k
+        drawn = [cosine_hemisphere(shading, strata(pixel, index, _WORLD_STREAM, seed))]
+        if image:
+            drawn.append(environment.sample(strata(pixel, index, _WORLD_STREAM + 2, seed))[0])
+        for dirs in drawn:
+            cos = dot(shading, dirs)
+            density = np.maximum(cos, 0.0) / math.pi + (environment.density(dirs) if image else 0.0)
+            idx = np.flatnonzero((cos > 0.0) & (dot(facing, dirs) > 0.0) & (density > 0.0))
+            if len(idx) == 0:
+                continue
+            toward = np.take(dirs, idx, axis=0)
+            seen = ~accel.occluded(accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), toward),
+                                   toward, np.full(len(idx), far))
+            idx, toward = idx[seen], toward[seen]
+            out[idx] += (environment.radiance(toward) * (cos[idx] / (density[idx] * samples))[:, None])
     return out

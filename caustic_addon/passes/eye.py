@@ -5,13 +5,13 @@ Where a camera ray meets a flat receiver directly, the caustic is averaged
 over the footprint of the ray's pixel stratum, not read at one point: a
 caustic's folds are singular, and point samples of them alias.
 
-At an opaque surface: ambient * albedo, plus direct light from each lamp
-(lighting.py), plus caustic irradiance E_c * albedo / pi read from the
-receiver's map. At a dielectric: both the reflected ray (weight F) and the
-refracted ray (weight 1 - F) carry on, each tinted by the glass colour and by
-Beer-Lambert absorption inside, up to `max_depth` bounces. At a reflector
-the reflected ray carries on, times the reflectance colour. A ray that leaves
-the scene sees the background. Eye rays refract with a dispersive glass's
+At an opaque surface: ambient * albedo, plus direct light from each lamp and
+from the world (direct_light.py), plus caustic irradiance E_c * albedo / pi
+read from the receiver's map. At a dielectric: both the reflected ray
+(weight F) and the refracted ray (weight 1 - F) carry on, each tinted by the
+glass colour and by Beer-Lambert absorption inside, up to `max_depth`
+bounces. At a reflector the reflected ray carries on, times the reflectance
+colour. A ray that leaves the scene sees the world. Eye rays refract with a dispersive glass's
 IOR at 587.6 nm: the caustics it throws are spectral (photon pass), the view
 through it is not.
 """
@@ -23,6 +23,7 @@ from functools import partial
 
 import numpy as np
 
+from ..emission.environment import Environment
 from ..maps.charts import PlaneChart
 from ..maps.illumination_map import IlluminationMap
 from ..scene import RenderSettings, Scene
@@ -34,7 +35,7 @@ from ..util.rows import take_rows
 from ..util.vectors import dot
 from .bounce import Interface, split, trace
 from .camera_rays import eye_rays, pixel_offsets, ray_differentials
-from .direct_light import direct_radiance
+from .direct_light import direct_radiance, world_irradiance
 from .paths import Paths, relative_floor
 
 PASSES = ("direct", "caustic", "ambient")
@@ -42,16 +43,19 @@ PASSES = ("direct", "caustic", "ambient")
 
 class EyeTracer:
     """The eye pass's choices in the bounce (bounce.trace), for the eye rays
-    of the flat pixels [first_pixel, end_pixel) (a path's id is its pixel):
-    the background where a ray escapes, shading where it meets an opaque
-    surface, both branches at a specular one. Pass buffers are each
-    (end_pixel - first_pixel, 3). A camera ray (one with no specular event
-    yet) stands for a square stratum of its pixel, `stratum` pixels wide."""
+    of the flat pixels [first_pixel, end_pixel): the world where a ray
+    escapes, shading where it meets an opaque surface, both branches at a
+    specular one. A path's id is its eye sample, `spp` to a pixel. Pass
+    buffers are each (end_pixel - first_pixel, 3). A camera ray (one with no
+    specular event yet) stands for a square stratum of its pixel, of side
+    1 / sqrt(spp) pixels."""
 
-    def __init__(self, accel: Accelerator, scene: Scene, materials: Materials,
-                 maps: dict[int, IlluminationMap], energy: float, stratum: float, first_pixel: int, end_pixel: int):
+    def __init__(self, accel: Accelerator, scene: Scene, materials: Materials, maps: dict[int, IlluminationMap],
+                 environment: Environment, settings: RenderSettings, first_pixel: int, end_pixel: int):
         self.accel, self.scene, self.materials, self.maps = accel, scene, materials, maps
-        self.energy, self.stratum = energy, stratum
+        self.environment, self.settings = environment, settings
+        self.energy, self.spp = settings.energy, settings.spp
+        self.stratum = 1.0 / math.sqrt(settings.spp)
         self.first_pixel, self.end_pixel = int(first_pixel), int(end_pixel)
         self.far = 4.0 * scene.extent() + float(np.abs(scene.camera.position).max())
         self.buffers = {name: np.zeros((self.end_pixel - self.first_pixel, 3)) for name in PASSES}
@@ -62,7 +66,7 @@ class EyeTracer:
             self.buffers[name][:, c] += np.bincount(pixel - self.first_pixel, weights=radiance[:, c], minlength=size)
 
     def escaped(self, rays: Paths) -> None:
-        self._add("ambient", rays.ids, rays.weight * self.scene.background)
+        self._add("ambient", rays.ids // self.spp, rays.weight * self.environment.radiance(rays.dirs))
 
     def arrived(self, rays: Paths, hits: Hits) -> None:
         if len(rays) == 0:
@@ -75,11 +79,18 @@ class EyeTracer:
         shading = np.where((dot(shading, view) < 0.0)[:, None], -shading, shading)
         albedo = np.take(m.albedo, hits.obj, axis=0)
 
-        points = hits.points
+        points, settings = hits.points, self.settings
+        pixel, stratum = rays.ids // self.spp, rays.ids % self.spp
         direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view,
-                                 albedo, np.take(m.specular, hits.obj, axis=0), m.exponent[hits.obj], self.far)
-        self._add("direct", rays.ids, rays.weight * direct)
-        self._add("ambient", rays.ids, rays.weight * self.scene.ambient * albedo)
+                                 albedo, np.take(m.specular, hits.obj, axis=0), m.exponent[hits.obj], self.far,
+                                 pixel, stratum, settings.lamp_samples, settings.seed)
+        self._add("direct", pixel, rays.weight * (direct + np.take(m.emission, hits.obj, axis=0)))
+        ambient = self.scene.ambient * albedo
+        if not self.scene.world.is_black:
+            world = world_irradiance(accel, self.environment, points, shading, facing, self.far, pixel, stratum,
+                                     settings.world_samples, settings.seed)
+            ambient = ambient + world * albedo / math.pi
+        self._add("ambient", pixel, rays.weight * ambient)
 
         for index, imap in self.maps.items():
             on_map = hits.obj == index
@@ -98,7 +109,7 @@ class EyeTracer:
                 irradiance[spread] = imap.mean_over(lo[ok], hi[ok])
             irradiance[~spread] = imap.irradiance_at(xy[~spread])
             radiance = irradiance * take_rows(on_map, albedo)[0] / math.pi
-            self._add("caustic", here.ids, here.weight * radiance)
+            self._add("caustic", here.ids // self.spp, here.weight * radiance)
 
     def scattered(self, rays: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
         return split(self.accel, self.materials, rays, hits, surface)
@@ -115,15 +126,15 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     camera_medium = int(accel.medium_at(cam.position[None])[0])
     size = chunk_size(samples, settings.chunk_size, settings.threads)
 
+    environment = Environment(scene.world)
+
     def job(first: int) -> EyeTracer:
         sample = np.arange(first, min(first + size, samples))
         pixel = sample // settings.spp
         origins, dirs = eye_rays(cam, pixel, offsets[sample % settings.spp])
         weight = np.full((len(sample), 3), 1.0 / settings.spp)
-        # each sample stands for a square stratum of its pixel, 1/spp of its area
-        tracer = EyeTracer(accel, scene, materials, maps, settings.energy, 1.0 / np.sqrt(settings.spp),
-                           pixel[0], pixel[-1] + 1)
-        trace(accel, materials, Paths.start(origins, dirs, weight, pixel, camera_medium, relative_floor(weight)),
+        tracer = EyeTracer(accel, scene, materials, maps, environment, settings, pixel[0], pixel[-1] + 1)
+        trace(accel, materials, Paths.start(origins, dirs, weight, sample, camera_medium, relative_floor(weight)),
               settings.max_depth, tracer)
         return tracer
 

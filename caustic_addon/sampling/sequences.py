@@ -12,5 +12,5 @@ _R2_ALPHA = np.array([1.0 / _PLASTIC, 1.0 / _PLASTIC ** 2])
 
 def r2_sequence(index: np.ndarray, shift: np.ndarray) -> np.ndarray:
     """(n,2) points in [0,1)^2 of the R2 sequence at integer `index (n,)`,
-    Cranley-Patterson rotated by `shift (2,)`."""
-    return np.mod(shift[None, :] + index[:, None].astype(np.float64) * _R2_ALPHA[None, :], 1.0)
+    Cranley-Patterson rotated by `shift`, (2,) for all or (n,2) per point."""
+    return np.mod(shift + index[:, None].astype(np.float64) * _R2_ALPHA[None, :], 1.0)

@@ -1,25 +1,38 @@
-"""Blender's lamps, in Blender's units (emission/radiometry.py turns them into radiometry)."""
+"""Blender's lamps and world, in Blender's units (emission/radiometry.py
+turns them into radiometry)."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Union
+from typing import Literal, Optional, Union
 
 import numpy as np
 
 from .color import RGB, rgb
 
 
+def _unit(vector) -> np.ndarray:
+    v = np.asarray(vector, dtype=np.float64).reshape(3)
+    return v / np.linalg.norm(v)
+
+
 @dataclass
 class PointLight:
-    """Blender's point lamp of radius 0: power in W, radiant intensity
-    I = color * power / (4 pi) W/sr in every direction (see units.py)."""
+    """Blender's point lamp: `power` W, so radiant intensity
+    I = color * power / (4 pi) W/sr in every direction.
+
+    radius        Blender's Radius (shadow_soft_size), m; 0 for a point
+    soft_falloff  Blender's Soft Falloff (on by default): the lamp is a disc
+                  of `radius` that faces each point it lights; off, a sphere
+    """
 
     position: np.ndarray
     power: float
     color: RGB = field(default_factory=lambda: np.ones(3))
     name: str = "Point"
+    radius: float = 0.0
+    soft_falloff: bool = True
 
     def __post_init__(self):
         self.position = np.asarray(self.position, dtype=np.float64).reshape(3)
@@ -33,6 +46,7 @@ class SpotLight:
     direction     unit axis of the cone, pointing where the light goes
     spot_size     full cone angle, radians (Blender's Spot Size)
     blend         softness of the cone's edge, 0..1 (Blender's Blend)
+    radius, soft_falloff   as a point lamp's
     """
 
     position: np.ndarray
@@ -42,11 +56,12 @@ class SpotLight:
     blend: float = 0.15
     color: RGB = field(default_factory=lambda: np.ones(3))
     name: str = "Spot"
+    radius: float = 0.0
+    soft_falloff: bool = True
 
     def __post_init__(self):
         self.position = np.asarray(self.position, dtype=np.float64).reshape(3)
-        d = np.asarray(self.direction, dtype=np.float64).reshape(3)
-        self.direction = d / np.linalg.norm(d)
+        self.direction = _unit(self.direction)
         self.color = rgb(self.color)
 
 
@@ -56,17 +71,81 @@ class SunLight:
     surface facing it.
 
     direction     unit vector the light travels along (Blender's -Z of the lamp)
+    angle         Blender's Angle: the full angle the sun's disc spans, radians
     """
 
     direction: np.ndarray
     strength: float
     color: RGB = field(default_factory=lambda: np.ones(3))
     name: str = "Sun"
+    angle: float = 0.0
 
     def __post_init__(self):
-        d = np.asarray(self.direction, dtype=np.float64).reshape(3)
-        self.direction = d / np.linalg.norm(d)
+        self.direction = _unit(self.direction)
         self.color = rgb(self.color)
 
 
-Light = Union[PointLight, SpotLight, SunLight]
+@dataclass
+class AreaLight:
+    """Blender's area lamp: a one-sided Lambertian emitter of `power` W.
+
+    center        (3,) world
+    axis_x/axis_y (3,) world half-extents along the lamp's local x and y,
+                  the object's scale applied: Size / 2 and Size Y / 2
+    direction     unit normal it emits along (Blender's -Z of the lamp)
+    shape         'RECTANGLE' (Square, Rectangle) or 'ELLIPSE' (Disk,
+                  Ellipse), inscribed in the rectangle
+    spread        Blender's Spread: the full angle of the cone it emits into,
+                  radians; pi is Lambertian, 0 a parallel beam
+    """
+
+    center: np.ndarray
+    axis_x: np.ndarray
+    axis_y: np.ndarray
+    direction: np.ndarray
+    power: float
+    shape: Literal["RECTANGLE", "ELLIPSE"] = "RECTANGLE"
+    spread: float = math.pi
+    color: RGB = field(default_factory=lambda: np.ones(3))
+    name: str = "Area"
+
+    def __post_init__(self):
+        self.center = np.asarray(self.center, dtype=np.float64).reshape(3)
+        self.axis_x = np.asarray(self.axis_x, dtype=np.float64).reshape(3)
+        self.axis_y = np.asarray(self.axis_y, dtype=np.float64).reshape(3)
+        self.direction = _unit(self.direction)
+        self.color = rgb(self.color)
+
+    @property
+    def area(self) -> float:
+        """m^2 of the emitting surface."""
+        rectangle = 4.0 * float(np.linalg.norm(np.cross(self.axis_x, self.axis_y)))
+        return rectangle * (math.pi / 4.0 if self.shape == "ELLIPSE" else 1.0)
+
+    @property
+    def position(self) -> np.ndarray:
+        return self.center
+
+
+Light = Union[PointLight, SpotLight, SunLight, AreaLight]
+
+
+@dataclass
+class World:
+    """The light from every direction that meets nothing, what Cycles'
+    world shader gives, W/(m^2 sr): `color (3,)` everywhere, or times an
+    `environment (h, w, 3)` lat-long image in Cycles' equirectangular
+    mapping (row 0 at the top, +Z; column u = 0.5 - atan2(y, x) / (2 pi),
+    +X at the middle)."""
+
+    color: RGB = field(default_factory=lambda: np.zeros(3))
+    environment: Optional[np.ndarray] = None
+
+    def __post_init__(self):
+        self.color = rgb(self.color)
+        if self.environment is not None:
+            self.environment = np.ascontiguousarray(self.environment, dtype=np.float64)
+
+    @property
+    def is_black(self) -> bool:
+        return not np.any(self.color > 0) or (self.environment is not None and not np.any(self.environment > 0))

@@ -21,6 +21,7 @@ class Materials:
     ior (m,)                    color (m,3): glass tint or reflectance
     absorption (m,3) per metre
     albedo (m,3)                specular (m,3), exponent (m,)
+    emission (m,3) radiance a surface gives off
     ior_bands (m,K)             IOR in each of the K wavelength bands
     band_weights (K,3)          each band's RGB share (spectrum.Bands)
 
@@ -36,6 +37,7 @@ class Materials:
     albedo: np.ndarray
     specular: np.ndarray
     exponent: np.ndarray
+    emission: np.ndarray
     ior_bands: np.ndarray
     band_weights: np.ndarray
 
@@ -64,6 +66,7 @@ class Materials:
             absorption=rgb_column("absorption", 0.0),
             albedo=rgb_column("albedo", 0.0),
             specular=rgb_column("specular", 0.0),
+            emission=rgb_column("emission", 0.0),
             exponent=column("exponent", 1.0),
             ior_bands=cauchy_ior(ior[:, None], abbe[:, None], spectral.wavelengths[None, :]),
             band_weights=spectral.weights,

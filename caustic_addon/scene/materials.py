@@ -46,16 +46,20 @@ class Diffuse:
     specular      (3,) specular colour (0 for none)
     exponent      Blinn-Phong exponent
     receiver      whether it collects caustics into an illumination map
+    emission      (3,) radiance it gives off, W/(m^2 sr), as an Emission
+                  shader's Color x Strength: seen, but lighting nothing else
     """
 
     albedo: RGB = field(default_factory=lambda: np.full(3, 0.8))
     specular: RGB = field(default_factory=lambda: np.zeros(3))
     exponent: float = 50.0
     receiver: bool = True
+    emission: RGB = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self):
         self.albedo = rgb(self.albedo)
         self.specular = rgb(self.specular)
+        self.emission = rgb(self.emission)
 
 
 @dataclass

@@ -9,7 +9,7 @@ import numpy as np
 from .camera import Camera
 from .color import RGB, rgb
 from .geometry import Mesh
-from .lights import Light
+from .lights import Light, World
 from .materials import Dielectric, Diffuse, Material, Reflector
 
 
@@ -39,15 +39,19 @@ class Object:
 
 @dataclass
 class Scene:
+    """objects, lamps and a camera; `ambient` (3,) the paper's ambient term,
+    radiance times albedo that every opaque surface adds; `world` the light
+    from every direction, seen where eye rays leave and lighting surfaces,
+    as Cycles' world."""
+
     objects: list[Object]
     lights: list[Light]
     camera: Camera
     ambient: RGB = field(default_factory=lambda: np.zeros(3))
-    background: RGB = field(default_factory=lambda: np.zeros(3))
+    world: World = field(default_factory=World)
 
     def __post_init__(self):
         self.ambient = rgb(self.ambient)
-        self.background = rgb(self.background)
 
     @property
     def casters(self) -> list[Object]:

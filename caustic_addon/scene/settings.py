@@ -32,6 +32,10 @@ class RenderSettings:
                   paths diverge (0 for a plain grid)
     max_depth     specular bounces per photon and per eye ray
     spp           eye samples per pixel
+    lamp_samples  shadow rays per eye sample toward each lamp with a size
+                  (a lamp of size 0 takes one), stratified over the pixel
+    world_samples directions per eye sample toward the world, stratified
+                  over the pixel (twice for an image: by cos and by radiance)
     bands         wavelength bands traced when a material disperses
                   (spectrum.py); one band, and no cost, when none does
     """
@@ -45,6 +49,8 @@ class RenderSettings:
     beam_refinement: int = 1
     max_depth: int = 12
     spp: int = 4
+    lamp_samples: int = 8
+    world_samples: int = 8
     seed: int = 0
     chunk_size: int = 1 << 17
     threads: int = 2
@@ -66,6 +72,8 @@ class RenderSettings:
              f"must be in 0..{MAX_BEAM_REFINEMENT}"),
             ("max_depth", self.max_depth >= 1, "must be >= 1"),
             ("spp", self.spp >= 1, "must be >= 1"),
+            ("lamp_samples", self.lamp_samples >= 1, "must be >= 1"),
+            ("world_samples", self.world_samples >= 1, "must be >= 1"),
             ("chunk_size", self.chunk_size >= 1, "must be >= 1"),
             ("threads", self.threads >= 1, "must be >= 1"),
             ("bands", 1 <= self.bands <= 64, "must be in 1..64"),

@@ -10,7 +10,7 @@ import numpy as np
 from ..errors import SceneError
 from ..optics.dispersion import cauchy_ior
 from ..optics.spectrum import VISIBLE_NM
-from .lights import PointLight, SpotLight, SunLight
+from .lights import AreaLight, SpotLight, SunLight, World
 from .materials import Dielectric, Reflector
 from .scene import Scene
 
@@ -60,17 +60,71 @@ def validate_scene(scene: Scene) -> list[str]:
             if np.any((material.color < 0) | (material.color > 1)):
                 raise SceneError(f"{obj.name}: reflectance colour must be in 0..1 (got {material.color.tolist()})")
 
+    extent = scene.extent()
     for light in scene.lights:
-        if isinstance(light, (PointLight, SpotLight)):
-            _finite(light.name, "its position", light.position)
-            if not (math.isfinite(light.power) and light.power >= 0):
-                raise SceneError(f"{light.name}: power must be a finite number of watts >= 0")
-        if isinstance(light, SunLight) and not (math.isfinite(light.strength) and light.strength >= 0):
-            raise SceneError(f"{light.name}: strength must be a finite number >= 0")
-        _finite(light.name, "its colour", light.color)
+        warnings += _check_lamp(light, extent)
+    _check_world(scene.world)
 
-    if not scene.lights:
-        warnings.append("the scene has no lamps: only ambient light and the background show")
+    if not scene.lights and scene.world.is_black:
+        warnings.append("the scene has no lamps and a black world: only the ambient term shows")
     if scene.casters and not scene.receivers:
         warnings.append("no object receives caustics: the photon pass is skipped")
     return warnings
+
+
+def _check_lamp(light, extent: float) -> list[str]:
+    """Raise SceneError for a lamp that cannot render; its warnings."""
+    name = f"lamp '{light.name}'"
+    _finite(name, "its colour", light.color)
+    if np.any(light.color < 0):
+        raise SceneError(f"{name}: its colour must not be negative")
+    power = light.strength if isinstance(light, SunLight) else light.power
+    if not (math.isfinite(power) and power >= 0):
+        raise SceneError(f"{name}: its {'strength' if isinstance(light, SunLight) else 'power'} must be a finite "
+                         f"number >= 0 (got {power})")
+    warnings = []
+    if power == 0 or not np.any(light.color > 0):
+        warnings.append(f"{name} gives no light (power 0 or black): it was left out")
+    if isinstance(light, SunLight):
+        if not 0.0 <= light.angle <= math.pi:
+            raise SceneError(f"{name}: its angle must be between 0 and 180 degrees (got "
+                             f"{math.degrees(light.angle):.6g})")
+        return warnings
+    _finite(name, "its position", light.position)
+    if isinstance(light, AreaLight):
+        _finite(name, "its size and direction", np.concatenate([light.axis_x, light.axis_y, light.direction]))
+        if not light.area > 0:
+            raise SceneError(f"{name}: its size is 0, so it has no area to give off light from")
+        if not 0.0 <= light.spread <= math.pi:
+            raise SceneError(f"{name}: its spread must be between 0 and 180 degrees (got "
+                             f"{math.degrees(light.spread):.6g})")
+        if light.spread == 0.0:
+            warnings.append(f"{name} has a spread of 0, a parallel beam: it lights the scene but casts no caustics")
+        size = float(np.linalg.norm(light.axis_x) + np.linalg.norm(light.axis_y))
+    else:
+        if not (math.isfinite(light.radius) and light.radius >= 0):
+            raise SceneError(f"{name}: its radius must be a finite number of metres >= 0 (got {light.radius})")
+        size = light.radius
+    if size > extent:
+        warnings.append(f"{name} is larger than the scene ({size:.3g} m against {extent:.3g} m across): "
+                        "its light is that of a lamp wrapped around everything")
+    if isinstance(light, SpotLight):
+        if not 0.0 < light.spot_size <= math.pi:
+            raise SceneError(f"{name}: its spot size must be between 0 and 180 degrees")
+        if not 0.0 <= light.blend <= 1.0:
+            raise SceneError(f"{name}: its blend must be between 0 and 1 (got {light.blend})")
+    return warnings
+
+
+def _check_world(world: World) -> None:
+    _finite("the world", "its colour", world.color)
+    if np.any(world.color < 0):
+        raise SceneError("the world: its colour must not be negative")
+    if world.environment is not None:
+        image = world.environment
+        if image.ndim != 3 or image.shape[2] != 3 or image.shape[0] < 2 or image.shape[1] < 2:
+            raise SceneError(f"the world: its environment image must be (rows, columns, 3), at least 2x2 "
+                             f"(got {image.shape})")
+        _finite("the world", "its environment image", image)
+        if np.any(image < 0):
+            raise SceneError("the world: its environment image must not be negative")

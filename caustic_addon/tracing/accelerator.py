@@ -181,6 +181,8 @@ class Accelerator:
         none: along each of three fixed directions, the first closed mesh
         met from behind (its inside) holds the point; the three vote, so a
         ray through a crack between triangles cannot decide alone."""
+        if not self.closed.any():
+            return np.full(len(points), MISS, dtype=np.int64)
         votes = []
         for direction in _PROBE_DIRS:
             dirs = np.broadcast_to(direction, points.shape)

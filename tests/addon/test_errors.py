@@ -17,8 +17,9 @@ def no_lamp(parts):
     bpy.data.objects.remove(parts["lamp"])
 
 
-def only_an_area_lamp(parts):
+def an_area_lamp_of_size_0(parts):
     parts["lamp"].data.type = 'AREA'
+    parts["lamp"].data.size = 0.0
 
 
 def no_receiver(parts):
@@ -40,8 +41,8 @@ def negative_ior_override(parts):
 
 CASES = [
     (no_camera, "The scene has no active camera", {"render", "compare_cycles"}),
-    (no_lamp, "The scene has no point, spot or sun lamp", {"render", "compare_cycles", "bake"}),
-    (only_an_area_lamp, "(area lamps are not supported)", {"render", "compare_cycles", "bake"}),
+    (no_lamp, "Nothing lights the scene: it has no lamp, and its world is black", {"render", "compare_cycles", "bake"}),
+    (an_area_lamp_of_size_0, "lamp 'Lamp': its size is 0", {"render", "compare_cycles", "bake"}),
     (no_receiver, "No object receives caustics", {"render", "compare_cycles", "bake"}),
     (zero_lamp_rays, "Lamp Rays is 0", {"render", "compare_cycles", "bake"}),
     (zero_ior_in_the_material, "Ball: IOR must be a positive number", {"render", "compare_cycles", "bake"}),

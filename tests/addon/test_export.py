@@ -161,13 +161,19 @@ def test_approximations_are_named_in_warnings(addon):
     scenes.add_sphere(0.3, (1.0, 0.0, 0.5), rough, segments=8, rings=4)
     bpy.ops.curve.primitive_bezier_circle_add()
     curve = bpy.context.object.name
-    bpy.data.objects.new("Area", bpy.data.lights.new("Area", 'AREA'))
-    bpy.context.scene.collection.objects.link(bpy.data.objects["Area"])
-    warnings = "\n".join(read(addon).warnings)
+    neon = scenes.add_sphere(0.2, (-1.0, 0.0, 0.5), scenes.diffuse_material("Neon"), name="Neon", segments=8, rings=4)
+    nodes = neon.active_material.node_tree.nodes
+    emission = nodes.new('ShaderNodeEmission')
+    emission.inputs['Strength'].default_value = 5.0
+    neon.active_material.node_tree.links.new(emission.outputs[0], nodes['Material Output'].inputs['Surface'])
+    result = read(addon)
+    warnings = "\n".join(result.warnings)
     assert "material 'Floor': its Color comes from other nodes" in warnings
     assert "material 'Frosted': rough glass is rendered as smooth glass" in warnings
     assert f"'{curve}': curve objects are not supported" in warnings
-    assert "lamp 'Area': area lamps are not supported" in warnings
+    assert "'Neon': its material 'Neon' emits light" in warnings
+    neon_material = next(o.material for o in result.scene.objects if o.name == "Neon")
+    assert np.allclose(neon_material.emission, 5.0) and np.allclose(neon_material.albedo, 0.0)
 
 
 def test_lamps_in_blender_units(addon):
@@ -194,6 +200,68 @@ def test_lamps_in_blender_units(addon):
     assert lights["Spot"].spot_size == pytest.approx(math.radians(30.0)) and lights["Spot"].blend == pytest.approx(0.2)
     assert lights["Sun"].strength == 3.0
     assert np.allclose(lights["Sun"].direction, (-math.sqrt(0.5), 0.0, -math.sqrt(0.5)), atol=1e-6)
+
+
+def test_lamps_with_a_size(addon):
+    """Radius and Soft Falloff, a sun's angle, an area lamp's shape, size,
+    scale and spread, as the engine's lamps."""
+    lamp_scene()
+    point = bpy.data.lights["Lamp"]
+    point.shadow_soft_size, point.use_soft_falloff = 0.4, False
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))
+    sun.data.angle = math.radians(12.0)
+    area = bpy.data.objects.new("Area", bpy.data.lights.new("Area", 'AREA'))
+    area.data.shape, area.data.size, area.data.size_y, area.data.spread = 'ELLIPSE', 2.0, 0.5, math.radians(60.0)
+    area.data.energy = 80.0
+    area.location, area.scale = (0.0, 0.0, 3.0), (1.5, 1.0, 1.0)
+    for ob in (sun, area):
+        bpy.context.scene.collection.objects.link(ob)
+    lights = {light.name: light for light in read(addon).scene.lights}
+    assert (lights["Lamp"].radius, lights["Lamp"].soft_falloff) == (pytest.approx(0.4), False)
+    assert lights["Sun"].angle == pytest.approx(math.radians(12.0))
+    lamp = lights["Area"]
+    assert lamp.shape == "ELLIPSE" and lamp.spread == pytest.approx(math.radians(60.0))
+    np.testing.assert_allclose(lamp.axis_x, (1.5, 0.0, 0.0), atol=1e-6)
+    np.testing.assert_allclose(lamp.axis_y, (0.0, 0.25, 0.0), atol=1e-6)
+    np.testing.assert_allclose(lamp.direction, (0.0, 0.0, -1.0), atol=1e-6)
+    assert lamp.area == pytest.approx(math.pi * 1.5 * 0.25) and lamp.power == pytest.approx(80.0)
+
+
+@pytest.mark.skipif("normalize" not in bpy.types.Light.bl_rna.properties, reason="Normalize is Blender 4.5+")
+def test_normalize_off_multiplies_the_power_by_the_lamps_area(addon):
+    """Cycles divides a lamp's power by Light.area() only with Normalize on."""
+    lamp_scene()
+    light = bpy.data.lights["Lamp"]
+    light.shadow_soft_size, light.normalize = 0.5, False
+    engine = read(addon).scene.lights[0]
+    assert engine.power == pytest.approx(light.energy * light.area(matrix_world=bpy.data.objects["Lamp"].matrix_world))
+
+
+def test_the_world_colour_and_an_environment_image(addon):
+    lamp_scene()
+    world = bpy.data.worlds.new("Sky")
+    bpy.context.scene.world = world
+    if world.node_tree is None:
+        world.use_nodes = True
+    background = next(n for n in world.node_tree.nodes if n.bl_idname == 'ShaderNodeBackground')
+    background.inputs['Color'].default_value = (0.2, 0.4, 0.8, 1.0)
+    background.inputs['Strength'].default_value = 2.0
+    np.testing.assert_allclose(read(addon).scene.world.color, (0.4, 0.8, 1.6))
+    image = bpy.data.images.new("Sky", 8, 4, float_buffer=True)
+    pixels = np.zeros((4, 8, 4), dtype=np.float32)
+    pixels[..., 0], pixels[..., 3] = np.arange(4)[:, None], 1.0
+    image.pixels.foreach_set(pixels.ravel())
+    texture = world.node_tree.nodes.new('ShaderNodeTexEnvironment')
+    texture.image = image
+    world.node_tree.links.new(texture.outputs['Color'], background.inputs['Color'])
+    read_world = read(addon).scene.world
+    np.testing.assert_allclose(read_world.color, 2.0)
+    # row 0 at the top: Blender's last row
+    np.testing.assert_allclose(read_world.environment[:, 0, 0], [3.0, 2.0, 1.0, 0.0])
+    texture.image = None
+    result = read(addon)
+    assert result.scene.world.is_black
+    assert any("world 'Sky': the Environment Texture" in w for w in result.warnings)
 
 
 @pytest.mark.skipif("temperature" not in bpy.types.Light.bl_rna.properties, reason="lamp temperature is Blender 4.5+")

@@ -84,7 +84,7 @@ def broken(**changes):
     (dict(ior=float("nan")), "Glass: IOR must be a positive number"),
     (dict(vertices=[np.nan, 0, 0]), "Glass: its vertex coordinates contains NaN"),
     (dict(empty=True), "Glass: the mesh has no triangles"),
-    (dict(power=-5.0), "Lamp: power must be"),
+    (dict(power=-5.0), "lamp 'Lamp': its power must be"),
 ])
 def test_bad_scenes_name_the_culprit(changes, message):
     with pytest.raises(SceneError, match=message):

@@ -1,0 +1,113 @@
+"""The world's light as directions: its radiance in any direction, and
+directions sampled in proportion to it (a piecewise-constant 2D
+distribution over the lat-long image, rows weighted by sin(theta): pbrt-v4's
+ImageInfiniteLight, Cycles' background map), with their solid-angle
+density, so the eye pass and the photon pass can importance-sample a bright
+sky or a sun in an HDRI.
+
+The mapping is Cycles' equirectangular one (`direction_to_equirectangular`):
+u = 0.5 - atan2(y, x) / (2 pi), v = acos(z) / pi from the top row, so +Z is
+row 0 and +X the image's middle column."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..scene import World
+from ..util.vectors import DIVISION_FLOOR
+
+
+def directions_to_uv(dirs: np.ndarray) -> np.ndarray:
+    """(n,2) image coordinates in [0,1)^2 (u across, v down from the top) of unit `dirs (n,3)`."""
+    u = np.mod(0.5 - np.arctan2(dirs[:, 1], dirs[:, 0]) / (2.0 * math.pi), 1.0)
+    v = np.arccos(np.clip(dirs[:, 2], -1.0, 1.0)) / math.pi
+    return np.stack([u, v], axis=1)
+
+
+def uv_to_directions(uv: np.ndarray) -> np.ndarray:
+    """(n,3) unit directions of image coordinates `uv (n,2)`."""
+    phi = (0.5 - uv[:, 0]) * 2.0 * math.pi
+    theta = uv[:, 1] * math.pi
+    sin_t = np.sin(theta)
+    return np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), np.cos(theta)], axis=1)
+
+
+def _luminance(rgb: np.ndarray) -> np.ndarray:
+    return 0.2126 * rgb[..., 0] + 0.7152 * rgb[..., 1] + 0.0722 * rgb[..., 2]
+
+
+class Environment:
+    """A world, ready to evaluate and sample.
+
+    A plain colour is sampled uniformly over the sphere; an image by its
+    pixels' luminance times sin(theta) (each pixel's solid angle), with a
+    density of p_pixel w h / (2 pi^2 sin(theta)) per steradian."""
+
+    def __init__(self, world: World):
+        self.world = world
+        image = world.environment
+        if image is None:
+            self.cdf_rows = self.cdf_cols = None
+            return
+        h, w = image.shape[:2]
+        theta = (np.arange(h) + 0.5) / h * math.pi
+        weight = np.maximum(_luminance(image * world.color), 0.0) * np.sin(theta)[:, None]
+        if not weight.sum() > 0:
+            weight = np.sin(theta)[:, None] * np.ones((1, w))
+        rows = weight.sum(axis=1)
+        self.row_pdf = rows / rows.sum()
+        self.cdf_rows = np.concatenate([[0.0], np.cumsum(self.row_pdf)])
+        self.col_pdf = weight / np.maximum(rows[:, None], DIVISION_FLOOR)
+        self.cdf_cols = np.concatenate([np.zeros((h, 1)), np.cumsum(self.col_pdf, axis=1)], axis=1)
+        # every row's column CDF, offset by its row number: one sorted array to search
+        self._stacked_cdf = (self.cdf_cols + np.arange(h)[:, None]).ravel()
+
+    def radiance(self, dirs: np.ndarray) -> np.ndarray:
+        """(n,3) W/(m^2 sr) arriving from `dirs (n,3)`: the image looked up
+        bilinearly (Cycles' Linear interpolation), times the world's colour."""
+        image = self.world.environment
+        if image is None:
+            return np.broadcast_to(self.world.color, (len(dirs), 3)).copy()
+        h, w = image.shape[:2]
+        uv = directions_to_uv(dirs)
+        x, y = uv[:, 0] * w - 0.5, uv[:, 1] * h - 0.5
+        x0, y0 = np.floor(x).astype(np.int64), np.floor(y).astype(np.int64)
+        fx, fy = (x - x0)[:, None], (y - y0)[:, None]
+        c0, c1 = x0 % w, (x0 + 1) % w
+        r0, r1 = np.clip(y0, 0, h - 1), np.clip(y0 + 1, 0, h - 1)
+        value = ((1 - fy) * ((1 - fx) * image[r0, c0] + fx * image[r0, c1])
+                 + fy * ((1 - fx) * image[r1, c0] + fx * image[r1, c1]))
+        return value * self.world.color
+
+    def sample(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(dirs (n,3), density (n,) per steradian) at `uv (n,2)` in the unit
+        square: uniform over the sphere for a plain colour, else in
+        proportion to the image."""
+        if self.cdf_rows is None:
+            z = 1.0 - 2.0 * uv[:, 0]
+            r = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+            phi = 2.0 * math.pi * uv[:, 1]
+            dirs = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
+            return dirs, np.full(len(uv), 1.0 / (4.0 * math.pi))
+        h, w = self.col_pdf.shape
+        row = np.clip(np.searchsorted(self.cdf_rows, uv[:, 1], side="right") - 1, 0, h - 1)
+        v = (row + (uv[:, 1] - self.cdf_rows[row]) / np.maximum(self.row_pdf[row], DIVISION_FLOOR)) / h
+        col = np.clip(np.searchsorted(self._stacked_cdf, row + uv[:, 0], side="right") - 1 - row * (w + 1), 0, w - 1)
+        within = (uv[:, 0] - self.cdf_cols[row, col]) / np.maximum(self.col_pdf[row, col], DIVISION_FLOOR)
+        u = (col + within) / w
+        dirs = uv_to_directions(np.stack([u, np.clip(v, 0.0, 1.0)], axis=1))
+        return dirs, self.density(dirs)
+
+    def density(self, dirs: np.ndarray) -> np.ndarray:
+        """(n,) the solid-angle density at which `sample` draws `dirs (n,3)`."""
+        if self.cdf_rows is None:
+            return np.full(len(dirs), 1.0 / (4.0 * math.pi))
+        h, w = self.col_pdf.shape
+        uv = directions_to_uv(dirs)
+        row = np.clip((uv[:, 1] * h).astype(np.int64), 0, h - 1)
+        col = np.clip((uv[:, 0] * w).astype(np.int64), 0, w - 1)
+        sin_t = np.sqrt(np.maximum(0.0, 1.0 - dirs[:, 2] ** 2))
+        pixel = self.row_pdf[row] * self.col_pdf[row, col]
+        return pixel * w * h / (2.0 * math.pi ** 2 * np.maximum(sin_t, DIVISION_FLOOR))

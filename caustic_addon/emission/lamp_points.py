@@ -1,0 +1,91 @@
+"""A lamp with a size as lamps of size 0, for beam mode, whose grids need
+rays from one point: `m` x `m` points of a stratified grid over the lamp
+(over its disc facing the casters, its sphere's near side, its area, or a
+sun's disc of directions), each with 1/m^2 of its light. Their caustics,
+each sharp, sum to the soft one; `m` grows with the penumbra the lamp's size
+throws onto the receivers, so that neighbouring points' caustics land less
+than BEAM_SHIFT map cells apart, up to MAX_PER_AXIS (beyond which the
+penumbra shows MAX_PER_AXIS steps)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from ..sampling.warps import cone_directions
+from ..scene import AreaLight, Light, SunLight
+from .aims import Sphere, emitting_points, reach
+
+# Map cells between the caustics of neighbouring points of a lamp.
+BEAM_SHIFT = 2.0
+# Points per side of a lamp's grid, at most (MAX_PER_AXIS^2 beam grids).
+MAX_PER_AXIS = 8
+
+
+def grid_points(per_axis: int) -> np.ndarray:
+    """(m^2, 2) centres of an m x m grid of cells over the unit square."""
+    ticks = (np.arange(per_axis) + 0.5) / per_axis
+    return np.stack(np.meshgrid(ticks, ticks, indexing="ij"), axis=-1).reshape(-1, 2)
+
+
+def penumbra(light: Light, targets: list[Sphere], receivers: tuple[np.ndarray, np.ndarray]) -> float:
+    """The widest blur, m, that the lamp's size throws from a target onto
+    the receivers' bounding box `(lo (3,), hi (3,))`: the lamp's angular size
+    seen from the target times the target's distance to the box."""
+    lo, hi = receivers
+    widest = 0.0
+    for sphere in targets:
+        to_box = float(np.linalg.norm(np.clip(sphere.center, lo, hi) - sphere.center)) + sphere.radius
+        if isinstance(light, SunLight):
+            angle = light.angle
+        else:
+            distance = float(np.linalg.norm(sphere.center - light.position))
+            angle = 2.0 * math.atan(reach(light) / max(distance - sphere.radius, sphere.radius))
+        widest = max(widest, angle * to_box)
+    return widest
+
+
+def points_per_axis(light: Light, targets: list[Sphere], receivers, cell: float) -> int:
+    """m for `light`: 1 for a lamp of size 0."""
+    blur = penumbra(light, targets, receivers)
+    return int(min(MAX_PER_AXIS, max(1, math.ceil(blur / (BEAM_SHIFT * cell)))))
+
+
+def point_lamps(light: Light, per_axis: int, facing: np.ndarray) -> list[Light]:
+    """`per_axis`^2 lamps of size 0 that stand for `light`; a point or spot
+    lamp's disc faces `facing (3,)`, the direction of its casters."""
+    grid = grid_points(per_axis)
+    share = 1.0 / len(grid)
+    if isinstance(light, SunLight):
+        if light.angle <= 0.0:
+            return [light]
+        half = 0.5 * light.angle
+        dirs = cone_directions(np.tile(light.direction, (len(grid), 1)), np.full(len(grid), math.cos(half)), grid)
+        # each carries L x the disc's solid angle / m^2, L = S / (pi sin^2 h)
+        strength = light.strength * 2.0 * (1.0 - math.cos(half)) / math.sin(half) ** 2 * share
+        return [replace(light, direction=d, strength=strength, angle=0.0) for d in dirs]
+    if reach(light) <= 0.0:
+        return [light]
+    if isinstance(light, AreaLight):
+        points = emitting_points(light, np.zeros((len(grid), 3)), grid)
+        zero = np.zeros(3)
+        return [replace(light, center=p, axis_x=zero, axis_y=zero, power=light.power * share) for p in points]
+    points = emitting_points(light, np.tile(facing, (len(grid), 1)), grid)
+    return [replace(light, position=p, radius=0.0, power=light.power * share) for p in points]
+
+
+def beam_lamps(lights: list[Light], targets: list[Sphere], receivers, cell: float) -> list[Light]:
+    """Every lamp as lamps of size 0 for beam mode, with points enough for
+    map cells of `cell` m on receivers within `receivers` (lo, hi)."""
+    out = []
+    for light in lights:
+        if isinstance(light, SunLight) or not targets:
+            facing = getattr(light, "direction", np.array([0.0, 0.0, -1.0]))
+        else:
+            toward = sum(sphere.center - light.position for sphere in targets)
+            norm = float(np.linalg.norm(toward))
+            facing = toward / norm if norm > 0 else np.array([0.0, 0.0, -1.0])
+        out += point_lamps(light, points_per_axis(light, targets, receivers, cell), facing)
+    return out
