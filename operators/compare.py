@@ -7,10 +7,11 @@ report says so."""
 import bpy
 import numpy as np
 
-from ..export import InputError, read_scene, render_settings
-from ..jobs import RenderJob
 from ..comparison.cycles import render_cycles
 from ..comparison.metrics import caustic_region, psnr, relative_l2
+from ..export import InputError, read_scene, render_settings
+from ..export.cycles_still import cycles_enabled
+from ..jobs import RenderJob
 from ..writeback.images import show_image, write_image
 from ..writeback.results import record_run
 from .render import RESULT_IMAGE, no_render_running
@@ -42,6 +43,9 @@ class CAUSTIC_OT_compare_cycles(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
+        if not cycles_enabled():
+            cls.poll_message_set("Compare with Cycles needs the Cycles add-on: turn it on in Preferences > Add-ons")
+            return False
         return no_render_running(cls)
 
     def execute(self, context):

@@ -1,4 +1,4 @@
-"""Float images in and out of Blender. Arrays here are (h, w, 4) float32
+"""Float images written into Blender. Arrays here are (h, w, 4) float32
 linear RGBA with row 0 at the TOP; Blender stores rows bottom to top."""
 
 import uuid
@@ -63,14 +63,6 @@ def register() -> None:
 def unregister() -> None:
     bpy.app.handlers.undo_post.remove(drop_stale_pixels)
     bpy.app.handlers.redo_post.remove(drop_stale_pixels)
-
-
-def read_pixels(image) -> np.ndarray:
-    """(h,w,4) float32 of `image`, top row first."""
-    w, h = image.size
-    pixels = np.empty(w * h * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    return pixels.reshape(h, w, 4)[::-1]
 
 
 def show_image(context, image) -> None:

@@ -20,15 +20,27 @@ Colours are linear RGB, a number (grey) or [r, g, b]. Positions are metres.
   height       z of the plane, metres [0.0]
   albedo       diffuse reflectance, 0..1 [0.8]
 
-[lamp]         one lamp; the keys depend on its type
-  type         "point" | "spot" | "sun" ["point"]
-  position     [x, y, z] (point, spot; required)
-  power        watts >= 0, as Blender's Power (point, spot; required)
-  direction    [x, y, z], the way the light travels (spot, sun; required)
+[lamp]         one lamp, as Blender's; the keys depend on its type
+  type         "point" | "spot" | "sun" | "area" ["point"]
+  position     [x, y, z] (point, spot, area: its centre; required)
+  power        watts >= 0, as Blender's Power (point, spot, area; required)
+  direction    [x, y, z], the way the light travels (spot, sun, area: the
+               way it faces; required)
+  radius       metres >= 0, Blender's Radius (point, spot) [0.0]
+  soft_falloff true: the lamp is a disc facing each point it lights;
+               false: a sphere (point, spot) [true]
   spot_size    full cone angle, degrees, 0 < spot_size <= 180 (spot) [45.0]
   blend        softness of the cone's edge, 0..1 (spot) [0.15]
   strength     W/m^2 >= 0 on a surface facing the sun, as Blender's Strength
                (sun; required)
+  angle        degrees the sun's disc spans, 0..180 (sun) [0.0]
+  shape        "square" | "rectangle" | "disk" | "ellipse" (area) ["square"]
+  size         metres > 0, the edge or diameter along the lamp's x (area)
+               [1.0]
+  size_y       metres > 0 along its y (area: rectangle, ellipse) [size]
+  up           [x, y, z], the way the lamp's y points, made square to
+               direction (area) [[0, 1, 0], or [1, 0, 0] facing along y]
+  spread       degrees of the cone it emits into, 0..180 (area) [180.0]
   color        colour >= 0 [1.0]
 
 [photons]      the paper's photon pass
@@ -91,7 +103,7 @@ from typing import Any, Callable, Optional
 import numpy as np
 
 from ..optics.media import absorption_from_color
-from ..scene import (Camera, Dielectric, Diffuse, Light, Mesh, Object, PointLight, Reflector, RenderSettings, Scene,
+from ..scene import (AreaLight, Camera, Dielectric, Diffuse, Light, Mesh, Object, PointLight, Reflector, RenderSettings, Scene,
                      SpotLight, SunLight, World, shapes)
 from ..scene.color import RGB
 from ..scene.settings import MAX_BEAM_REFINEMENT
@@ -158,6 +170,13 @@ def triple(condition: str, test: Callable[[float], bool], default=_REQUIRED) -> 
     return Field(parse, f"must be a number {condition} or a list of 3 of them", default)
 
 
+def boolean(default=_REQUIRED) -> Field:
+    def parse(value):
+        _require(isinstance(value, bool))
+        return value
+    return Field(parse, "must be true or false", default)
+
+
 def choice(*options: str, default=_REQUIRED) -> Field:
     def parse(value):
         _require(value in options)
@@ -211,13 +230,21 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "albedo": triple("in 0..1", _unit, np.full(3, 0.8)),
     },
     "lamp": {
-        "type": choice("point", "spot", "sun", default="point"),
+        "type": choice("point", "spot", "sun", "area", default="point"),
         "position": vector(),
         "power": number(">= 0", _non_negative),
         "direction": vector(nonzero=True),
+        "radius": number(">= 0", _non_negative, 0.0),
+        "soft_falloff": boolean(True),
         "spot_size": number("> 0 and <= 180", lambda x: 0 < x <= 180, 45.0),
         "blend": number("in 0..1", _unit, 0.15),
         "strength": number(">= 0", _non_negative),
+        "angle": number("in 0..180", lambda x: 0 <= x <= 180, 0.0),
+        "shape": choice("square", "rectangle", "disk", "ellipse", default="square"),
+        "size": number("> 0", _positive, 1.0),
+        "size_y": number("> 0", _positive, None),
+        "up": vector(nonzero=True, default=None),
+        "spread": number("in 0..180", lambda x: 0 <= x <= 180, 180.0),
         "color": triple(">= 0", _non_negative, np.ones(3)),
     },
     "photons": {
@@ -263,9 +290,10 @@ OBJECT_KEYS = {
 
 # The keys each lamp type takes.
 LAMP_KEYS = {
-    "point": ("type", "position", "power", "color"),
-    "spot": ("type", "position", "direction", "power", "spot_size", "blend", "color"),
-    "sun": ("type", "direction", "strength", "color"),
+    "point": ("type", "position", "power", "radius", "soft_falloff", "color"),
+    "spot": ("type", "position", "direction", "power", "radius", "soft_falloff", "spot_size", "blend", "color"),
+    "sun": ("type", "direction", "strength", "angle", "color"),
+    "area": ("type", "position", "direction", "power", "shape", "size", "size_y", "up", "spread", "color"),
 }
 
 
@@ -331,7 +359,7 @@ def parse(text: str, name: str = "<config>") -> Config:
         camera=Camera.from_paper(camera["FOV"], camera["pixx"], camera["pixy"], camera["S"], camera["eye"],
                                  camera["look_at"], camera["up"]),
         floor=Object("Plane", shapes.plane(plane["size"], (0.0, 0.0, plane["height"])), Diffuse(plane["albedo"])),
-        lamp=_lamp(lamp),
+        lamp=_lamp(lamp, name),
         material=(Reflector(obj["color"]) if obj["material"] == "reflector"
                   else Dielectric(obj["ior"], obj["color"], _glass_absorption(obj, document, name), obj["abbe"])),
         placement=placement,
@@ -385,10 +413,30 @@ def _value(field: Field, raw: dict, table: str, key: str, name: str) -> Any:
         raise ConfigError(f"{name}: {table}.{key} {field.must} (got {got})") from None
 
 
-def _lamp(lamp: dict) -> Light:
+def _lamp(lamp: dict, name: str) -> Light:
     if lamp["type"] == "point":
-        return PointLight(lamp["position"], lamp["power"], lamp["color"])
+        return PointLight(lamp["position"], lamp["power"], lamp["color"], radius=lamp["radius"],
+                          soft_falloff=lamp["soft_falloff"])
     if lamp["type"] == "spot":
         return SpotLight(lamp["position"], lamp["direction"], lamp["power"], math.radians(lamp["spot_size"]),
-                         lamp["blend"], lamp["color"])
-    return SunLight(lamp["direction"], lamp["strength"], lamp["color"])
+                         lamp["blend"], lamp["color"], radius=lamp["radius"], soft_falloff=lamp["soft_falloff"])
+    if lamp["type"] == "sun":
+        return SunLight(lamp["direction"], lamp["strength"], lamp["color"], angle=math.radians(lamp["angle"]))
+    return _area_lamp(lamp, name)
+
+
+def _area_lamp(lamp: dict, name: str) -> AreaLight:
+    """The area lamp of `lamp`'s keys: its x square to `up` and `direction`."""
+    normal = lamp["direction"] / np.linalg.norm(lamp["direction"])
+    up = lamp["up"]
+    if up is None:
+        up = np.array([1.0, 0.0, 0.0]) if abs(normal[1]) > 0.9 else np.array([0.0, 1.0, 0.0])
+    along_y = up - (up @ normal) * normal
+    if np.linalg.norm(along_y) < 1e-6 * np.linalg.norm(up):
+        raise ConfigError(f"{name}: lamp.up must not be parallel to lamp.direction")
+    along_y /= np.linalg.norm(along_y)
+    along_x = np.cross(normal, along_y)
+    size_y = lamp["size"] if lamp["size_y"] is None or lamp["shape"] in ("square", "disk") else lamp["size_y"]
+    return AreaLight(lamp["position"], 0.5 * lamp["size"] * along_x, 0.5 * size_y * along_y, normal, lamp["power"],
+                     "RECTANGLE" if lamp["shape"] in ("square", "rectangle") else "ELLIPSE",
+                     math.radians(lamp["spread"]), lamp["color"])

@@ -34,6 +34,17 @@ def uv_to_directions(uv: np.ndarray) -> np.ndarray:
     return np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), np.cos(theta)], axis=1)
 
 
+def pixel_means(image: np.ndarray) -> np.ndarray:
+    """(h, w, 3) the mean of the bilinear lookup over each pixel of `image
+    (h, w, 3)`: the integral of the tent between neighbours over a pixel,
+    1/8, 3/4, 1/8 along each axis, wrapping across u and clamped at the
+    poles as `Environment.radiance` is."""
+    wide = np.concatenate([image[:, -1:], image, image[:, :1]], axis=1)
+    across = 0.125 * wide[:, :-2] + 0.75 * wide[:, 1:-1] + 0.125 * wide[:, 2:]
+    tall = np.concatenate([across[:1], across, across[-1:]], axis=0)
+    return 0.125 * tall[:-2] + 0.75 * tall[1:-1] + 0.125 * tall[2:]
+
+
 def _luminance(rgb: np.ndarray) -> np.ndarray:
     return 0.2126 * rgb[..., 0] + 0.7152 * rgb[..., 1] + 0.0722 * rgb[..., 2]
 
@@ -41,9 +52,13 @@ def _luminance(rgb: np.ndarray) -> np.ndarray:
 class Environment:
     """A world, ready to evaluate and sample.
 
-    A plain colour is sampled uniformly over the sphere; an image by its
-    pixels' luminance times sin(theta) (each pixel's solid angle), with a
-    density of p_pixel w h / (2 pi^2 sin(theta)) per steradian."""
+    A plain colour is sampled uniformly over the sphere; an image by the
+    luminance its bilinear lookup averages over each pixel (`pixel_means`)
+    times sin(theta) (the pixel's solid angle), with a density of p_pixel w
+    h / (2 pi^2 sin(theta)) per steradian. The mean, not the pixel's own
+    value, because the lookup spreads a pixel half a pixel into its
+    neighbours: a density that left those out would never draw a sixth of
+    a 3 x 3 pixel sun."""
 
     def __init__(self, world: World):
         self.world = world
@@ -53,7 +68,7 @@ class Environment:
             return
         h, w = image.shape[:2]
         theta = (np.arange(h) + 0.5) / h * math.pi
-        weight = np.maximum(_luminance(image * world.color), 0.0) * np.sin(theta)[:, None]
+        weight = np.maximum(_luminance(pixel_means(image) * world.color), 0.0) * np.sin(theta)[:, None]
         if not weight.sum() > 0:
             weight = np.sin(theta)[:, None] * np.ones((1, w))
         rows = weight.sum(axis=1)
@@ -99,6 +114,17 @@ class Environment:
         u = (col + within) / w
         dirs = uv_to_directions(np.stack([u, np.clip(v, 0.0, 1.0)], axis=1))
         return dirs, self.density(dirs)
+
+    def total(self) -> np.ndarray:
+        """(3,) int L dw over the sphere, W/(m^2): the world's flux through a
+        unit area from every direction."""
+        image = self.world.environment
+        if image is None:
+            return 4.0 * math.pi * self.world.color
+        h, w = image.shape[:2]
+        theta = (np.arange(h) + 0.5) / h * math.pi
+        solid_angle = (2.0 * math.pi / w) * (math.pi / h) * np.sin(theta)
+        return (image * solid_angle[:, None, None]).sum(axis=(0, 1)) * self.world.color
 
     def density(self, dirs: np.ndarray) -> np.ndarray:
         """(n,) the solid-angle density at which `sample` draws `dirs (n,3)`."""

@@ -35,6 +35,7 @@ import numpy as np
 from ..emission.aims import casters_and_bounds
 from ..emission.beam_sources import BeamSource, beam_sources
 from ..emission.lamp_points import beam_lamps
+from ..emission.photons import make_emitters
 from ..maps.deposits import Deposits
 from ..maps.illumination_map import IlluminationMap
 from ..maps.raster import signed_areas
@@ -48,6 +49,7 @@ from ..util.vectors import DIVISION_FLOOR, max_channel
 from .bounce import Interface, on_maps, split, trace
 from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
 from .paths import MIN_BRANCH_WEIGHT, Paths, relative_floor
+from .photon import photon_jobs
 
 # A cell whose two triangles' landed areas differ by more than this factor is
 # split (measured on the ball lens: lower factors spend paths for no gain).
@@ -354,7 +356,11 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
     receivers = np.concatenate([o.mesh.vertices for o in scene.receivers])
     lamps = beam_lamps(scene.lights, targets, (receivers.min(axis=0), receivers.max(axis=0)),
                        min(imap.cell for imap in maps.values()))
-    sources = beam_sources(lamps, targets, scene_sphere, settings.energy, settings.lamp_rays // count)
+    # the world's light comes as photons, its share of the lamp rays by its flux
+    emitters = [e for e in make_emitters(lamps, scene.world, targets, scene_sphere, "targeted", settings.energy,
+                                         settings.lamp_rays, settings.seed) if e.light is None]
+    from_world = sum(e.count for e in emitters)
+    sources = beam_sources(lamps, targets, scene_sphere, settings.energy, (settings.lamp_rays - from_world) // count)
     jobs = []
     for source in sources:
         # one band of rows per thread, of at most `chunk_size` points: a
@@ -366,6 +372,7 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
         jobs += [partial(band_beams, source, first, min(first + rows + 1, source.grid), accel, materials, maps,
                          settings.max_depth, medium, settings.beam_refinement, band)
                  for band in range(count) for first in range(0, source.grid - 1, rows)]
+    jobs += photon_jobs(emitters, accel, materials, maps, settings)
     stats, deliver = deliverer(maps)
     run_chunks(jobs, settings.threads, monitor, 0.0, share, "beam pass", deliver)
     return stats

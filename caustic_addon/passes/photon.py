@@ -89,11 +89,10 @@ def trace_photons(accel: Accelerator, materials: Materials, maps: dict, photons:
     return JobResult(deposits, LampPassStats(len(photons.ids), 0, tracer.landed, deposits.flux))
 
 
-def photon_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
-                maps: dict, monitor: Monitor, share: float) -> LampPassStats:
-    """Emit and trace every photon, chunk by chunk, onto `maps`."""
-    emitters = make_emitters(scene.lights, *casters_and_bounds(scene), settings.emission, settings.energy,
-                             settings.lamp_rays, settings.seed)
+def photon_jobs(emitters: list[Emitter], accel: Accelerator, materials: Materials, maps: dict,
+                settings: RenderSettings) -> list:
+    """Jobs for util.parallel.run_chunks that trace the emitters' photons,
+    chunk by chunk, each from the medium its lamp is in."""
 
     def job(emitter: Emitter, start: int, stop: int, medium: int) -> JobResult:
         return trace_photons(accel, materials, maps, emitter.emit(start, stop), settings.max_depth, settings.seed,
@@ -102,10 +101,19 @@ def photon_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, mate
     jobs = []
     for emitter in emitters:
         size = chunk_size(emitter.count, settings.chunk_size, settings.threads)
-        medium = lamp_medium(accel, emitter.light)
+        medium = MISS if emitter.light is None else lamp_medium(accel, emitter.light)
         jobs += [partial(job, emitter, start, min(start + size, emitter.count), medium)
                  for start in range(0, emitter.count, size)]
+    return jobs
+
+
+def photon_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
+                maps: dict, monitor: Monitor, share: float) -> LampPassStats:
+    """Emit and trace every photon, chunk by chunk, onto `maps`."""
+    emitters = make_emitters(scene.lights, scene.world, *casters_and_bounds(scene), settings.emission,
+                             settings.energy, settings.lamp_rays, settings.seed)
     stats, deliver = deliverer(maps)
+    jobs = photon_jobs(emitters, accel, materials, maps, settings)
     run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass", deliver)
     stats.lamp_rays = sum(e.count for e in emitters)
     return stats

@@ -292,6 +292,29 @@ def test_spot_and_sun_lamps():
         config.parse(sun.replace("direction = [0, 0, -1]\n", ""))
 
 
+def test_lamps_with_a_size():
+    point = config.parse(SMALL.replace("power = 0.8", "power = 0.8\nradius = 0.05\nsoft_falloff = false")).lamp
+    assert (point.radius, point.soft_falloff) == (0.05, False)
+    sun = config.parse(SMALL.replace("position = [0.0, 0.0, 0.6]\npower = 0.8",
+                                     'type = "sun"\ndirection = [0, 0, -1]\nstrength = 3.0\nangle = 10')).lamp
+    assert sun.angle == pytest.approx(math.radians(10))
+    area = config.parse(SMALL.replace("power = 0.8", 'power = 0.8\ntype = "area"\ndirection = [0, 0, -1]\n'
+                                      'shape = "rectangle"\nsize = 0.4\nsize_y = 0.2\nspread = 90')).lamp
+    # Blender's lamp frame: x cross y is the lamp's +Z, the way it does not face
+    np.testing.assert_allclose([area.axis_x, area.axis_y], [[0.2, 0, 0], [0, 0.1, 0]], atol=1e-12)
+    assert (area.shape, area.area, area.spread) == ("RECTANGLE", pytest.approx(0.08), pytest.approx(math.pi / 2))
+    disk = config.parse(SMALL.replace("power = 0.8", 'power = 0.8\ntype = "area"\ndirection = [0, 1, 0]\n'
+                                      'shape = "disk"\nsize = 0.4\nsize_y = 0.1')).lamp
+    assert (disk.shape, disk.area) == ("ELLIPSE", pytest.approx(math.pi * 0.04))
+    with pytest.raises(config.ConfigError, match=r"lamp\.up must not be parallel to lamp\.direction"):
+        config.parse(SMALL.replace("power = 0.8", 'power = 0.8\ntype = "area"\ndirection = [0, 0, -1]\n'
+                                   "up = [0, 0, 2]"))
+    with pytest.raises(config.ConfigError, match=r"lamp\.soft_falloff must be true or false \(got 1\)"):
+        config.parse(SMALL.replace("power = 0.8", "power = 0.8\nsoft_falloff = 1"))
+    with pytest.raises(config.ConfigError, match=r"unknown key lamp\.angle \(the keys of a point lamp"):
+        config.parse(SMALL.replace("power = 0.8", "power = 0.8\nangle = 1"))
+
+
 # --- OBJ -----------------------------------------------------------------------------------------------------
 
 SQUARE = "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 3\n"

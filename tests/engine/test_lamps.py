@@ -10,7 +10,9 @@ import pytest
 
 from caustic_addon import (AreaLight, Dielectric, Diffuse, Object, PointLight, RenderSettings, Scene, SpotLight,
                            SunLight, World, render, shapes)
+from caustic_addon.emission.environment import Environment, uv_to_directions
 from caustic_addon.emission.lamp_samples import sample_lamp
+from caustic_addon.sampling.sequences import r2_sequence
 from scenes import floor_points, top_camera
 
 HEIGHT = 2.0
@@ -18,7 +20,7 @@ POWER = 400.0
 
 
 def floor_scene(lamp, half_width=1.0, pixels=32, objects=(), world=None, camera_height=20.0, floor=40.0) -> Scene:
-    return Scene([Object("Floor", shapes.plane(floor), Diffuse(albedo=1.0)), *objects], [lamp],
+    return Scene([Object("Floor", shapes.plane(floor), Diffuse(albedo=1.0)), *objects], [lamp] if lamp else [],
                  top_camera(half_width, pixels, camera_height), world=world or World())
 
 
@@ -155,6 +157,63 @@ def test_the_world_is_seen_where_eye_rays_leave_and_occluded_under_a_roof():
     assert result.passes["ambient"][..., 0].mean() == pytest.approx(1.0 - math.sin(math.atan(w / z)), abs=0.01)
     sky = render(Scene([], [], top_camera(0.5, 4), world=World(0.25)), RenderSettings(spp=1))
     np.testing.assert_allclose(sky.image[..., :3].ravel(), 0.25)
+
+
+def sun_in_the_sky(rows=slice(20, 23), cols=slice(127, 130), radiance=1000.0):
+    """(image (128, 256, 3), to_sky (3,), irradiance W/m^2, solid angle sr)
+    of a sky that is black but for a patch of pixels."""
+    h, w = 128, 256
+    image = np.zeros((h, w, 3))
+    image[rows, cols] = radiance
+    theta = (np.arange(h) + 0.5) / h * math.pi
+    solid_angle = (2 * math.pi / w) * (math.pi / h) * np.sin(theta[rows]).sum() * (cols.stop - cols.start)
+    centre = np.array([[0.5 * (cols.start + cols.stop) / w, 0.5 * (rows.start + rows.stop) / h]])
+    return image, uv_to_directions(centre)[0], radiance * solid_angle, solid_angle
+
+
+def test_an_environment_is_sampled_wherever_its_lookup_gives_light():
+    """The estimate sum L(w) / p(w) / n of the world's light through a unit
+    area is its integral, which needs p > 0 wherever the bilinear lookup
+    spreads a pixel. (A density drawn from the pixels themselves left out
+    the half-pixel rim: 16% of a 3 x 3 pixel sun.)"""
+    image, _, irradiance, _ = sun_in_the_sky()
+    environment = Environment(World(1.0, image))
+    dirs, density = environment.sample(r2_sequence(np.arange(200_000), np.zeros(2)))
+    estimate = (environment.radiance(dirs)[:, 0] / density).mean()
+    assert estimate == pytest.approx(irradiance, rel=0.01)
+    np.testing.assert_allclose(environment.density(dirs), density, rtol=1e-9)
+
+
+def test_the_worlds_light_through_index_matched_glass_is_the_light_the_glass_hides():
+    """Under a uniform world of radiance L, a white floor has radiance L
+    everywhere: where glass of index 1 hides part of the sky from the eye
+    pass's occlusion rays, the world's photons through it make up the rest."""
+    ball = Object("Ball", shapes.uv_sphere(0.3, (0, 0, 0.8), 64, 32), Dielectric(1.0))
+    scene = floor_scene(None, 0.1, 8, [ball], world=World(1.0), floor=2.0)
+    result = render(scene, RenderSettings(spp=1, lamp_rays=2_000_000, world_samples=256))
+    assert result.passes["caustic"][..., 0].mean() > 0.1
+    total = (result.passes["ambient"] + result.passes["caustic"])[..., 0]
+    assert total.mean() == pytest.approx(1.0, abs=0.01)
+    assert np.abs(total - 1.0).max() < 0.06
+
+
+@pytest.mark.parametrize("density", ["beam", "adaptive"])
+def test_a_sun_in_an_hdri_throws_the_caustic_of_a_sun_lamp(density):
+    """A 3 x 3 pixel patch of a black sky, 30 degrees from the zenith, and
+    a sun lamp from its centre of the same irradiance and solid angle throw
+    the same caustic through a glass ball: the same flux, and the same
+    picture but for the patch's shape."""
+    image, to_sky, irradiance, solid_angle = sun_in_the_sky()
+    centre = np.array([0.0, 0.0, 0.8]) + 0.8 / to_sky[2] * to_sky
+    ball = Object("Ball", shapes.uv_sphere(0.3, (centre[0], centre[1], 0.8), 64, 32), Dielectric(1.5))
+    sun = SunLight(-to_sky, irradiance, angle=2 * math.acos(1 - solid_angle / (2 * math.pi)))
+    settings = RenderSettings(spp=1, lamp_rays=400_000, density=density)
+    from_sky = render(floor_scene(None, 0.5, 48, [ball], world=World(1.0, image), floor=4.0),
+                      settings).passes["caustic"][..., 0]
+    from_sun = render(floor_scene(sun, 0.5, 48, [ball], floor=4.0),
+                      settings).passes["caustic"][..., 0]
+    assert from_sky.sum() == pytest.approx(from_sun.sum(), rel=0.02)
+    assert np.abs(from_sky - from_sun).sum() < 0.1 * from_sun.sum()
 
 
 SIZED = [AreaLight((0, 0, HEIGHT), (0.3, 0, 0), (0, 0.3, 0), (0, 0, -1), POWER),

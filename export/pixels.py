@@ -1,0 +1,39 @@
+"""Pixels of Blender images as numpy arrays, row 0 at the TOP (Blender
+stores rows bottom to top)."""
+
+import bpy
+import numpy as np
+
+# Colour spaces whose byte values are linear already
+LINEAR_SPACES = ("Non-Color", "Linear Rec.709", "Linear", "Raw")
+
+
+def image_pixels(image) -> np.ndarray:
+    """(h, w, channels) float32 of `image` as Blender holds it."""
+    w, h = image.size
+    pixels = np.empty(w * h * image.channels, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    return pixels.reshape(h, w, image.channels)[::-1]
+
+
+def linear_rgb(image) -> np.ndarray:
+    """(h, w, 3) float64 linear RGB of `image`: float images are linear
+    already; byte images are decoded from sRGB (IEC 61966-2-1) unless their
+    colour space says they are linear or data."""
+    rgb = image_pixels(image)[..., :3].astype(np.float64)
+    if not image.is_float and image.colorspace_settings.name not in LINEAR_SPACES:
+        rgb = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+    return rgb
+
+
+def can_read(image) -> bool:
+    """Whether `image` has pixels, loading them from its file or its packed
+    data if they are not in memory yet."""
+    if image.has_data:
+        return True
+    try:
+        image.pixels[0]
+    except (RuntimeError, IndexError):
+        return False
+    return image.has_data
+
