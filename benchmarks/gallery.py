@@ -2,7 +2,7 @@
 settings (40,000 lamp rays as beams, 4 samples per pixel), each written to
 docs/gallery/<name>.png with its render time in docs/gallery/gallery.json.
 
-    .venv/bin/python examples/gallery.py
+    .venv/bin/python benchmarks/gallery.py
 
 - ball_lens: a glass ball (n = 1.5) under a point lamp focuses its light
   into a bright disc ringed by the fold of the caustic.
@@ -18,20 +18,20 @@ from __future__ import annotations
 
 import json
 import math
-import platform
 import sys
 import time
 from datetime import date
 from pathlib import Path
 
-import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from caustic_addon import (Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector, RenderSettings,  # noqa: E402
                            Scene, SunLight, World, render, shapes)
 from caustic_addon.cli.image_io import write_image  # noqa: E402
+from speed import machine  # noqa: E402
 
 OUT = REPO / "docs" / "gallery"
 PIXELS = (480, 360)
@@ -101,8 +101,7 @@ def main() -> None:
                            triangles=result.stats["triangles"], warnings=result.warnings)
         print(f"{name:16s} {seconds:5.2f} s  {result.stats['lamp_rays']:,} lamp rays", flush=True)
     (OUT / "gallery.json").write_text(json.dumps(dict(
-        date=date.today().isoformat(), machine=f"{platform.processor() or platform.machine()}, Python "
-                                               f"{platform.python_version()}",
+        date=date.today().isoformat(), machine=machine(),
         pixels=list(PIXELS), spp=settings.spp, renders=times), indent=2) + "\n")
 
 
