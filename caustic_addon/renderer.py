@@ -15,7 +15,7 @@ from .maps.illumination_map import IlluminationMap
 from .maps.receivers import build_maps
 from .passes.beam import beam_pass
 from .passes.eye import PASSES, eye_pass
-from .passes.lamp_pass import LampPassStats
+from .passes.lamp_pass import LampPassStats, lamps_in_glass
 from .passes.photon import photon_pass
 from .scene import RenderSettings, Scene
 from .scene.material_table import Materials
@@ -31,7 +31,7 @@ _LAMP_SHARE = 0.6
 class RenderResult:
     """image     (pixy, pixx, 4) float32 linear RGBA, row 0 at the top
     passes    name -> (pixy, pixx, 3) float32: 'direct' (lamps), 'caustic'
-              (illumination maps), 'ambient' (ambient term and background);
+              (illumination maps), 'ambient' (ambient term and the world);
               they sum to the image's RGB
     maps      receiver name -> IlluminationMap
     stats     counts and seconds per stage
@@ -60,7 +60,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
     clock = time.perf_counter()
     accel = Accelerator(scene.objects, scene.extent(), settings.threads)
     try:
-        warnings += accel.warnings
+        warnings += accel.warnings + lamps_in_glass(scene, accel)
         materials = Materials.of(scene.objects, settings.bands)
         seconds["bvh"] = time.perf_counter() - clock
 

@@ -1,7 +1,6 @@
 """Pixels of Blender images as numpy arrays, row 0 at the TOP (Blender
 stores rows bottom to top)."""
 
-import bpy
 import numpy as np
 
 # Colour spaces whose byte values are linear already

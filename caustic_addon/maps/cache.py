@@ -1,5 +1,5 @@
 """Illumination maps kept between renders: moving the camera, or changing
-only the eye pass (samples, ambient, background), must not re-run the pass
+only the eye pass (samples, ambient), must not re-run the pass
 from the lamps. Maps are found by a hash of everything that pass reads."""
 
 from __future__ import annotations

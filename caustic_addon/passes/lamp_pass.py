@@ -9,7 +9,7 @@ from typing import Callable
 import numpy as np
 
 from ..maps.deposits import Deposits
-from ..scene import Light, SunLight
+from ..scene import Light, Scene, SunLight
 from ..tracing.accelerator import Accelerator
 from ..tracing.hits import MISS
 
@@ -58,3 +58,15 @@ def lamp_medium(accel: Accelerator, light: Light) -> int:
     if isinstance(light, SunLight):
         return MISS
     return int(accel.medium_at(light.position[None])[0])
+
+
+def lamps_in_glass(scene: Scene, accel: Accelerator) -> list[str]:
+    """A warning for each lamp inside closed glass, which lights what is
+    outside only through the glass: shadow rays stop at glass."""
+    warnings = []
+    for light in scene.lights:
+        medium = lamp_medium(accel, light)
+        if medium != MISS and scene.objects[medium].is_transparent:
+            warnings.append(f"lamp '{light.name}' is inside '{scene.objects[medium].name}': what is outside "
+                            "gets its light only through the glass, as caustics")
+    return warnings

@@ -1,8 +1,10 @@
 """Inputs the add-on cannot render: each operator refuses with a message
-naming the problem and leaves every datablock of the file as it was."""
+naming the problem and leaves every datablock of the file as it was; and
+odd inputs it renders with a warning that names them."""
 
 import bmesh
 import bpy
+import numpy as np
 import pytest
 
 import blender_scenes as scenes
@@ -99,3 +101,42 @@ def test_open_glass_mesh_renders_with_a_warning(reports):
     assert caustic_after == caustic_before
     before["scenes"]["Scene"].pop("caustic"), after["scenes"]["Scene"].pop("caustic")
     assert after["scenes"] == before["scenes"]
+
+
+def a_lamp_of_power_0(parts):
+    parts["lamp"].data.energy = 0.0
+    scenes.add_point_light((1.0, 0.0, 3.0), 200.0, name="Key")
+
+
+def an_area_lamp_with_spread_0(parts):
+    parts["lamp"].data.type = 'AREA'
+    parts["lamp"].data.size, parts["lamp"].data.spread = 0.5, 0.0
+
+
+def a_lamp_larger_than_the_scene(parts):
+    parts["lamp"].data.shadow_soft_size = 100.0
+
+
+def a_lamp_inside_the_glass(parts):
+    parts["lamp"].location = parts["ball"].location
+
+
+WARNED = [
+    (a_lamp_of_power_0, "lamp 'Lamp' gives no light (power 0 or black): it was left out"),
+    (an_area_lamp_with_spread_0, "lamp 'Lamp' has a spread of 0, a parallel beam: it lights the scene but casts "
+                                 "no caustics"),
+    (a_lamp_larger_than_the_scene, "lamp 'Lamp' is larger than the scene"),
+    (a_lamp_inside_the_glass, "lamp 'Lamp' is inside 'Ball': what is outside gets its light only through the "
+                              "glass, as caustics"),
+]
+
+
+@pytest.mark.parametrize("spoil, message", WARNED, ids=[case[0].__name__ for case in WARNED])
+def test_odd_lamps_render_with_a_warning_that_names_them(spoil, message, reports):
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=2000, segments=16, rings=8)
+    spoil(parts)
+    bpy.context.view_layer.update()
+    reports()
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    assert message in reports()
+    assert np.isfinite(scenes.pixels_of("Caustic Render")).all()
