@@ -12,6 +12,11 @@ docs/gallery/<name>.png with its render time in docs/gallery/gallery.json.
   on a pool's floor.
 - dispersive_gem: a facetted gem of strongly dispersive glass (n = 2.0,
   Abbe number 20): each facet throws a beam that the spectrum fans out.
+- softbox: the glass ball under a studio's square area lamp, 1.5 m across:
+  a soft caustic in a soft shadow.
+- sunny_sky: the glass ball under a sky with a sun in it, the world's light
+  alone: a blue sky lights the floor and fills the shadow, and the sun's
+  caustic comes through the glass.
 """
 
 from __future__ import annotations
@@ -28,8 +33,11 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from caustic_addon import (Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector, RenderSettings,  # noqa: E402
-                           Scene, SunLight, World, render, shapes)
+import numpy as np  # noqa: E402
+
+from caustic_addon import (AreaLight, Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector,  # noqa: E402
+                           RenderSettings, Scene, SunLight, World, render, shapes)
+from caustic_addon.emission.environment import uv_to_directions  # noqa: E402
 from caustic_addon.cli.image_io import write_image  # noqa: E402
 from speed import machine  # noqa: E402
 
@@ -82,9 +90,44 @@ def dispersive_gem() -> Scene:
         world=World(0.05))
 
 
+def softbox() -> Scene:
+    scene = ball_lens()
+    tilt = math.radians(20.0)
+    scene.lights = [AreaLight((0.0, -1.0, 5.0), (0.75, 0.0, 0.0), (0.0, 0.75 * math.cos(tilt), 0.75 * math.sin(tilt)),
+                              (0.0, math.sin(tilt), -math.cos(tilt)), 3000.0)]
+    return scene
+
+
+def sky_with_sun(width: int = 1024, elevation: float = 40.0, azimuth: float = 120.0) -> np.ndarray:
+    """(h, w, 3) a lat-long sky, W/(m^2 sr): blue overhead and white at the
+    horizon, a dim ground, and a sun 0.6 degrees across at `elevation` and
+    `azimuth` (degrees from +X toward +Y) giving 300 W/m^2, six times the
+    sky's."""
+    h = width // 2
+    v, u = np.meshgrid((np.arange(h) + 0.5) / h, (np.arange(width) + 0.5) / width, indexing="ij")
+    dirs = uv_to_directions(np.stack([u.ravel(), v.ravel()], axis=1)).reshape(h, width, 3)
+    up = np.clip(dirs[..., 2], 0.0, 1.0)[..., None]
+    sky = 16.0 * np.where(dirs[..., 2:] > 0.0,
+                          (1.0 - up) * np.array([0.9, 0.95, 1.0]) + up * np.array([0.25, 0.45, 1.0]),
+                          np.array([0.05, 0.045, 0.04]))
+    e, a = math.radians(elevation), math.radians(azimuth)
+    sun = np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)])
+    half = math.radians(0.3)
+    inside = dirs @ sun > math.cos(half)
+    sky[inside] = 300.0 / (2.0 * math.pi * (1.0 - math.cos(half)))
+    return sky
+
+
+def sunny_sky() -> Scene:
+    scene = ball_lens()
+    scene.lights = []
+    scene.world = World(1.0, sky_with_sun())
+    return scene
+
+
 # name -> (scene, exposure of its PNG in stops)
 SCENES = {"ball_lens": (ball_lens, -1.0), "mirror_ring": (mirror_ring, -1.0), "wavy_water": (wavy_water, -1.5),
-          "dispersive_gem": (dispersive_gem, -1.2)}
+          "dispersive_gem": (dispersive_gem, -1.2), "softbox": (softbox, -3.5), "sunny_sky": (sunny_sky, -6.5)}
 
 
 def main() -> None:

@@ -60,7 +60,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
     clock = time.perf_counter()
     accel = Accelerator(scene.objects, scene.extent(), settings.threads)
     try:
-        warnings += accel.warnings + lamps_in_glass(scene, accel)
+        warnings += accel.warnings
         materials = Materials.of(scene.objects, settings.bands)
         seconds["bvh"] = time.perf_counter() - clock
 
@@ -68,6 +68,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         key = lamp_pass_key(scene, settings) if cache is not None else None
         cached = cache.get(key) if cache is not None else None
         if cached is None:
+            warnings += lamps_in_glass(scene, accel)
             maps = build_maps(scene, settings, warnings)
             run_lamps = bool(maps) and bool(scene.casters) and settings.lamp_rays > 0
             share = _LAMP_SHARE if run_lamps else 0.0

@@ -5,6 +5,13 @@ ImageInfiniteLight, Cycles' background map), with their solid-angle
 density, so the eye pass and the photon pass can importance-sample a bright
 sky or a sun in an HDRI.
 
+What the camera sees is the image looked up bilinearly, as Cycles' Linear
+interpolation; what lights the scene is each pixel's own value
+(`Environment.light`), as pbrt-v4's ImageLe does, so that a sample's
+radiance over its density is the same everywhere in a pixel: a sun a few
+pixels wide, looked up bilinearly under a density constant per pixel,
+would make every sample of it a different weight, and the floor grainy.
+
 The mapping is Cycles' equirectangular one (`direction_to_equirectangular`):
 u = 0.5 - atan2(y, x) / (2 pi), v = acos(z) / pi from the top row, so +Z is
 row 0 and +X the image's middle column."""
@@ -34,31 +41,23 @@ def uv_to_directions(uv: np.ndarray) -> np.ndarray:
     return np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), np.cos(theta)], axis=1)
 
 
-def pixel_means(image: np.ndarray) -> np.ndarray:
-    """(h, w, 3) the mean of the bilinear lookup over each pixel of `image
-    (h, w, 3)`: the integral of the tent between neighbours over a pixel,
-    1/8, 3/4, 1/8 along each axis, wrapping across u and clamped at the
-    poles as `Environment.radiance` is."""
-    wide = np.concatenate([image[:, -1:], image, image[:, :1]], axis=1)
-    across = 0.125 * wide[:, :-2] + 0.75 * wide[:, 1:-1] + 0.125 * wide[:, 2:]
-    tall = np.concatenate([across[:1], across, across[-1:]], axis=0)
-    return 0.125 * tall[:-2] + 0.75 * tall[1:-1] + 0.125 * tall[2:]
+def _pixels(dirs: np.ndarray, h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
+    """(row (n,), col (n,)) of the pixel of an h x w lat-long image each of `dirs (n,3)` falls in."""
+    uv = directions_to_uv(dirs)
+    return (np.clip((uv[:, 1] * h).astype(np.int64), 0, h - 1), np.clip((uv[:, 0] * w).astype(np.int64), 0, w - 1))
 
 
-def _luminance(rgb: np.ndarray) -> np.ndarray:
+def luminance(rgb: np.ndarray) -> np.ndarray:
+    """(...) Rec.709 luminance of linear `rgb (..., 3)`."""
     return 0.2126 * rgb[..., 0] + 0.7152 * rgb[..., 1] + 0.0722 * rgb[..., 2]
 
 
 class Environment:
     """A world, ready to evaluate and sample.
 
-    A plain colour is sampled uniformly over the sphere; an image by the
-    luminance its bilinear lookup averages over each pixel (`pixel_means`)
-    times sin(theta) (the pixel's solid angle), with a density of p_pixel w
-    h / (2 pi^2 sin(theta)) per steradian. The mean, not the pixel's own
-    value, because the lookup spreads a pixel half a pixel into its
-    neighbours: a density that left those out would never draw a sixth of
-    a 3 x 3 pixel sun."""
+    A plain colour is sampled uniformly over the sphere; an image by its
+    pixels' luminance times sin(theta) (each pixel's solid angle), with a
+    density of p_pixel w h / (2 pi^2 sin(theta)) per steradian."""
 
     def __init__(self, world: World):
         self.world = world
@@ -68,7 +67,7 @@ class Environment:
             return
         h, w = image.shape[:2]
         theta = (np.arange(h) + 0.5) / h * math.pi
-        weight = np.maximum(_luminance(pixel_means(image) * world.color), 0.0) * np.sin(theta)[:, None]
+        weight = np.maximum(luminance(image * world.color), 0.0) * np.sin(theta)[:, None]
         if not weight.sum() > 0:
             weight = np.sin(theta)[:, None] * np.ones((1, w))
         rows = weight.sum(axis=1)
@@ -79,9 +78,19 @@ class Environment:
         # every row's column CDF, offset by its row number: one sorted array to search
         self._stacked_cdf = (self.cdf_cols + np.arange(h)[:, None]).ravel()
 
+    def light(self, dirs: np.ndarray) -> np.ndarray:
+        """(n,3) W/(m^2 sr) that lights the scene from `dirs (n,3)`: the
+        pixel each falls in, times the world's colour."""
+        image = self.world.environment
+        if image is None:
+            return np.broadcast_to(self.world.color, (len(dirs), 3)).copy()
+        row, col = _pixels(dirs, *image.shape[:2])
+        return image[row, col] * self.world.color
+
     def radiance(self, dirs: np.ndarray) -> np.ndarray:
-        """(n,3) W/(m^2 sr) arriving from `dirs (n,3)`: the image looked up
-        bilinearly (Cycles' Linear interpolation), times the world's colour."""
+        """(n,3) W/(m^2 sr) the eye sees toward `dirs (n,3)`: the image
+        looked up bilinearly (Cycles' Linear interpolation), times the
+        world's colour."""
         image = self.world.environment
         if image is None:
             return np.broadcast_to(self.world.color, (len(dirs), 3)).copy()
@@ -131,9 +140,7 @@ class Environment:
         if self.cdf_rows is None:
             return np.full(len(dirs), 1.0 / (4.0 * math.pi))
         h, w = self.col_pdf.shape
-        uv = directions_to_uv(dirs)
-        row = np.clip((uv[:, 1] * h).astype(np.int64), 0, h - 1)
-        col = np.clip((uv[:, 0] * w).astype(np.int64), 0, w - 1)
+        row, col = _pixels(dirs, h, w)
         sin_t = np.sqrt(np.maximum(0.0, 1.0 - dirs[:, 2] ** 2))
         pixel = self.row_pdf[row] * self.col_pdf[row, col]
         return pixel * w * h / (2.0 * math.pi ** 2 * np.maximum(sin_t, DIVISION_FLOOR))

@@ -158,7 +158,7 @@ class WorldEmitter(Emitter):
             perp = rel - np.einsum("ij,ij->i", rel, toward_sky)[:, None] * toward_sky
             crossing += rate * (np.einsum("ij,ij->i", perp, perp) <= radius ** 2 * (1.0 + 1e-12))
         with np.errstate(divide="ignore", invalid="ignore"):
-            flux = self.environment.radiance(toward_sky) / (pdf * crossing)[:, None]
+            flux = self.environment.light(toward_sky) / (pdf * crossing)[:, None]
         flux = np.where(np.isfinite(flux), flux, 0.0)
         return _kept(origins, -toward_sky, flux, ids)
 

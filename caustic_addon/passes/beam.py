@@ -36,6 +36,7 @@ from ..emission.aims import casters_and_bounds
 from ..emission.beam_sources import BeamSource, beam_sources
 from ..emission.lamp_points import beam_lamps
 from ..emission.photons import make_emitters
+from ..emission.world_sun import extract_sun
 from ..maps.deposits import Deposits
 from ..maps.illumination_map import IlluminationMap
 from ..maps.raster import signed_areas
@@ -387,11 +388,14 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
     count = materials.band_count
     targets, scene_sphere = casters_and_bounds(scene)
     receivers = np.concatenate([o.mesh.vertices for o in scene.receivers])
-    # the world's light comes as photons, its share of the lamp rays by its flux
-    emitters = [e for e in make_emitters(scene.lights, scene.world, targets, scene_sphere, "targeted",
-                                         settings.energy, settings.lamp_rays, settings.seed) if e.light is None]
+    # the world's sun comes as beams, the rest of its light as photons, its
+    # share of the lamp rays by its flux
+    sun, world = extract_sun(scene.world)
+    lights = scene.lights + ([sun] if sun is not None else [])
+    emitters = [e for e in make_emitters(lights, world, targets, scene_sphere, "targeted", settings.energy,
+                                         settings.lamp_rays, settings.seed) if e.light is None]
     from_world = sum(e.count for e in emitters)
-    lamps = beam_lamps(scene.lights, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
+    lamps = beam_lamps(lights, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
                        min(imap.cell for imap in maps.values()), (settings.lamp_rays - from_world) // count)
     sources = beam_sources(lamps, targets, scene_sphere, settings.energy, (settings.lamp_rays - from_world) // count)
     stacks: dict[tuple[int, int], list[BeamSource]] = {}

@@ -107,5 +107,5 @@ def world_irradiance(accel: Accelerator, environment: Environment, points: np.nd
             seen = ~accel.occluded(accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), toward),
                                    toward, np.full(len(idx), far))
             idx, toward = idx[seen], toward[seen]
-            out[idx] += (environment.radiance(toward) * (cos[idx] / (density[idx] * samples))[:, None])
+            out[idx] += (environment.light(toward) * (cos[idx] / (density[idx] * samples))[:, None])
     return out

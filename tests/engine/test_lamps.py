@@ -12,6 +12,7 @@ from caustic_addon import (AreaLight, Dielectric, Diffuse, Object, PointLight, R
                            SunLight, World, render, shapes)
 from caustic_addon.emission.environment import Environment, uv_to_directions
 from caustic_addon.emission.lamp_samples import sample_lamp
+from caustic_addon.emission.world_sun import extract_sun
 from caustic_addon.sampling.sequences import r2_sequence
 from scenes import floor_points, top_camera
 
@@ -171,17 +172,37 @@ def sun_in_the_sky(rows=slice(20, 23), cols=slice(127, 130), radiance=1000.0):
     return image, uv_to_directions(centre)[0], radiance * solid_angle, solid_angle
 
 
-def test_an_environment_is_sampled_wherever_its_lookup_gives_light():
-    """The estimate sum L(w) / p(w) / n of the world's light through a unit
-    area is its integral, which needs p > 0 wherever the bilinear lookup
-    spreads a pixel. (A density drawn from the pixels themselves left out
-    the half-pixel rim: 16% of a 3 x 3 pixel sun.)"""
+def test_an_environment_samples_its_light_in_proportion_to_it():
+    """The estimate sum L(w) / p(w) / n of the world's light is its
+    integral, and each sample of a uniform pixel carries the same weight
+    but for sin(theta) within the pixel: the light is the pixel's own
+    value, as the density is. (With the bilinear lookup the camera sees,
+    the density missed the half-pixel rim, 16% of a 3 x 3 pixel sun, and
+    each sample of the sun weighed differently: a grainy floor.)"""
     image, _, irradiance, _ = sun_in_the_sky()
     environment = Environment(World(1.0, image))
     dirs, density = environment.sample(r2_sequence(np.arange(200_000), np.zeros(2)))
-    estimate = (environment.radiance(dirs)[:, 0] / density).mean()
-    assert estimate == pytest.approx(irradiance, rel=0.01)
+    weight = environment.light(dirs)[:, 0] / density
+    assert weight.mean() == pytest.approx(irradiance, rel=1e-3)
+    on_sun = weight > 0
+    assert on_sun.mean() == 1.0
+    # sin(theta) spans cot(theta) d(theta) = 4% across a pixel row 30 degrees from the zenith
+    assert weight.std() / weight.mean() < 0.02
     np.testing.assert_allclose(environment.density(dirs), density, rtol=1e-9)
+
+
+def test_an_hdris_sun_is_taken_out_as_a_sun_lamp_and_an_overcast_sky_is_not():
+    image, to_sky, irradiance, solid_angle = sun_in_the_sky()
+    image += 0.5
+    sun, rest = extract_sun(World(2.0, image))
+    assert sun.strength == pytest.approx(2.0 * (irradiance + 0.5 * solid_angle))
+    assert sun.angle == pytest.approx(2 * math.acos(1 - solid_angle / (2 * math.pi)))
+    assert math.degrees(math.acos(-sun.direction @ to_sky)) < 0.05
+    assert rest.environment.max() == 0.5 and (rest.environment == 0).sum() == 27
+    overcast = np.full((64, 128, 3), 1.0)
+    overcast[20, 60] = 20.0
+    assert extract_sun(World(1.0, overcast))[0] is None
+    assert extract_sun(World(1.0))[0] is None
 
 
 def test_the_worlds_light_through_index_matched_glass_is_the_light_the_glass_hides():
@@ -202,7 +223,7 @@ def test_a_sun_in_an_hdri_throws_the_caustic_of_a_sun_lamp(density):
     """A 3 x 3 pixel patch of a black sky, 30 degrees from the zenith, and
     a sun lamp from its centre of the same irradiance and solid angle throw
     the same caustic through a glass ball: the same flux, and the same
-    picture but for the patch's shape."""
+    picture but for the patch's shape and, with photons, their noise."""
     image, to_sky, irradiance, solid_angle = sun_in_the_sky()
     centre = np.array([0.0, 0.0, 0.8]) + 0.8 / to_sky[2] * to_sky
     ball = Object("Ball", shapes.uv_sphere(0.3, (centre[0], centre[1], 0.8), 64, 32), Dielectric(1.5))
@@ -213,7 +234,8 @@ def test_a_sun_in_an_hdri_throws_the_caustic_of_a_sun_lamp(density):
     from_sun = render(floor_scene(sun, 0.5, 48, [ball], floor=4.0),
                       settings).passes["caustic"][..., 0]
     assert from_sky.sum() == pytest.approx(from_sun.sum(), rel=0.02)
-    assert np.abs(from_sky - from_sun).sum() < 0.1 * from_sun.sum()
+    # beams take the sky's sun as a sun lamp: the same caustic, without the photons' noise
+    assert np.abs(from_sky - from_sun).sum() < (0.01 if density == "beam" else 0.1) * from_sun.sum()
 
 
 SIZED = [AreaLight((0, 0, HEIGHT), (0.3, 0, 0), (0, 0.3, 0), (0, 0, -1), POWER),
