@@ -121,7 +121,7 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
         dirs, crossed = scatter(surface, paths.dirs, np.full(len(paths), mirror))
         share = surface.fresnel if mirror else np.where(crossed, 1.0 - surface.fresnel, 0.0)
         weight = paths.weight * tint * share[:, None]
-        family = None if paths.family is None else _next_family(paths.family, hits.obj, event)
+        family = None if paths.family is None else _next_family(paths.family, accel.surface[hits.obj], event)
         kind = None if paths.kind is None else np.where(crossed, REFRACTED, REFLECTED).astype(np.int8)
         branch = Paths(accel.offset(surface.points, surface.facing, dirs), dirs, weight,
                        crossed_medium(surface, crossed, hits.obj, paths.medium), paths.ids, paths.floor,
@@ -131,10 +131,11 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
     return Paths.concat(branches)
 
 
-def _next_family(family: np.ndarray, obj: np.ndarray, event: int) -> np.ndarray:
-    """(n,) uint64 signatures of paths that add (object, event) to `family`."""
+def _next_family(family: np.ndarray, surface: np.ndarray, event: int) -> np.ndarray:
+    """(n,) uint64 signatures of paths that add (surface, event) to
+    `family`: the parts of one body with one material are one surface."""
     with np.errstate(over="ignore"):
-        return (family * _FAMILY_PRIME) ^ (obj.astype(np.uint64) * np.uint64(4) + np.uint64(event + 1))
+        return (family * _FAMILY_PRIME) ^ (surface.astype(np.uint64) * np.uint64(4) + np.uint64(event + 1))
 
 
 class Tracer(Protocol):

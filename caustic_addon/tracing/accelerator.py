@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import threading
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import fields
 
 import numpy as np
 from embreex import rtcore_scene
@@ -39,6 +40,10 @@ CAMERA, REFLECTED, REFRACTED, SHADOW = 0, 1, 2, 3
 _VISIBILITY_FLAGS = ("camera", "glossy", "transmission", "shadow")
 
 
+def _same_material(a, b) -> bool:
+    return type(a) is type(b) and all(np.array_equal(getattr(a, f.name), getattr(b, f.name)) for f in fields(a))
+
+
 class _View:
     """The objects one kind of ray sees, in an Embree scene of their own:
     `objects (k,)` maps its geometry ids to object indices; `embree` is None
@@ -52,7 +57,9 @@ class Accelerator:
     """The scene's triangles in one Embree BVH, with per-triangle shading data.
 
     body (m,) int64 per object: the index of the first object of its body
-    (scene.Object.body); closed (m,) bool: a dielectric whose body has no
+    (scene.Object.body); surface (m,) int64: the first object of its body
+    with an equal material, what paths crossing from one to the other
+    cannot tell apart; closed (m,) bool: a dielectric whose body has no
     holes, so that a ray's own state can track its inside.
 
     Per global triangle index (all objects' triangles, in object order):
@@ -79,6 +86,9 @@ class Accelerator:
 
         first: dict[str, int] = {}
         self.body = np.array([first.setdefault(o.body_name, i) for i, o in enumerate(objects)], dtype=np.int64)
+        self.surface = np.array([next(j for j in range(i + 1) if self.body[j] == self.body[i]
+                                      and _same_material(objects[j].material, o.material))
+                                 for i, o in enumerate(objects)], dtype=np.int64)
         self.closed = np.zeros(len(objects), dtype=bool)
         sign = np.ones(len(objects))
         for body in np.unique(self.body):
