@@ -119,4 +119,8 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
         objects.append((Object(part, world.subset(rows) if several else world,
                                engine_material(surfaces[key], ob.original.caustic), visibility,
                                body=name if several else None), key))
+    if not ob.visible_diffuse and any(obj.is_caster for obj, _ in objects):
+        warnings.append(f"'{name}': its Diffuse ray visibility is off, which hides it from Cycles' diffuse "
+                        "bounces and the caustics they find through it; the caustic render's light goes from the "
+                        "lamps, so it still casts its caustic")
     return objects

@@ -16,6 +16,7 @@ named in a warning."""
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from typing import Callable, TypeVar
 
 import bpy
@@ -44,27 +45,36 @@ class CAUSTIC_RE_scene_reader(bpy.types.RenderEngine):
             type(self).outcome.append(('error', exc))
 
 
-def _render_result_slot(overrides: Overrides):
-    """Point the Render Result at a slot kept for scene reads, so the
-    earlier render's slot is left alone; None if there is no Render Result."""
+@contextmanager
+def _own_render_slot():
+    """The Render Result, if there is one, pointed at a slot kept for scene
+    reads while the context lasts, so that the earlier render's slot is left
+    alone; without one, the Render Result the read makes is deleted."""
     result = bpy.data.images.get(RENDER_RESULT)
-    if result is None or result.type != 'RENDER_RESULT':
-        return None
+    if result is None:
+        try:
+            yield
+        finally:
+            if RENDER_RESULT in bpy.data.images:
+                bpy.data.images.remove(bpy.data.images[RENDER_RESULT])
+        return
     slots = result.render_slots
+    earlier = slots.active_index
     slot = next((s for s in slots if s.name == READ_SLOT), None) or slots.new(name=READ_SLOT)
-    overrides.set(slots, "active_index", list(slots).index(slot))
-    return result
+    slots.active_index = list(slots).index(slot)
+    try:
+        yield
+    finally:
+        slots.active_index = earlier
 
 
 def read_as_render(scene, view_layer, reader: Callable[[object], T]) -> T:
     """`reader(depsgraph)`'s result, for the render depsgraph of `view_layer`
     of `scene` (which must have a camera). Exceptions it raises come out here."""
-    had_result = RENDER_RESULT in bpy.data.images
     CAUSTIC_RE_scene_reader.reader, CAUSTIC_RE_scene_reader.outcome = reader, []
     bpy.utils.register_class(CAUSTIC_RE_scene_reader)
     try:
-        with Overrides() as overrides:
-            _render_result_slot(overrides)
+        with _own_render_slot(), Overrides() as overrides:
             for name, value in (("engine", ENGINE), ("use_compositing", False), ("use_sequencer", False)):
                 overrides.set(scene.render, name, value)
             try:
@@ -75,8 +85,6 @@ def read_as_render(scene, view_layer, reader: Callable[[object], T]) -> T:
     finally:
         bpy.utils.unregister_class(CAUSTIC_RE_scene_reader)
         CAUSTIC_RE_scene_reader.reader = None
-        if not had_result and RENDER_RESULT in bpy.data.images:
-            bpy.data.images.remove(bpy.data.images[RENDER_RESULT])
     outcome, CAUSTIC_RE_scene_reader.outcome = CAUSTIC_RE_scene_reader.outcome, []
     if not outcome:
         raise InputError(f"Blender rendered nothing of the view layer '{view_layer.name}': is it disabled for "

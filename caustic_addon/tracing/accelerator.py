@@ -41,7 +41,16 @@ _VISIBILITY_FLAGS = ("camera", "glossy", "transmission", "shadow")
 
 
 def _same_material(a, b) -> bool:
-    return type(a) is type(b) and all(np.array_equal(getattr(a, f.name), getattr(b, f.name)) for f in fields(a))
+    """Whether materials `a` and `b` are equal field by field (arrays by
+    value, anything else, such as a texture's nodes, by identity)."""
+
+    def equal(x, y) -> bool:
+        numeric = (np.ndarray, np.generic, float, int)
+        if isinstance(x, numeric) and isinstance(y, numeric):
+            return bool(np.array_equal(x, y))
+        return x is y
+
+    return type(a) is type(b) and all(equal(getattr(a, f.name), getattr(b, f.name)) for f in fields(a))
 
 
 class _View:
@@ -84,15 +93,18 @@ class Accelerator:
         self._count_lock = threading.Lock()
         self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
 
-        first: dict[str, int] = {}
-        self.body = np.array([first.setdefault(o.body_name, i) for i, o in enumerate(objects)], dtype=np.int64)
-        self.surface = np.array([next(j for j in range(i + 1) if self.body[j] == self.body[i]
-                                      and _same_material(objects[j].material, o.material))
-                                 for i, o in enumerate(objects)], dtype=np.int64)
+        bodies: dict[str, list[int]] = {}
+        for index, obj in enumerate(objects):
+            bodies.setdefault(obj.body_name, []).append(index)
+        self.body = np.empty(len(objects), dtype=np.int64)
+        self.surface = np.arange(len(objects), dtype=np.int64)
         self.closed = np.zeros(len(objects), dtype=bool)
         sign = np.ones(len(objects))
-        for body in np.unique(self.body):
-            members = np.flatnonzero(self.body == body)
+        for members in bodies.values():
+            self.body[members] = members[0]
+            for k, index in enumerate(members[1:], 1):
+                self.surface[index] = next(j for j in members[:k + 1]
+                                           if _same_material(objects[j].material, objects[index].material))
             glass = [i for i in members if objects[i].is_transparent]
             if glass:
                 self.closed[glass], sign[glass] = self._body_orientation(members)

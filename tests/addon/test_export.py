@@ -345,3 +345,47 @@ def test_volume_absorption_abbe_and_colour_at_distance(addon, reports):
     np.testing.assert_allclose(np.exp(-names["Gem"].absorption * 0.05), (0.9, 0.6, 0.3), rtol=1e-6)
     np.testing.assert_allclose(names["Smoky"].absorption, 0.0)
     assert any("material 'Smoky': a 'Principled Volume' volume is not understood" in w for w in result.warnings)
+
+
+def test_ray_visibility_and_holdouts_are_read_as_cycles_reads_them(addon):
+    lamp_scene()
+    glass = scenes.glass_material()
+
+    def ball(name, x, collection=None):
+        ob = scenes.add_sphere(0.2, (x, 0.0, 0.5), glass, name=name, segments=8, rings=4)
+        if collection is not None:
+            collection.objects.link(ob)
+            bpy.context.scene.collection.objects.unlink(ob)
+        return ob
+
+    def collection(name):
+        made = bpy.data.collections.new(name)
+        bpy.context.scene.collection.children.link(made)
+        return made, bpy.context.view_layer.layer_collection.children[name]
+
+    shy = ball("Shy", -1.5)
+    shy.visible_camera = shy.visible_shadow = shy.visible_diffuse = False
+    ball("Held", -1.0).is_holdout = True
+    cutouts, cutouts_layer = collection("Cutouts")
+    ball("InHoldout", -0.5, cutouts)
+    cutouts_layer.holdout = True
+    sideline, sideline_layer = collection("Sideline")
+    ball("Aside", 0.0, sideline)
+    sideline_layer.indirect_only = True
+    source, source_layer = collection("Source")
+    ball("Piece", 0.5, source)
+    source_layer.exclude = True
+    instancer = bpy.data.objects.new("Instancer", None)
+    instancer.instance_type, instancer.instance_collection = 'COLLECTION', source
+    instancer.visible_glossy = False
+    bpy.context.scene.collection.objects.link(instancer)
+    result = read(addon)
+    seen = {result.sources[o.name] if o.name in result.instanced else o.name: o.visibility
+            for o in result.scene.objects}
+    Visibility = addon.caustic_addon.Visibility
+    assert seen == {"Floor": Visibility(), "Shy": Visibility(camera=False, shadow=False),
+                    "Held": Visibility(holdout=True), "InHoldout": Visibility(holdout=True),
+                    "Aside": Visibility(camera=False), "Piece": Visibility(glossy=False)}
+    assert ("'Shy': its Diffuse ray visibility is off, which hides it from Cycles' diffuse bounces and the caustics "
+            "they find through it; the caustic render's light goes from the lamps, so it still casts its caustic"
+            ) in result.warnings

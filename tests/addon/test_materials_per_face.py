@@ -100,3 +100,14 @@ def test_glass_with_a_base_of_another_material_is_one_closed_body(addon):
     # Both parts of one glass: the eye rays, the lamp's aims and its beams as through the one mesh.
     for name in ("direct", "ambient", "caustic"):
         assert np.allclose(parts.passes[name], whole.passes[name], rtol=1e-4, atol=1e-6), name
+
+
+@pytest.mark.parametrize("base", ["denser glass", "painted"])
+def test_a_glass_whose_base_is_another_kind_of_material_stays_closed(addon, base):
+    material = (scenes.glass_material("Base", ior=1.8) if base == "denser glass"
+                else scenes.diffuse_material("Base", (0.2, 0.6, 0.2)))
+    tumbler(material)
+    read, parts = passes(addon)
+    assert not any("closed" in w or "leak" in w for w in parts.warnings)
+    assert read.scene.objects[2].is_transparent == (base == "denser glass")
+    assert np.isfinite(parts.image).all() and parts.passes["caustic"].max() > 0.0
