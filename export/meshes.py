@@ -12,6 +12,7 @@ import numpy as np
 
 from ..caustic_addon import Mesh, Object, Visibility
 from .materials import engine_material, read_surface
+from .textures import ObjectFrame, bind
 
 
 @contextmanager
@@ -24,12 +25,13 @@ def evaluated_mesh(ob_eval):
         ob_eval.to_mesh_clear()
 
 
-def _local_mesh(mesh) -> tuple[Optional[Mesh], np.ndarray]:
-    """(Mesh in object space or None if it has no faces, material_index (nt,))."""
+def _local_mesh(mesh) -> tuple[Optional[Mesh], np.ndarray, dict[str, np.ndarray]]:
+    """(Mesh in object space or None if it has no faces, material_index (nt,),
+    UV map name -> (nt,3,2) corner coordinates, "" the active map)."""
     tris = mesh.loop_triangles
     nt = len(tris)
     if nt == 0:
-        return None, np.zeros(0, dtype=np.int32)
+        return None, np.zeros(0, dtype=np.int32), {}
     co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
     mesh.vertices.foreach_get("co", co)
     tri_vertices = np.empty(nt * 3, dtype=np.int32)
@@ -41,20 +43,22 @@ def _local_mesh(mesh) -> tuple[Optional[Mesh], np.ndarray]:
     mesh.corner_normals.foreach_get("vector", corner_normals)
     material_index = np.empty(nt, dtype=np.int32)
     tris.foreach_get("material_index", material_index)
-    corner_uvs = None
-    if mesh.uv_layers.active is not None:
+    uv_maps = {}
+    for layer in mesh.uv_layers:
         uvs = np.empty(len(mesh.loops) * 2, dtype=np.float32)
-        mesh.uv_layers.active.data.foreach_get("uv", uvs)
-        corner_uvs = uvs.reshape(-1, 2)[tri_loops]
-    return Mesh(co.reshape(-1, 3), tri_vertices.reshape(nt, 3), corner_normals.reshape(-1, 3)[tri_loops],
-                corner_uvs), material_index
+        layer.data.foreach_get("uv", uvs)
+        uv_maps[layer.name] = uvs.reshape(-1, 2)[tri_loops].astype(np.float64)
+    if mesh.uv_layers.active is not None:
+        uv_maps[""] = uv_maps[mesh.uv_layers.active.name]
+    return (Mesh(co.reshape(-1, 3), tri_vertices.reshape(nt, 3), corner_normals.reshape(-1, 3)[tri_loops],
+                 uv_maps.get("")), material_index, uv_maps)
 
 
 def _material_parts(ob_eval, material_index: np.ndarray, name: str, warnings: list[str]) -> list:
-    """[(material or None, triangle rows (k,), slot numbers from 1)]: the
-    object's triangles by the material of their slot, a slot index past the
-    last slot taking the last one, as Cycles does. Slots holding the same
-    material are one part. A warning names each empty slot that faces use:
+    """[(material or None, triangle rows (k,) in mesh order, slot numbers
+    from 1)]: the object's triangles by the material of their slot, a slot
+    index past the last slot taking the last one, as Cycles does. Slots
+    holding the same material are one part. A warning names each empty slot that faces use:
     Cycles renders them with its default surface, as the engine does."""
     slots = [slot.material for slot in ob_eval.material_slots]
     if not slots:
@@ -68,7 +72,7 @@ def _material_parts(ob_eval, material_index: np.ndarray, name: str, warnings: li
                             "default grey diffuse surface")
         key = None if material is None else material.original.name
         _, rows, numbers = parts.get(key, (None, np.zeros(0, dtype=np.int64), []))
-        parts[key] = (material, np.concatenate([rows, np.flatnonzero(slot_of == slot)]), numbers + [slot + 1])
+        parts[key] = (material, np.union1d(rows, np.flatnonzero(slot_of == slot)), numbers + [slot + 1])
     return list(parts.values())
 
 
@@ -99,9 +103,13 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
     material's reading, so that a material shared by several objects is
     read, and warned about, once."""
     with evaluated_mesh(ob) as mesh:
-        local, material_index = _local_mesh(mesh)
+        local, material_index, uv_maps = _local_mesh(mesh)
         parts = _material_parts(ob, material_index, name, warnings) if local is not None else []
     world = local.transformed(matrix) if local is not None else None
+    if np.linalg.det(matrix[:3, :3]) < 0:
+        # a mirroring matrix turns the engine's triangles around (Mesh.transformed)
+        uv_maps = {layer: corners[:, ::-1] for layer, corners in uv_maps.items()}
+    several = len(parts) > 1
     objects = []
     for material, rows, slots in parts:
         key = material.original.name if material is not None else None
@@ -114,10 +122,16 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
         if np.any(surfaces[key].emission > 0.0):
             warnings.append(f"'{name}': its material '{key}' emits light; the caustic render shows it but lights "
                             "nothing with it and casts no caustics from it yet (a lamp in its place would)")
-        several = len(parts) > 1
         part = f"{name} [{key if key is not None else 'no material'}]" if several else name
+        texture = None
+        if surfaces[key].texture is not None:
+            data = ob.original.data
+            frame = ObjectFrame({layer: np.take(corners, rows, axis=0) for layer, corners in uv_maps.items()},
+                                np.linalg.inv(matrix), np.array(data.texspace_location[:], dtype=np.float64),
+                                np.array(data.texspace_size[:], dtype=np.float64))
+            texture = bind(surfaces[key].texture, frame, f"'{part}'", warnings)
         objects.append((Object(part, world.subset(rows) if several else world,
-                               engine_material(surfaces[key], ob.original.caustic), visibility,
+                               engine_material(surfaces[key], ob.original.caustic, texture), visibility,
                                body=name if several else None), key))
     if not ob.visible_diffuse and any(obj.is_caster for obj, _ in objects):
         warnings.append(f"'{name}': its Diffuse ray visibility is off, which hides it from Cycles' diffuse "

@@ -5,7 +5,6 @@ the mean irradiance within 2% of Cycles, and the pole's shadow and penumbra
 within 8% of the unshadowed light (RMS), at the add-on's default samples."""
 
 import math
-import os
 
 import bpy
 import numpy as np

@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from caustic_addon import Dielectric, Diffuse, Object, PointLight, Scene, Visibility, render, shapes
+from caustic_addon import Diffuse, Object, PointLight, Scene, Visibility, render, shapes
 from caustic_addon.tracing.accelerator import Accelerator
 
 from scenes import ball_lens, floor_points, quick, shadow_radius, unobstructed_irradiance
