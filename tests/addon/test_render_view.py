@@ -99,3 +99,22 @@ def test_a_view_layer_disabled_for_rendering_is_named(addon):
         assert "ViewLayer" in str(exc)
     else:
         raise AssertionError("no error")
+
+
+def test_adaptive_subdivision_is_read_at_the_render_levels_and_named(addon):
+    parts = subdivided_scene()
+    scene = bpy.context.scene
+    scene.render.engine = 'CYCLES'
+    modifier = parts["ball"].modifiers["Subdivide"]
+    if hasattr(modifier, "use_adaptive_subdivision"):  # Blender 5: the modifier's
+        modifier.use_adaptive_subdivision = True
+    else:  # before: the object's, with the Experimental feature set
+        scene.cycles.feature_set = 'EXPERIMENTAL'
+        parts["ball"].cycles.use_adaptive_subdivision = True
+    read = addon.export.read_scene(bpy.context)
+    assert ("'Ball': Cycles subdivides it adaptively when it renders; the caustic render uses its Subdivision "
+            "Surface's Render levels") in read.warnings
+    quads, fans = 16 * (8 - 2), 2 * 16
+    ball = next(o for o in read.scene.objects if o.name == "Ball")
+    assert len(ball.mesh.triangles) == 2 * (4 ** 2 * quads + 3 * 4 * fans)
+    assert scene.render.engine == 'CYCLES'
