@@ -10,9 +10,9 @@ back: the scene's engine and output settings, and the Render Result, which
 gets a slot of its own so that an earlier render stays as it was.
 Nothing is written into the file, and no undo step is pushed.
 
-Without a camera Blender renders nothing, so a scene without one is read
-from the viewport's depsgraph, and what a render would see differently is
-named in a warning."""
+Without a camera, or for a view layer disabled for rendering, Blender
+renders nothing, so such a scene is read from the viewport's depsgraph, and
+what a render would see differently is named in a warning."""
 
 from __future__ import annotations
 
@@ -87,8 +87,8 @@ def read_as_render(scene, view_layer, reader: Callable[[object], T]) -> T:
         CAUSTIC_RE_scene_reader.reader = None
     outcome, CAUSTIC_RE_scene_reader.outcome = CAUSTIC_RE_scene_reader.outcome, []
     if not outcome:
-        raise InputError(f"Blender rendered nothing of the view layer '{view_layer.name}': is it disabled for "
-                         "rendering?")
+        raise InputError(f"Blender rendered nothing of the view layer '{view_layer.name}': is another render "
+                         "running, or is the view layer disabled for rendering?")
     kind, value = outcome[0]
     if kind == 'error':
         raise value

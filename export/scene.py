@@ -46,24 +46,27 @@ def read_scene(context, with_camera: bool = True) -> SceneRead:
     """The engine scene of the context's view layer, as a render sees it.
     Raises InputError if it has no camera (when `with_camera`), no light
     (neither a lamp nor a world) or no receiver. A scene without a camera,
-    which Blender does not render, is read as the viewport shows it, and a
-    warning names what a render would see otherwise."""
+    or a view layer disabled for rendering, which Blender does not render,
+    is read as the viewport shows it, and a warning names what a render
+    would see otherwise."""
     scene, view_layer = context.scene, context.view_layer
-    if scene.camera is not None:
+    if scene.camera is not None and view_layer.use:
         read = read_as_render(scene, view_layer, lambda depsgraph: _read_objects(scene, depsgraph, with_camera))
         adaptive = sorted({read.sources[name] for name in read.materials
                            if adaptive_subdivision(scene, bpy.data.objects[read.sources[name]])})
         read.warnings += [f"'{name}': Cycles subdivides it adaptively when it renders; the caustic render uses "
                           "its Subdivision Surface's Render levels" for name in adaptive]
-    elif with_camera:
+    elif with_camera and scene.camera is None:
         raise InputError("The scene has no active camera")
     else:
         renderable = renderable_objects(view_layer)
-        read = _read_objects(scene, context.evaluated_depsgraph_get(), False, renderable)
+        read = _read_objects(scene, context.evaluated_depsgraph_get(), with_camera, renderable)
         differ = viewport_differences(view_layer, set(read.sources.values()))
+        why = ("The scene has no camera" if scene.camera is None
+               else f"The view layer '{view_layer.name}' is disabled for rendering (Use for Rendering)")
         if differ:
-            read.warnings.append("The scene has no camera, so Blender cannot evaluate it as it renders: it was read "
-                                 "as the viewport shows it, which differs for " + ", ".join(differ))
+            read.warnings.append(f"{why}, so Blender cannot evaluate it as it renders: it was read as the viewport "
+                                 "shows it, which differs for " + ", ".join(differ))
     read.scene.world = engine_world(scene.world, read.warnings)
     read.scene.ambient = np.array(scene.caustic.ambient[:], dtype=np.float64)
     if not read.scene.lights and read.scene.world.is_black:
