@@ -75,7 +75,8 @@ def read_as_render(scene, view_layer, reader: Callable[[object], T]) -> T:
     bpy.utils.register_class(CAUSTIC_RE_scene_reader)
     try:
         with _own_render_slot(), Overrides() as overrides:
-            for name, value in (("engine", ENGINE), ("use_compositing", False), ("use_sequencer", False)):
+            for name, value in (("engine", ENGINE), ("use_compositing", False), ("use_sequencer", False),
+                                ("use_multiview", False)):
                 overrides.set(scene.render, name, value)
             try:
                 bpy.ops.render.render(layer=view_layer.name, scene=scene.name)
