@@ -8,11 +8,20 @@ from __future__ import annotations
 from contextlib import contextmanager
 from typing import Optional
 
+import bpy
 import numpy as np
 
 from ..caustic_addon import Mesh, Object, Visibility
 from .materials import engine_material, read_surface
 from .textures import ObjectFrame, bind
+
+# Faces of an empty slot: Cycles renders them with its default surface, a
+# grey Diffuse BSDF (0.8) in Blender 4.2 and 4.5 and a grey Principled BSDF
+# (0.8, Roughness 0.5) in 5.3 (both rendered to check).
+EMPTY_SLOT = ("its faces are rendered as Cycles renders them, with its default grey diffuse surface"
+              if bpy.app.version < (5, 0, 0) else
+              "its faces are rendered as a grey diffuse surface (albedo 0.8), where Cycles renders them with its "
+              "default grey Principled BSDF, whose specular the caustic render lacks")
 
 
 @contextmanager
@@ -58,8 +67,8 @@ def _material_parts(ob_eval, material_index: np.ndarray, name: str, warnings: li
     """[(material or None, triangle rows (k,) in mesh order, slot numbers
     from 1)]: the object's triangles by the material of their slot, a slot
     index past the last slot taking the last one, as Cycles does. Slots
-    holding the same material are one part. A warning names each empty slot that faces use:
-    Cycles renders them with its default surface, as the engine does."""
+    holding the same material are one part. A warning names each empty
+    slot that faces use (EMPTY_SLOT: what the engine and Cycles render there)."""
     slots = [slot.material for slot in ob_eval.material_slots]
     if not slots:
         return [(None, np.arange(len(material_index)), [])]
@@ -68,8 +77,7 @@ def _material_parts(ob_eval, material_index: np.ndarray, name: str, warnings: li
     for slot in np.unique(slot_of).tolist():
         material = slots[slot]
         if material is None:
-            warnings.append(f"'{name}': material slot {slot + 1} is empty; its faces are rendered as Blender's "
-                            "default grey diffuse surface")
+            warnings.append(f"'{name}': material slot {slot + 1} is empty; {EMPTY_SLOT}")
         key = None if material is None else material.original.name
         _, rows, numbers = parts.get(key, (None, np.zeros(0, dtype=np.int64), []))
         parts[key] = (material, np.union1d(rows, np.flatnonzero(slot_of == slot)), numbers + [slot + 1])
