@@ -1,9 +1,11 @@
 """A Blender material read as the engine's: Glass BSDF, or Principled BSDF
 that mostly transmits, is a Dielectric; Glossy BSDF, or Principled BSDF that
 is mostly metal and smooth, is a Reflector; Principled and Diffuse BSDFs,
-plain viewport colours and anything not understood are Diffuse receivers. A
-Volume Absorption node on the Volume output gives glass its absorption. What
-is read approximately comes back as a warning naming the material.
+plain viewport colours and anything not understood are Diffuse receivers; a
+material with no output node, or nothing connected to it, is black, as
+Cycles renders it. A Volume Absorption node on the Volume output gives glass
+its absorption. What is read approximately comes back as a warning naming
+the material.
 
 No Glass or Principled BSDF has a Dispersion input in Blender 4.2, 4.5 or 5.3
 (checked with each bpy module of the test matrix), so dispersion comes only from the object's
@@ -38,7 +40,9 @@ class Surface:
     `color` is the glass tint or the reflectance; `emission` the radiance
     it gives off (an Emission shader, or a Principled BSDF's emission),
     which the engine shows but does not yet light anything with; `texture`
-    the nodes that drive a receiver's colour (textures.py), if read."""
+    the nodes that drive a receiver's colour (textures.py), if read. `black`
+    says why a material renders black, as Cycles renders it: no output node,
+    or no shader connected to it."""
 
     transparent: bool
     reflector: bool = False
@@ -49,6 +53,7 @@ class Surface:
     texture: Optional[Recipe] = None
     absorption: np.ndarray = field(default_factory=lambda: np.zeros(3))
     warnings: list[str] = field(default_factory=list)
+    black: Optional[str] = None
 
 
 def _value(node, name: str, what: str, warnings: list[str]):
@@ -103,8 +108,9 @@ def read_surface(material) -> Surface:
         return Surface(transparent=False, albedo=viewport)
     shader = _shader(material, 'Surface')
     if shader is None:
-        return Surface(transparent=False, albedo=viewport,
-                       warnings=[f"{what}: no shader reaches its output; its viewport colour is used"])
+        missing = ("has no Material Output node" if material.node_tree.get_output_node('CYCLES') is None
+                   else "has no shader connected to its Material Output's Surface")
+        return Surface(transparent=False, albedo=np.zeros(3), black=missing)
     warnings: list[str] = []
     kind = shader.bl_idname
     if kind in GLASS_NODES or (kind == 'ShaderNodeBsdfPrincipled'

@@ -28,7 +28,7 @@ from ..maps.charts import PlaneChart
 from ..maps.illumination_map import IlluminationMap
 from ..scene import RenderSettings, Scene
 from ..scene.material_table import Materials
-from ..tracing.accelerator import Accelerator
+from ..tracing.accelerator import CAMERA, Accelerator
 from ..tracing.hits import Hits
 from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.rows import take_rows
@@ -39,26 +39,31 @@ from .direct_light import direct_radiance, world_irradiance
 from .paths import Paths, relative_floor
 
 PASSES = ("direct", "caustic", "ambient")
+# The buffer of each pixel's share cut out by holdouts (its alpha is 1 minus it).
+HOLDOUT = "holdout"
 
 
 class EyeTracer:
     """The eye pass's choices in the bounce (bounce.trace), for the eye rays
     of the flat pixels [first_pixel, end_pixel): the world where a ray
     escapes, shading where it meets an opaque surface, both branches at a
-    specular one. A path's id is its eye sample, `spp` to a pixel. Pass
-    buffers are each (end_pixel - first_pixel, 3). A camera ray (one with no
+    specular one, where camera rays meeting a holdout stop. A path's id is
+    its eye sample, `spp` to a pixel. Pass buffers, the holdout's among
+    them, are each (end_pixel - first_pixel, 3). A camera ray (one with no
     specular event yet) stands for a square stratum of its pixel, of side
-    1 / sqrt(spp) pixels."""
+    1 / sqrt(spp) pixels. `holdout (m,)` bool per object."""
 
     def __init__(self, accel: Accelerator, scene: Scene, materials: Materials, maps: dict[int, IlluminationMap],
-                 environment: Environment, settings: RenderSettings, first_pixel: int, end_pixel: int):
+                 environment: Environment, settings: RenderSettings, first_pixel: int, end_pixel: int,
+                 holdout: np.ndarray):
         self.accel, self.scene, self.materials, self.maps = accel, scene, materials, maps
+        self.holdout = holdout
         self.environment, self.settings = environment, settings
         self.energy, self.spp = settings.energy, settings.spp
         self.stratum = 1.0 / math.sqrt(settings.spp)
         self.first_pixel, self.end_pixel = int(first_pixel), int(end_pixel)
         self.far = 4.0 * scene.extent() + float(np.abs(scene.camera.position).max())
-        self.buffers = {name: np.zeros((self.end_pixel - self.first_pixel, 3)) for name in PASSES}
+        self.buffers = {name: np.zeros((self.end_pixel - self.first_pixel, 3)) for name in (*PASSES, HOLDOUT)}
 
     def _add(self, name: str, pixel: np.ndarray, radiance: np.ndarray) -> None:
         size = self.end_pixel - self.first_pixel
@@ -68,7 +73,19 @@ class EyeTracer:
     def escaped(self, rays: Paths) -> None:
         self._add("ambient", rays.ids // self.spp, rays.weight * self.environment.radiance(rays.dirs))
 
+    def _cut_out(self, rays: Paths, hits: Hits) -> np.ndarray:
+        """(n,) bool: the camera rays that met a holdout, their weight added
+        to the holdout buffer."""
+        cut = np.take(self.holdout, hits.obj) & (rays.kind == CAMERA)
+        if cut.any():
+            here = rays.select(cut)
+            self._add(HOLDOUT, here.ids // self.spp, here.weight)
+        return cut
+
     def arrived(self, rays: Paths, hits: Hits) -> None:
+        cut = self._cut_out(rays, hits)
+        if cut.any():
+            rays, hits = rays.select(~cut), hits.select(~cut)
         if len(rays) == 0:
             return
         m, accel = self.materials, self.accel
@@ -113,13 +130,17 @@ class EyeTracer:
             self._add("caustic", here.ids // self.spp, here.weight * radiance)
 
     def scattered(self, rays: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
+        cut = self._cut_out(rays, hits)
+        if cut.any():
+            rays, hits, surface = rays.select(~cut), hits.select(~cut), surface.select(~cut)
         return split(self.accel, self.materials, rays, hits, surface)
 
 
 def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
              maps: dict[int, IlluminationMap], monitor: Monitor, start: float) -> dict[str, np.ndarray]:
     """Trace `spp` eye rays through every pixel, chunk by chunk, reporting
-    progress from `start` to 1. Returns the pass buffers, each (pixels, 3)."""
+    progress from `start` to 1. Returns the pass buffers and the holdout's,
+    each (pixels, 3)."""
     cam = scene.camera
     pixels = cam.pixx * cam.pixy
     offsets = pixel_offsets(settings.spp, settings.seed)
@@ -128,22 +149,23 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     size = chunk_size(samples, settings.chunk_size, settings.threads)
 
     environment = Environment(scene.world)
+    holdout = np.array([o.visibility.holdout for o in scene.objects], dtype=bool)
 
     def job(first: int) -> EyeTracer:
         sample = np.arange(first, min(first + size, samples))
         pixel = sample // settings.spp
         origins, dirs = eye_rays(cam, pixel, offsets[sample % settings.spp])
         weight = np.full((len(sample), 3), 1.0 / settings.spp)
-        tracer = EyeTracer(accel, scene, materials, maps, environment, settings, pixel[0], pixel[-1] + 1)
-        trace(accel, materials, Paths.start(origins, dirs, weight, sample, camera_medium, relative_floor(weight)),
-              settings.max_depth, tracer)
+        tracer = EyeTracer(accel, scene, materials, maps, environment, settings, pixel[0], pixel[-1] + 1, holdout)
+        trace(accel, materials, Paths.start(origins, dirs, weight, sample, camera_medium, relative_floor(weight),
+                                            camera=True), settings.max_depth, tracer)
         return tracer
 
     jobs = [partial(job, first) for first in range(0, samples, size)]
-    buffers = {name: np.zeros((pixels, 3)) for name in PASSES}
+    buffers = {name: np.zeros((pixels, 3)) for name in (*PASSES, HOLDOUT)}
 
     def add(tracer: EyeTracer) -> None:
-        for name in PASSES:
+        for name in buffers:
             buffers[name][tracer.first_pixel:tracer.end_pixel] += tracer.buffers[name]
 
     run_chunks(jobs, settings.threads, monitor, start, 1.0 - start, "eye pass", add)

@@ -6,8 +6,9 @@ from .camera import Camera
 from .geometry import Mesh
 from .lights import AreaLight, Light, PointLight, SpotLight, SunLight, World
 from .materials import Dielectric, Diffuse, Material, Reflector
-from .scene import Object, Scene
+from .scene import Object, Scene, Visibility
 from .settings import RenderSettings
 
 __all__ = ["AreaLight", "Camera", "Dielectric", "Diffuse", "Light", "Material", "Mesh", "Object", "PointLight",
-           "Reflector", "RenderSettings", "Scene", "SpotLight", "SunLight", "World", "paper", "shapes", "textures"]
+           "Reflector", "RenderSettings", "Scene", "SpotLight", "SunLight", "Visibility", "World", "paper",
+           "shapes", "textures"]
