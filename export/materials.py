@@ -1,9 +1,11 @@
 """A Blender material read as the engine's: Glass BSDF, or Principled BSDF
 that mostly transmits, is a Dielectric; Glossy BSDF, or Principled BSDF that
 is mostly metal and smooth, is a Reflector; Principled and Diffuse BSDFs,
-plain viewport colours and anything not understood are Diffuse receivers. A
-Volume Absorption node on the Volume output gives glass its absorption. What
-is read approximately comes back as a warning naming the material.
+plain viewport colours and anything not understood are Diffuse receivers, a
+Principled BSDF's with its specular layer (Roughness, IOR, Specular IOR
+Level, Specular Tint, the GGX or Multiscatter GGX distribution). A Volume
+Absorption node on the Volume output gives glass its absorption. What is
+read approximately comes back as a warning naming the material.
 
 No Glass or Principled BSDF has a Dispersion input in Blender 4.2, 4.5 or 5.3
 (checked with each bpy module of the test matrix), so dispersion comes only from the object's
@@ -17,7 +19,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from ..caustic_addon import Dielectric, Diffuse, Reflector, absorption_from_color, volume_absorption
+from ..caustic_addon import Dielectric, Diffuse, Reflector, Specular, absorption_from_color, volume_absorption
 
 DEFAULT_ALBEDO = 0.8
 GLASS_NODES = {'ShaderNodeBsdfGlass', 'ShaderNodeBsdfRefraction'}
@@ -26,6 +28,11 @@ GLOSSY_NODES = {'ShaderNodeBsdfGlossy', 'ShaderNodeBsdfAnisotropic'}
 # A Principled BSDF with Metallic above 0.5 is a mirror up to this Roughness,
 # and diffuse beyond it; either way a warning names it when Roughness > 0.
 MIRROR_ROUGHNESS = 0.2
+# A Principled receiver's inputs the engine does not render, with the value
+# that leaves them out (Blender's default).
+UNRENDERED = {"Coat Weight": 0.0, "Sheen Weight": 0.0, "Subsurface Weight": 0.0, "Anisotropic": 0.0,
+              "Thin Film Thickness": 0.0, "Diffuse Roughness": 0.0, "Metallic": 0.0, "Transmission Weight": 0.0,
+              "Alpha": 1.0}
 
 
 @dataclass
@@ -34,7 +41,8 @@ class Surface:
     metal) pick the engine material; neither is a diffuse receiver.
     `color` is the glass tint or the reflectance; `emission` the radiance
     it gives off (an Emission shader, or a Principled BSDF's emission),
-    which the engine shows but does not yet light anything with."""
+    which the engine shows but does not yet light anything with;
+    `specular` a Principled receiver's specular layer."""
 
     transparent: bool
     reflector: bool = False
@@ -43,6 +51,7 @@ class Surface:
     color: np.ndarray = field(default_factory=lambda: np.ones(3))
     albedo: np.ndarray = field(default_factory=lambda: np.full(3, DEFAULT_ALBEDO))
     absorption: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    specular: Specular | None = None
     warnings: list[str] = field(default_factory=list)
 
 
@@ -104,7 +113,7 @@ def read_surface(material) -> Surface:
         emission = _value(shader, "Emission Color", what, warnings) * _value(shader, "Emission Strength", what,
                                                                               warnings)
         return Surface(transparent=False, albedo=_value(shader, "Base Color", what, warnings), emission=emission,
-                       warnings=warnings)
+                       specular=_specular_layer(shader, what, warnings), warnings=warnings)
     if kind == 'ShaderNodeBsdfDiffuse':
         return Surface(transparent=False, albedo=_value(shader, "Color", what, warnings), warnings=warnings)
     if kind == 'ShaderNodeEmission':
@@ -113,6 +122,21 @@ def read_surface(material) -> Surface:
     return Surface(transparent=False, albedo=viewport,
                    warnings=[f"{what}: a '{shader.name}' shader is not understood; it is rendered as diffuse "
                              "with the material's viewport colour"])
+
+
+def _specular_layer(shader, what: str, warnings: list[str]) -> Specular:
+    """A Principled BSDF's specular layer, its inputs clamped as Cycles clamps
+    them (svm/closure.h); a warning names the inputs left out of the render."""
+    unrendered = [name for name, off in UNRENDERED.items()
+                  if name in shader.inputs and _value(shader, name, what, warnings) != off]
+    if unrendered:
+        warnings.append(f"{what}: its {', '.join(unrendered)} are not rendered; it is rendered as a diffuse base "
+                        "under a specular layer")
+    return Specular(roughness=min(max(_value(shader, "Roughness", what, warnings), 0.0), 1.0),
+                    ior=max(_value(shader, "IOR", what, warnings), 1e-5),
+                    level=max(_value(shader, "Specular IOR Level", what, warnings), 0.0),
+                    tint=np.maximum(_value(shader, "Specular Tint", what, warnings), 0.0),
+                    multiscatter=shader.distribution == 'MULTI_GGX')
 
 
 def _mirror(shader, color_input: str, what: str, warnings: list[str]) -> Surface:
@@ -148,7 +172,8 @@ def engine_material(surface: Surface, settings) -> Dielectric | Diffuse | Reflec
     transparent = role == 'TRANSPARENT' or (role == 'AUTO' and surface.transparent)
     if not transparent:
         opaque = not (surface.transparent or surface.reflector)
-        return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO, emission=surface.emission)
+        return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO, emission=surface.emission,
+                       specular=surface.specular if opaque else None)
     ior = settings.ior if settings.use_ior else (surface.ior if surface.transparent else 1.5)
     color = surface.color if surface.transparent else np.ones(3)
     if settings.absorption_from == 'COLOR':

@@ -5,9 +5,9 @@ from . import paper, shapes
 from .camera import Camera
 from .geometry import Mesh
 from .lights import AreaLight, Light, PointLight, SpotLight, SunLight, World
-from .materials import Dielectric, Diffuse, Material, Reflector
+from .materials import Dielectric, Diffuse, Material, Reflector, Specular
 from .scene import Object, Scene
 from .settings import RenderSettings
 
 __all__ = ["AreaLight", "Camera", "Dielectric", "Diffuse", "Light", "Material", "Mesh", "Object", "PointLight",
-           "Reflector", "RenderSettings", "Scene", "SpotLight", "SunLight", "World", "paper", "shapes"]
+           "Reflector", "RenderSettings", "Scene", "Specular", "SpotLight", "SunLight", "World", "paper", "shapes"]
