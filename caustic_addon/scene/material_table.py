@@ -12,6 +12,7 @@ from ..optics.principled import Layer, Lobe
 from ..optics.spectrum import bands
 from .materials import Diffuse
 from .scene import Object
+from .textures import Node, SurfacePoints, as_color
 
 
 @dataclass
@@ -27,6 +28,7 @@ class Materials:
     ior_bands (m,K)             IOR in each of the K wavelength bands
     band_weights (K,3)          each band's RGB share (spectrum.Bands)
     layers                      object index -> its specular layer (principled.Layer)
+    textures                    object index -> the nodes of its albedo
 
     K is 1, with ior_bands = ior, unless a dielectric disperses.
     """
@@ -42,6 +44,7 @@ class Materials:
     ior_bands: np.ndarray
     band_weights: np.ndarray
     layers: dict[int, Layer] = field(default_factory=dict)
+    textures: dict[int, Node] = field(default_factory=dict)
 
     @property
     def band_count(self) -> int:
@@ -70,8 +73,24 @@ class Materials:
             emission=rgb_column("emission", 0.0),
             ior_bands=cauchy_ior(ior[:, None], abbe[:, None], spectral.wavelengths[None, :]),
             band_weights=spectral.weights,
+            textures={index: o.material.texture for index, o in enumerate(objects)
+                      if getattr(o.material, "texture", None) is not None},
             layers=_layers(objects),
         )
+
+    def albedo_at(self, obj: np.ndarray, triangle: np.ndarray, u: np.ndarray, v: np.ndarray,
+                  points: np.ndarray) -> np.ndarray:
+        """(n,3) albedo at surface points of objects `obj (n,)`: a textured
+        object's nodes at its `triangle (n,)` (index in its own mesh),
+        barycentrics `u, v (n,)` and world `points (n,3)`; else its colour."""
+        albedo = np.take(self.albedo, obj, axis=0)
+        for index, texture in self.textures.items():
+            rows = np.flatnonzero(obj == index)
+            if len(rows):
+                at = SurfacePoints(np.take(points, rows, axis=0), np.take(triangle, rows), np.take(u, rows),
+                                   np.take(v, rows))
+                albedo[rows] = as_color(texture.evaluate(at))
+        return albedo
 
     def lobe_at(self, obj: np.ndarray, cos_v: np.ndarray) -> tuple[Lobe | None, np.ndarray]:
         """(lobe, diffuse (n,)) at points of objects `obj (n,)` seen at
