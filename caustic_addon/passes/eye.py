@@ -10,10 +10,11 @@ from the world (direct_light.py), plus caustic irradiance E_c * albedo / pi
 read from the receiver's map. Under a Principled BSDF's specular layer the
 albedo is the base colour times the share the layer leaves it toward the
 eye (optics/principled.py); the lobe itself reflects the lamps and the
-world, but not the caustic, whose directions the map does not keep. At a dielectric: both the reflected ray
-(weight F) and the refracted ray (weight 1 - F) carry on, each tinted by the
-glass colour and by Beer-Lambert absorption inside, up to `max_depth`
-bounces. At a reflector the reflected ray carries on, times the reflectance
+world, but not the caustic, whose directions the map does not keep.
+
+At a dielectric: both the reflected ray (weight F) and the refracted ray
+(weight 1 - F) carry on, each tinted by the glass colour and by
+Beer-Lambert absorption inside, up to `max_depth` bounces. At a reflector the reflected ray carries on, times the reflectance
 colour. A ray that leaves the scene sees the world. Eye rays refract with a dispersive glass's
 IOR at 587.6 nm: the caustics it throws are spectral (photon pass), the view
 through it is not.

@@ -122,7 +122,7 @@ def _layers(objects: list[Object]) -> dict[int, Layer]:
     for index, o in enumerate(objects):
         spec = o.material.specular if isinstance(o.material, Diffuse) else None
         if spec is not None:
-            layer = Layer.of(spec.roughness, spec.ior, spec.level, spec.tint, spec.multiscatter)
+            layer = spec.layer()
             if layer is not None:
                 layers[index] = layer
     return layers

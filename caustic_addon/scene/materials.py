@@ -8,6 +8,7 @@ from typing import Optional, Union
 
 import numpy as np
 
+from ..optics.principled import Layer
 from .color import RGB, rgb
 from .textures import Node
 
@@ -60,6 +61,16 @@ class Specular:
 
     def __post_init__(self):
         self.tint = rgb(self.tint)
+
+    def layer(self) -> Layer | None:
+        """The layer ready to shade, or None where it reflects nothing."""
+        return Layer.of(self.roughness, self.ior, self.level, self.tint, self.multiscatter)
+
+    def diffuse_share(self, cos_v: np.ndarray) -> np.ndarray:
+        """(n,) the share of the diffuse base the layer leaves toward view
+        cosines `cos_v (n,)` (Layer.toward): what the caustic is times."""
+        layer = self.layer()
+        return np.ones(len(cos_v)) if layer is None else layer.toward(np.asarray(cos_v, dtype=np.float64))[1]
 
 
 @dataclass
