@@ -1,11 +1,13 @@
 """A Blender material read as the engine's: Glass BSDF, or Principled BSDF
 that mostly transmits, is a Dielectric; Glossy BSDF, or Principled BSDF that
 is mostly metal and smooth, is a Reflector; Principled and Diffuse BSDFs,
-plain viewport colours and anything not understood are Diffuse receivers; a
-material with no output node, or nothing connected to it, is black, as
-Cycles renders it. A Volume Absorption node on the Volume output gives glass
-its absorption. What is read approximately comes back as a warning naming
-the material.
+plain viewport colours and anything not understood are Diffuse receivers, a
+Principled BSDF's with its specular layer (Roughness, IOR, Specular IOR
+Level, Specular Tint, the GGX or Multiscatter GGX distribution); a material
+with no output node, or nothing connected to it, is black, as Cycles
+renders it. A Volume Absorption node on the Volume output gives glass its
+absorption. What is read approximately comes back as a warning naming the
+material.
 
 No Glass or Principled BSDF has a Dispersion input in Blender 4.2, 4.5 or 5.3
 (checked with each bpy module of the test matrix), so dispersion comes only from the object's
@@ -20,7 +22,7 @@ from typing import Optional
 import bpy
 import numpy as np
 
-from ..caustic_addon import Dielectric, Diffuse, Reflector, absorption_from_color, volume_absorption
+from ..caustic_addon import Dielectric, Diffuse, Reflector, Specular, absorption_from_color, volume_absorption
 from ..caustic_addon import textures as nodes
 from .textures import Recipe, color_recipe
 
@@ -31,6 +33,11 @@ GLOSSY_NODES = {'ShaderNodeBsdfGlossy', 'ShaderNodeBsdfAnisotropic'}
 # A Principled BSDF with Metallic above 0.5 is a mirror up to this Roughness,
 # and diffuse beyond it; either way a warning names it when Roughness > 0.
 MIRROR_ROUGHNESS = 0.2
+# A Principled receiver's inputs the engine does not render, with the value
+# that leaves them out (Blender's default).
+UNRENDERED = {"Coat Weight": 0.0, "Sheen Weight": 0.0, "Subsurface Weight": 0.0, "Anisotropic": 0.0,
+              "Thin Film Thickness": 0.0, "Diffuse Roughness": 0.0, "Metallic": 0.0, "Transmission Weight": 0.0,
+              "Alpha": 1.0}
 
 
 @dataclass
@@ -40,9 +47,10 @@ class Surface:
     `color` is the glass tint or the reflectance; `emission` the radiance
     it gives off (an Emission shader, or a Principled BSDF's emission),
     which the engine shows but does not yet light anything with; `texture`
-    the nodes that drive a receiver's colour (textures.py), if read. `black`
-    says why a material renders black, as Cycles renders it: no output node,
-    or no shader connected to it."""
+    the nodes that drive a receiver's colour (textures.py), if read;
+    `specular` a Principled receiver's specular layer. `black` says why a
+    material renders black, as Cycles renders it: no output node, or no
+    shader connected to it."""
 
     transparent: bool
     reflector: bool = False
@@ -52,6 +60,7 @@ class Surface:
     albedo: np.ndarray = field(default_factory=lambda: np.full(3, DEFAULT_ALBEDO))
     texture: Optional[Recipe] = None
     absorption: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    specular: Specular | None = None
     warnings: list[str] = field(default_factory=list)
     black: Optional[str] = None
 
@@ -133,7 +142,8 @@ def read_surface(material) -> Surface:
         emission = _value(shader, "Emission Color", what, warnings) * _value(shader, "Emission Strength", what,
                                                                               warnings)
         albedo, texture = _albedo(shader, "Base Color", what, warnings)
-        return Surface(transparent=False, albedo=albedo, texture=texture, emission=emission, warnings=warnings)
+        return Surface(transparent=False, albedo=albedo, texture=texture, emission=emission,
+                       specular=_specular_layer(shader, what, warnings), warnings=warnings)
     if kind == 'ShaderNodeBsdfDiffuse':
         albedo, texture = _albedo(shader, "Color", what, warnings)
         return Surface(transparent=False, albedo=albedo, texture=texture, warnings=warnings)
@@ -143,6 +153,21 @@ def read_surface(material) -> Surface:
     return Surface(transparent=False, albedo=viewport,
                    warnings=[f"{what}: a '{shader.name}' shader is not understood; it is rendered as diffuse "
                              "with the material's viewport colour"])
+
+
+def _specular_layer(shader, what: str, warnings: list[str]) -> Specular:
+    """A Principled BSDF's specular layer, its inputs clamped as Cycles clamps
+    them (svm/closure.h); a warning names the inputs left out of the render."""
+    unrendered = [name for name, off in UNRENDERED.items()
+                  if name in shader.inputs and _value(shader, name, what, warnings) != off]
+    if unrendered:
+        warnings.append(f"{what}: its {', '.join(unrendered)} are not rendered; it is rendered as a diffuse base "
+                        "under a specular layer")
+    return Specular(roughness=min(max(_value(shader, "Roughness", what, warnings), 0.0), 1.0),
+                    ior=max(_value(shader, "IOR", what, warnings), 1e-5),
+                    level=max(_value(shader, "Specular IOR Level", what, warnings), 0.0),
+                    tint=np.maximum(_value(shader, "Specular Tint", what, warnings), 0.0),
+                    multiscatter=shader.distribution == 'MULTI_GGX')
 
 
 def _mirror(shader, color_input: str, what: str, warnings: list[str]) -> Surface:
@@ -182,7 +207,7 @@ def engine_material(surface: Surface, settings,
     if not transparent:
         opaque = not (surface.transparent or surface.reflector)
         return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO, emission=surface.emission,
-                       texture=texture if opaque else None)
+                       texture=texture if opaque else None, specular=surface.specular if opaque else None)
     ior = settings.ior if settings.use_ior else (surface.ior if surface.transparent else 1.5)
     color = surface.color if surface.transparent else np.ones(3)
     if settings.absorption_from == 'COLOR':

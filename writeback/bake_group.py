@@ -2,7 +2,11 @@
 looked up at the shading point and added to the material's own shader as
 emission of radiance E * albedo / pi, the albedo from the material's own
 colour nodes where it has them, so EEVEE and the Cycles viewport show the
-caustic. `unwire` takes out exactly what `wire` put in."""
+caustic. Under a Principled BSDF's specular layer the albedo is times the
+share of the diffuse base the layer leaves toward the eye, as the eye pass
+shades it: a Color Ramp of it over Layer Weight's Facing, 1 - |cos|, which
+the ramp interpolates linearly between SHARE_STOPS view cosines. `unwire`
+takes out exactly what `wire` put in."""
 
 from __future__ import annotations
 
@@ -17,6 +21,8 @@ from ..caustic_addon import ImageFrame
 NODE_NAME = "Caustic Bake"
 # Custom property marking the node groups a bake made.
 TAG = "caustic_bake"
+# A Color Ramp's most elements.
+SHARE_STOPS = 32
 
 
 def _chart_coordinates(nodes, links, frame: ImageFrame, uv_layer: str):
@@ -38,10 +44,32 @@ def _chart_coordinates(nodes, links, frame: ImageFrame, uv_layer: str):
     return source, mapping
 
 
-def make_group(name: str, image, imap, albedo: np.ndarray, uv_layer: str):
+def _view_share(nodes, links, share):
+    """A Color Ramp node giving the diffuse share `share(cos_v (k,)) -> (k,)`
+    at each shading point, from Layer Weight's Facing (blend 0.5: 1 - |cos_v|,
+    Cycles' svm_node_layer_weight)."""
+    facing = nodes.new('ShaderNodeLayerWeight')
+    facing.inputs['Blend'].default_value = 0.5
+    ramp = nodes.new('ShaderNodeValToRGB')
+    ramp.color_ramp.interpolation = 'LINEAR'
+    positions = np.linspace(0.0, 1.0, SHARE_STOPS)
+    values = share(1.0 - positions)
+    elements = ramp.color_ramp.elements
+    elements[0].position, elements[-1].position = 0.0, 1.0
+    for position in positions[1:-1]:
+        elements.new(float(position))
+    for element, value in zip(sorted(elements, key=lambda e: e.position), values):
+        element.color = (float(value), float(value), float(value), 1.0)
+    links.new(facing.outputs['Facing'], ramp.inputs['Fac'])
+    return facing, ramp
+
+
+def make_group(name: str, image, imap, albedo: np.ndarray, uv_layer: str, share=None):
     """A shader node group: Shader and Albedo in, Shader out = in + emission
     of the map `image` (irradiance, W/m^2) times Albedo / pi; Albedo is
-    `albedo (3,)` unless `wire` links the material's own colour to it."""
+    `albedo (3,)` unless `wire` links the material's own colour to it, and
+    is times `share(cos_v (k,)) -> (k,)` toward the eye if given (a
+    Principled BSDF's diffuse share under its specular layer)."""
     group = bpy.data.node_groups.new(name, 'ShaderNodeTree')
     group[TAG] = True
     group.interface.new_socket(name="Shader", in_out='INPUT', socket_type='NodeSocketShader')
@@ -60,7 +88,16 @@ def make_group(name: str, image, imap, albedo: np.ndarray, uv_layer: str):
     links.new(mapping.outputs['Vector'], texture.inputs['Vector'])
     links.new(texture.outputs['Color'], shaded.inputs[0])
     links.new(inputs.outputs['Albedo'], shaded.inputs[1])
-    links.new(shaded.outputs['Vector'], radiance.inputs[0])
+    if share is None:
+        links.new(shaded.outputs['Vector'], radiance.inputs[0])
+    else:
+        facing, ramp = _view_share(nodes, links, share)
+        viewed = nodes.new('ShaderNodeVectorMath')
+        viewed.operation = 'MULTIPLY'
+        links.new(shaded.outputs['Vector'], viewed.inputs[0])
+        links.new(ramp.outputs['Color'], viewed.inputs[1])
+        links.new(viewed.outputs['Vector'], radiance.inputs[0])
+        facing.location, ramp.location, viewed.location = (220.0, -400.0), (440.0, -400.0), (660.0, -400.0)
     links.new(radiance.outputs['Vector'], emission.inputs['Color'])
     links.new(inputs.outputs['Shader'], add.inputs[0])
     links.new(emission.outputs['Emission'], add.inputs[1])

@@ -17,7 +17,7 @@ from ..scene import RenderSettings, Scene
 # RenderSettings fields that change nothing in the maps.
 _EYE_ONLY = {"spp", "lamp_samples", "world_samples", "threads", "chunk_size"}
 # Material fields only the eye pass reads: a receiver's map holds irradiance.
-_SHADING_ONLY = {"albedo", "specular", "exponent", "emission", "texture"}
+_SHADING_ONLY = {"albedo", "specular", "emission", "texture"}
 
 
 def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:

@@ -7,10 +7,14 @@ caustic's folds are singular, and point samples of them alias.
 
 At an opaque surface: ambient * albedo, plus direct light from each lamp and
 from the world (direct_light.py), plus caustic irradiance E_c * albedo / pi
-read from the receiver's map. At a dielectric: both the reflected ray
-(weight F) and the refracted ray (weight 1 - F) carry on, each tinted by the
-glass colour and by Beer-Lambert absorption inside, up to `max_depth`
-bounces. At a reflector the reflected ray carries on, times the reflectance
+read from the receiver's map. Under a Principled BSDF's specular layer the
+albedo is the base colour times the share the layer leaves it toward the
+eye (optics/principled.py); the lobe itself reflects the lamps and the
+world, but not the caustic, whose directions the map does not keep.
+
+At a dielectric: both the reflected ray (weight F) and the refracted ray
+(weight 1 - F) carry on, each tinted by the glass colour and by
+Beer-Lambert absorption inside, up to `max_depth` bounces. At a reflector the reflected ray carries on, times the reflectance
 colour. A ray that leaves the scene sees the world. Eye rays refract with a dispersive glass's
 IOR at 587.6 nm: the caustics it throws are spectral (photon pass), the view
 through it is not.
@@ -35,7 +39,7 @@ from ..util.rows import take_rows
 from ..util.vectors import dot
 from .bounce import Interface, split, trace
 from .camera_rays import eye_rays, pixel_offsets, ray_differentials
-from .direct_light import direct_radiance, world_irradiance
+from .direct_light import direct_radiance, world_light
 from .paths import Paths, relative_floor
 
 PASSES = ("direct", "caustic", "ambient")
@@ -96,18 +100,19 @@ class EyeTracer:
         shading = np.where((dot(shading, view) < 0.0)[:, None], -shading, shading)
         triangle = hits.prim - np.take(accel.prim_offset, hits.obj)
         albedo = m.albedo_at(hits.obj, triangle, hits.u, hits.v, hits.points)
+        lobe, share = m.lobe_at(hits.obj, dot(shading, view))
+        diffuse = albedo * share[:, None]
 
         points, settings = hits.points, self.settings
         pixel, stratum = rays.ids // self.spp, rays.ids % self.spp
-        direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view,
-                                 albedo, np.take(m.specular, hits.obj, axis=0), m.exponent[hits.obj], self.far,
-                                 pixel, stratum, settings.lamp_samples, settings.seed)
+        direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view, diffuse,
+                                 lobe, self.far, pixel, stratum, settings.lamp_samples, settings.seed)
         self._add("direct", pixel, rays.weight * (direct + np.take(m.emission, hits.obj, axis=0)))
-        ambient = self.scene.ambient * albedo
+        ambient = self.scene.ambient * diffuse
         if not self.scene.world.is_black:
-            world = world_irradiance(accel, self.environment, points, shading, facing, self.far, pixel, stratum,
-                                     settings.world_samples, settings.seed)
-            ambient = ambient + world * albedo / math.pi
+            world, glossy = world_light(accel, self.environment, points, shading, facing, view, lobe, self.far,
+                                        pixel, stratum, settings.world_samples, settings.seed)
+            ambient = ambient + world * diffuse / math.pi + glossy
         self._add("ambient", pixel, rays.weight * ambient)
 
         for index, imap in self.maps.items():
@@ -126,7 +131,7 @@ class EyeTracer:
                 spread[primary[ok]] = True
                 irradiance[spread] = imap.mean_over(lo[ok], hi[ok])
             irradiance[~spread] = imap.irradiance_at(xy[~spread])
-            radiance = irradiance * take_rows(on_map, albedo)[0] / math.pi
+            radiance = irradiance * take_rows(on_map, diffuse)[0] / math.pi
             self._add("caustic", here.ids // self.spp, here.weight * radiance)
 
     def scattered(self, rays: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:

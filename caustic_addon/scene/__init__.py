@@ -5,10 +5,10 @@ from . import paper, shapes, textures
 from .camera import Camera
 from .geometry import Mesh
 from .lights import AreaLight, Light, PointLight, SpotLight, SunLight, World
-from .materials import Dielectric, Diffuse, Material, Reflector
+from .materials import Dielectric, Diffuse, Material, Reflector, Specular
 from .scene import Object, Scene, Visibility
 from .settings import RenderSettings
 
 __all__ = ["AreaLight", "Camera", "Dielectric", "Diffuse", "Light", "Material", "Mesh", "Object", "PointLight",
-           "Reflector", "RenderSettings", "Scene", "SpotLight", "SunLight", "Visibility", "World", "paper",
+           "Reflector", "RenderSettings", "Scene", "Specular", "SpotLight", "SunLight", "Visibility", "World", "paper",
            "shapes", "textures"]

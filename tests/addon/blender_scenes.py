@@ -29,6 +29,15 @@ def diffuse_material(name="Floor", color=(0.8, 0.8, 0.8)):
     return material
 
 
+def principled_material(name="Floor", color=(0.8, 0.8, 0.8), roughness=0.3, level=0.5):
+    material = _material(name)
+    shader = _shader(material, 'ShaderNodeBsdfPrincipled')
+    shader.inputs['Base Color'].default_value = (*color, 1.0)
+    shader.inputs['Roughness'].default_value = roughness
+    shader.inputs['Specular IOR Level'].default_value = level
+    return material
+
+
 def glass_material(name="Glass", ior=1.5):
     material = _material(name)
     shader = _shader(material, 'ShaderNodeBsdfGlass')

@@ -141,6 +141,25 @@ def test_roles_from_materials_and_overrides(addon):
     assert result.materials["Water"] == "Water"
 
 
+def test_a_principled_receiver_keeps_its_specular_layer(addon):
+    """Roughness, IOR, Specular IOR Level, Specular Tint and the distribution
+    reach the engine; inputs it does not render are named; a Diffuse BSDF
+    has no layer."""
+    floor, _ = lamp_scene()
+    floor.data.materials[0] = principled("Varnish", **{
+        "Roughness": 0.3, "IOR": 1.45, "Specular IOR Level": 0.8, "Specular Tint": (1.0, 0.5, 0.25, 1.0),
+        "Coat Weight": 0.5, "Sheen Weight": 0.2})
+    floor.data.materials[0].node_tree.nodes["Principled BSDF"].distribution = 'GGX'
+    scenes.add_sphere(0.3, (1.0, 0.0, 0.5), scenes.diffuse_material("Chalk"), name="Chalk", segments=8, rings=4)
+    result = read(addon)
+    layer = engine_object(result, "Floor").material.specular
+    assert (layer.roughness, layer.ior, layer.level) == pytest.approx((0.3, 1.45, 0.8))
+    assert layer.tint == pytest.approx([1.0, 0.5, 0.25]) and not layer.multiscatter
+    assert engine_object(result, "Chalk").material.specular is None
+    named = [w for w in result.warnings if "material 'Varnish'" in w]
+    assert len(named) == 1 and "Coat Weight, Sheen Weight are not rendered" in named[0]
+
+
 def test_mirrors_and_metals_read_as_reflectors(addon):
     floor, _ = lamp_scene()
     shapes = {}
