@@ -108,9 +108,10 @@ def _shader(material, output_socket: str):
 
 
 def read_surface(material) -> Surface:
-    """The engine's view of `material` (None: Blender's default grey)."""
+    """The engine's view of `material` (None: Cycles' default surface, a
+    grey Diffuse BSDF before Blender 5.0 and a grey Principled BSDF since)."""
     if material is None:
-        return Surface(transparent=False)
+        return Surface(transparent=False, specular=Specular() if bpy.app.version >= (5, 0, 0) else None)
     what = f"material '{material.name}'"
     viewport = np.array(material.diffuse_color[:3], dtype=np.float64)
     if material.node_tree is None or not (bpy.app.version >= (5, 0, 0) or material.use_nodes):

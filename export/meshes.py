@@ -17,11 +17,10 @@ from .textures import ObjectFrame, bind
 
 # Faces of an empty slot: Cycles renders them with its default surface, a
 # grey Diffuse BSDF (0.8) in Blender 4.2 and 4.5 and a grey Principled BSDF
-# (0.8, Roughness 0.5) in 5.3 (both rendered to check).
-EMPTY_SLOT = ("its faces are rendered as Cycles renders them, with its default grey diffuse surface"
-              if bpy.app.version < (5, 0, 0) else
-              "its faces are rendered as a grey diffuse surface (albedo 0.8), where Cycles renders them with its "
-              "default grey Principled BSDF, whose specular the caustic render lacks")
+# (0.8, Roughness 0.5) in 5.x (both rendered to check); read_surface(None)
+# gives the same.
+EMPTY_SLOT = ("its faces are rendered as Cycles renders them, with its default grey "
+              + ("diffuse surface" if bpy.app.version < (5, 0, 0) else "Principled BSDF"))
 
 
 @contextmanager

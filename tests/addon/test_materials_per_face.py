@@ -74,6 +74,21 @@ def test_each_half_of_a_two_material_floor_matches_cycles(addon, tmp_path, textu
         assert mine == pytest.approx(cycles, rel=0.02) and error < 0.05
 
 
+def test_an_empty_slot_renders_as_cycles_default_surface(addon, tmp_path):
+    """Blue's slot emptied: its half is Cycles' default surface (a grey
+    diffuse before Blender 5.0, a grey Principled BSDF since), highlight and all."""
+    floor = two_colour_floor()
+    floor.material_slots[1].material = None
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    ours = scenes.pixels_of("Caustic Render")[..., :3].astype(np.float64)
+    theirs = scenes.cycles_render(str(tmp_path), samples=16)[..., :3]
+    columns = slice(PIXELS // 2 + 1, PIXELS)
+    error = np.linalg.norm((ours - theirs)[:, columns] @ LUMINANCE) / np.linalg.norm(theirs[:, columns] @ LUMINANCE)
+    print(f"empty slot: ours / Cycles {ours[:, columns].mean() / theirs[:, columns].mean()}, "
+          f"relative L2 of luminance {100 * error:.2f}%")
+    assert ours[:, columns].mean() == pytest.approx(theirs[:, columns].mean(), rel=0.02) and error < 0.05
+
+
 def test_the_bake_writes_a_map_into_each_material_of_the_receiver(addon):
     floor = two_colour_floor()
     scenes.add_sphere(0.4, (0.0, 0.0, 0.8), scenes.glass_material(), segments=16, rings=8)
