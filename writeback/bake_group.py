@@ -17,10 +17,9 @@ import numpy as np
 from mathutils import Matrix
 
 from ..caustic_addon import ImageFrame
+from ..export.materials import BAKE_TAG as TAG
 
 NODE_NAME = "Caustic Bake"
-# Custom property marking the node groups a bake made.
-TAG = "caustic_bake"
 # A Color Ramp's most elements.
 SHARE_STOPS = 32
 

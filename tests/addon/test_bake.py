@@ -10,6 +10,7 @@ import pytest
 import blender_scenes as scenes
 from snapshot import material_state, snapshot_file
 from test_render import cycles_render
+from test_textures_vs_cycles import random_image
 
 RESULT_FIELDS = {"last_seconds", "last_lamp_rays", "last_refined"}
 
@@ -143,3 +144,37 @@ def test_map_scale_is_a_length_that_follows_the_unit_scale():
     assert in_metres == (300, 300)
     assert baked_map_size(0.01, "20 mm") == in_metres
     assert baked_map_size(0.01, "2 cm") == in_metres
+
+
+@pytest.mark.parametrize("floor_kind", ["diffuse", "principled", "textured"])
+def test_a_baked_receiver_reads_as_before_the_bake(addon, floor_kind):
+    """The bake's node group sits between the receiver's shader and its
+    output: a Render or a second Bake after it still reads the shader's
+    colour, texture and specular layer (it read a default grey before)."""
+    material = (scenes.principled_material(level=1.0) if floor_kind == "principled"
+                else scenes.diffuse_material("Floor", (0.7, 0.3, 0.2)))
+    if floor_kind == "textured":
+        tree = material.node_tree
+        texture = tree.nodes.new('ShaderNodeTexImage')
+        texture.image = random_image()
+        tree.links.new(texture.outputs['Color'], tree.nodes["Diffuse BSDF"].inputs['Color'])
+    scenes.add_plane(6.0, material)
+    scenes.add_sphere(0.5, (0.0, 0.0, 0.75), scenes.glass_material(), segments=16, rings=8)
+    scenes.add_point_light((-1.5, 0.6, 3.0), 1000.0)
+    scenes.add_camera((3.5, -2.5, 2.5), target=(0.5, -0.2, 0.0))
+    scenes.set_resolution(16, 12)
+    bpy.context.scene.caustic.lamp_rays = 2000
+
+    def floor():
+        read = addon.export.read_scene(bpy.context)
+        return next(o for o in read.scene.objects if o.name == "Floor").material, read.warnings
+
+    before, _ = floor()
+    assert bpy.ops.caustic.bake() == {'FINISHED'}
+    after, warnings = floor()
+    assert np.allclose(after.albedo, before.albedo)
+    assert (after.texture is None) == (before.texture is None) == (floor_kind != "textured")
+    assert (after.specular is None) == (before.specular is None) == (floor_kind != "principled")
+    assert not any("Floor" in w for w in warnings)
+    assert bpy.ops.caustic.bake() == {'FINISHED'}
+    assert len([n for n in material.node_tree.nodes if n.bl_idname == 'ShaderNodeGroup']) == 1
