@@ -118,7 +118,7 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
         family = None if paths.family is None else _next_family(paths.family, hits.obj, event)
         branch = Paths(accel.offset(surface.points, surface.facing, dirs), dirs, weight,
                        crossed_medium(surface, crossed, hits.obj, paths.medium), paths.ids, paths.floor,
-                       np.ones(len(paths), dtype=bool), paths.band, family)
+                       np.ones(len(paths), dtype=bool), paths.band, family, hits.prim)
         exists = mirror | materials.dielectric[hits.obj]
         branches.append(branch.select(exists & (max_channel(weight) >= paths.floor)))
     return Paths.concat(branches)
@@ -149,7 +149,7 @@ def trace(accel: Accelerator, materials: Materials, paths: Paths, max_depth: int
     for depth in range(max_depth + 1):
         if len(paths) == 0:
             return
-        hits = accel.intersect(paths.origins, paths.dirs, paths.medium)
+        hits = accel.intersect(paths.origins, paths.dirs, paths.medium, paths.surface)
         tracer.escaped(paths.select(~hits.hit))
         paths, hits = paths.select(hits.hit), hits.select(hits.hit)
         inside = paths.medium != MISS

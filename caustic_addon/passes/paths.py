@@ -8,6 +8,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..tracing.hits import MISS
 from ..util.rows import take_rows
 from ..util.vectors import max_channel
 
@@ -32,6 +33,9 @@ class Paths:
     band      (n,) int64 wavelength band, or None: refract at 587.6 nm
     family    (n,) uint64 the sequence of (surface, event) so far, or None
               where no one asks (beam mode asks)
+    surface   (n,) int64 the triangle the path last scattered at, MISS
+              until it first does (where surfaces touch, the next one it
+              meets may lie at that very point: tracing/contact.py)
     """
 
     origins: np.ndarray
@@ -43,6 +47,7 @@ class Paths:
     specular: np.ndarray
     band: Optional[np.ndarray] = None
     family: Optional[np.ndarray] = None
+    surface: Optional[np.ndarray] = None
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -54,7 +59,8 @@ class Paths:
         (MISS: in air), with no specular event yet."""
         n = len(ids)
         return Paths(origins, dirs, weight, np.full(n, medium, dtype=np.int64), ids, floor,
-                     np.zeros(n, dtype=bool), band, np.zeros(n, dtype=np.uint64) if family else None)
+                     np.zeros(n, dtype=bool), band, np.zeros(n, dtype=np.uint64) if family else None,
+                     np.full(n, MISS, dtype=np.int64))
 
     def _columns(self) -> list[str]:
         return [f.name for f in fields(self) if getattr(self, f.name) is not None]

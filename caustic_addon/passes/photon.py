@@ -69,7 +69,7 @@ class PhotonTracer:
         weight, alive = roulette(weight, paths.floor, hash_uniform(paths.ids, 2 * depth + 1, self.seed))
         paths = Paths(self.accel.offset(surface.points, surface.facing, dirs), dirs, weight,
                       crossed_medium(surface, crossed, hits.obj, paths.medium), paths.ids, paths.floor,
-                      np.ones(len(paths), dtype=bool), paths.band)
+                      np.ones(len(paths), dtype=bool), paths.band, surface=hits.prim)
         return paths.select(alive)
 
 

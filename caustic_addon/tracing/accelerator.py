@@ -17,6 +17,7 @@ from embreex.mesh_construction import TriangleMesh
 
 from ..scene import Object
 from ..util.vectors import length, normalize
+from .contact import Contacts
 from .hits import MISS, Hits
 from .topology import open_edge_count, signed_volume, triangle_normals
 
@@ -90,6 +91,7 @@ class Accelerator:
         self.prim_offset = np.asarray(offsets, dtype=np.int64)
         for index in np.flatnonzero(self.closed):
             self._warn_if_thin(index)
+        self.contacts = Contacts(self)
         self.rays_cast = 0  # counts the passes' rays, not the probes'
 
     def _min_barycentric(self, corners: np.ndarray, area: np.ndarray) -> np.ndarray:
@@ -133,11 +135,14 @@ class Accelerator:
         if self._pool is not None:
             self._pool.shutdown()
 
+    def count_rays(self, n: int) -> None:
+        with self._count_lock:
+            self.rays_cast += n
+
     def _run(self, origins: np.ndarray, dirs: np.ndarray, **kwargs) -> list[dict]:
         """Embree over the batch, split across threads; one result dict per part."""
         n = len(origins)
-        with self._count_lock:
-            self.rays_cast += n
+        self.count_rays(n)
         o32 = np.ascontiguousarray(origins, dtype=np.float32)
         d32 = np.ascontiguousarray(dirs, dtype=np.float32)
         dists = kwargs.pop("dists", None)
@@ -150,7 +155,8 @@ class Accelerator:
                    for a, b in parts]
         return [f.result() for f in futures]
 
-    def intersect(self, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray | None = None) -> Hits:
+    def intersect(self, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray | None = None,
+                  leaving: np.ndarray | None = None) -> Hits:
         """Closest hits of rays `origins (n,3)`, `dirs (n,3)` (unit), world space.
 
         With `medium (n,)`, the closed object each ray is inside (MISS if
@@ -161,7 +167,9 @@ class Accelerator:
         crossed, met again at t ~ 0 past a shared edge; a face turned away
         from a ray that only touches a vertex; the far side of a crack in
         Embree's non-watertight triangle test. Passing them keeps a ray's
-        medium true to the side of the surface it is on."""
+        medium true to the side of the surface it is on. Where objects
+        touch, coincident surfaces are met in the order contact.py gives,
+        `leaving (n,)` being the face each ray scattered at (MISS if none)."""
         hits = self._closest(origins, dirs)
         if medium is None:
             return hits
@@ -174,6 +182,8 @@ class Accelerator:
             again = self._closest(start, dirs[skip])
             again.t += hits.t[skip] + length(start - hits.points[skip])
             hits.replace(skip, again)
+        if self.contacts.boxes:
+            self.contacts.resolve(hits, origins, dirs, medium, leaving)
         return hits
 
     def medium_at(self, points: np.ndarray) -> np.ndarray:
@@ -216,21 +226,27 @@ class Accelerator:
 
     def _closest(self, origins: np.ndarray, dirs: np.ndarray) -> Hits:
         if len(origins) == 0:
+            return self.as_hits({}, origins, np.arange(len(self.objects)))
+        parts = self._run(origins, dirs, output=1)
+        raw = {key: np.concatenate([p[key] for p in parts]) for key in ("geomID", "primID", "tfar", "u", "v")}
+        return self.as_hits(raw, origins, np.arange(len(self.objects)))
+
+    def as_hits(self, raw: dict, origins: np.ndarray, members: np.ndarray) -> Hits:
+        """Hits from embreex's output `raw` for rays from `origins (n,3)`,
+        cast in an Embree scene whose geomIDs are the objects `members`."""
+        if len(origins) == 0:
             empty = np.zeros(0)
             return Hits(empty, empty.astype(np.int64), empty.astype(np.int64), empty, empty, np.zeros((0, 3)))
-        parts = self._run(origins, dirs, output=1)
-        geom = np.concatenate([p["geomID"] for p in parts]).astype(np.int64)
-        prim = np.concatenate([p["primID"] for p in parts]).astype(np.int64)
-        t = np.concatenate([p["tfar"] for p in parts]).astype(np.float64)
-        u = np.concatenate([p["u"] for p in parts]).astype(np.float64)
-        v = np.concatenate([p["v"] for p in parts]).astype(np.float64)
+        geom = raw["geomID"].astype(np.int64)
         miss = geom < 0
-        t[miss] = np.inf
-        prim = np.where(miss, MISS, prim + self.prim_offset[np.maximum(geom, 0)])
+        obj = np.where(miss, MISS, np.take(members, np.maximum(geom, 0)))
+        t = np.where(miss, np.inf, raw["tfar"].astype(np.float64))
+        u, v = raw["u"].astype(np.float64), raw["v"].astype(np.float64)
+        prim = np.where(miss, MISS, raw["primID"].astype(np.int64) + self.prim_offset[np.maximum(obj, 0)])
         points = origins.astype(np.float64, copy=True)
         hit = np.flatnonzero(~miss)
         points[hit] = self.surface_points(prim[hit], u[hit], v[hit])
-        return Hits(t, np.where(miss, MISS, geom), prim, u, v, points)
+        return Hits(t, obj, prim, u, v, points)
 
     def surface_points(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         """(n,3) float64 points of triangles `prim` at Embree's barycentrics,
