@@ -169,11 +169,11 @@ def on_maps(accel: Accelerator, maps: dict, paths: Paths, hits: Hits):
     """Where the paths that have met a specular surface land on a
     receiver's map (`maps`: object index -> IlluminationMap), one receiver
     at a time: (object index, rows (k,) of `paths`, xy (k,2) chart metres,
-    scale (k,) chart area per world area)."""
+    scale (k,) chart area per world area, island (k,) of the chart)."""
     land = np.flatnonzero(paths.specular & np.isin(hits.obj, list(maps)))
     for index in np.unique(hits.obj[land]):
         rows = land[hits.obj[land] == index]
         local = np.take(hits.prim, rows) - accel.prim_offset[index]
         chart = maps[index].chart
         xy = chart.coords(local, np.take(hits.u, rows), np.take(hits.v, rows), np.take(hits.points, rows, axis=0))
-        yield int(index), rows, xy, chart.area_scale(local)
+        yield int(index), rows, xy, chart.area_scale(local), chart.islands_of(local)

@@ -59,7 +59,7 @@ class PhotonTracer:
         pass
 
     def arrived(self, paths: Paths, hits: Hits) -> None:
-        for obj, rows, xy, scale in on_maps(self.accel, self.maps, paths, hits):
+        for obj, rows, xy, scale, _ in on_maps(self.accel, self.maps, paths, hits):
             self.deposits.add_photons(obj, xy, np.take(paths.weight, rows, axis=0), scale)
             self.landed += len(rows)
 

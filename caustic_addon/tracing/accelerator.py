@@ -239,7 +239,8 @@ class Accelerator:
             return Hits(empty, empty.astype(np.int64), empty.astype(np.int64), empty, empty, np.zeros((0, 3)))
         geom = raw["geomID"].astype(np.int64)
         miss = geom < 0
-        obj = np.where(miss, MISS, np.take(members, np.maximum(geom, 0)))
+        # a miss takes the MISS appended to `members`, which may be empty
+        obj = np.take(np.append(np.asarray(members, dtype=np.int64), MISS), np.where(miss, len(members), geom))
         t = np.where(miss, np.inf, raw["tfar"].astype(np.float64))
         u, v = raw["u"].astype(np.float64), raw["v"].astype(np.float64)
         prim = np.where(miss, MISS, raw["primID"].astype(np.int64) + self.prim_offset[np.maximum(obj, 0)])
