@@ -47,9 +47,11 @@ def mesh_pieces(triangles: np.ndarray, corner_keys: np.ndarray, group: np.ndarra
     """(nt,) labels 0..k-1 of the pieces of a mesh: triangles of one
     `group (nt,)` joined through shared edges, an edge being two corners of
     equal keys (`corner_keys (nt,3)` int64: welded positions, or positions
-    and UVs for UV islands). Labels spread as the smallest over each edge,
-    with pointer jumping, until nothing changes (a few dozen passes of
-    numpy over the edges)."""
+    and UVs for UV islands). Connected components by hooking and pointer
+    jumping (Shiloach and Vishkin 1982): each round hooks the larger root
+    of every edge whose ends differ onto the smaller, then points every
+    triangle at its root; a few rounds, each a numpy pass over the edges
+    still between pieces."""
     nt = len(triangles)
     if nt == 0:
         return np.zeros(0, dtype=np.int64)
@@ -60,14 +62,17 @@ def mesh_pieces(triangles: np.ndarray, corner_keys: np.ndarray, group: np.ndarra
     order = np.argsort(key, kind="stable")
     same = key[order][1:] == key[order][:-1]
     left, right = owner[order][:-1][same], owner[order][1:][same]
-    labels = np.arange(nt)
+    root = np.arange(nt)
     while True:
-        low = np.minimum(labels[left], labels[right])
-        new = labels.copy()
-        np.minimum.at(new, left, low)
-        np.minimum.at(new, right, low)
-        new = new[new]
-        if np.array_equal(new, labels):
+        low, high = np.minimum(root[left], root[right]), np.maximum(root[left], root[right])
+        apart = np.flatnonzero(low != high)
+        if len(apart) == 0:
             break
-        labels = new
-    return np.unique(labels, return_inverse=True)[1].reshape(-1)
+        left, right = left[apart], right[apart]
+        np.minimum.at(root, high[apart], low[apart])
+        while True:
+            up = root[root]
+            if np.array_equal(up, root):
+                break
+            root = up
+    return np.unique(root, return_inverse=True)[1].reshape(-1)

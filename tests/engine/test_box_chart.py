@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from caustic_addon import Dielectric, Diffuse, Object, RenderSettings, Scene, SunLight, render, shapes
+from caustic_addon import Dielectric, Diffuse, Mesh, Object, RenderSettings, Scene, SunLight, render, shapes
 from caustic_addon.maps.box_chart import BoxChart
 from caustic_addon.optics.specular import fresnel_dielectric
 from caustic_addon.passes.camera_rays import eye_rays
@@ -131,3 +131,20 @@ def test_the_bowl_is_closed_and_holds_its_volume():
     bowl = shapes.bowl(0.5, 0.05, (0.2, -0.1, 0.3), 128, 32)
     assert open_edge_count(bowl.triangles, bowl.vertices) == 0
     assert signed_volume(bowl.corners) == pytest.approx(2 * math.pi * (0.5 ** 3 - 0.45 ** 3) / 3, rel=3e-3)
+
+
+def test_a_receiver_whose_box_chart_overlaps_itself_is_named():
+    """A spiral ramp of two turns is one piece at overlapping depths whose
+    turns lie over each other seen from above: no depth slab separates
+    them, and the warning names the object and the face."""
+    r, turn = np.linspace(0.3, 1.0, 4), np.linspace(0.0, 4 * math.pi, 97)
+    gr, gt = np.meshgrid(r, turn, indexing="ij")
+    vertices = np.stack([gr * np.cos(gt), gr * np.sin(gt), 0.05 * gt], -1).reshape(-1, 3)
+    idx = np.arange(vertices.shape[0]).reshape(gr.shape)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    ramp = Mesh(vertices, np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]))
+    scene = sun_through_slab(ramp, 0.0)
+    scene.objects[0].name = "Ramp"
+    warnings = render(scene, RenderSettings(lamp_rays=2_000, spp=1)).warnings
+    print(warnings)
+    assert any("'Ramp' has no UV map" in w and "Z overlap" in w for w in warnings)
