@@ -18,6 +18,7 @@ from mathutils import Matrix
 
 from ..caustic_addon import ImageFrame
 from ..export.materials import BAKE_TAG as TAG
+from .box_chart_nodes import box_chart_vector
 
 NODE_NAME = "Caustic Bake"
 # A Color Ramp's most elements.
@@ -26,13 +27,17 @@ SHARE_STOPS = 32
 
 def _chart_coordinates(nodes, links, frame: ImageFrame, uv_layer: str):
     """A Mapping node that turns the shading point into the [0,1]^2
-    coordinates of the image that `frame` places: from the world position
-    or from the UV map `uv_layer`, as the frame says."""
+    coordinates of the image that `frame` places: from the world position,
+    from the UV map `uv_layer`, or from the box chart the engine made for a
+    curved receiver without one, as the frame says."""
     mapping = nodes.new('ShaderNodeMapping')
     mapping.vector_type = 'TEXTURE'
     if frame.coordinates == 'POSITION':
         source = nodes.new('ShaderNodeNewGeometry')
         links.new(source.outputs['Position'], mapping.inputs['Vector'])
+    elif frame.coordinates == 'BOX':
+        source, chart = box_chart_vector(nodes, links, frame)
+        links.new(chart, mapping.inputs['Vector'])
     else:
         source = nodes.new('ShaderNodeUVMap')
         source.uv_map = uv_layer

@@ -178,3 +178,42 @@ def test_a_baked_receiver_reads_as_before_the_bake(addon, floor_kind):
     assert not any("Floor" in w for w in warnings)
     assert bpy.ops.caustic.bake() == {'FINISHED'}
     assert len([n for n in material.node_tree.nodes if n.bl_idname == 'ShaderNodeGroup']) == 1
+
+
+def test_a_sphere_without_uvs_bakes_through_its_box_chart(addon, tmp_path):
+    """A ball with no UV map, lit by a sun through a glass slab: the bake
+    looks its box chart up from the position and true normal, and Cycles
+    shows the baked caustic (slab and sun hidden) as the caustic pass has
+    it, pixel by pixel, seams included; the mesh gets no UV map."""
+    ball = scenes.add_sphere(0.5, (0.0, 0.0, 0.0), scenes.diffuse_material(), segments=96, rings=48)
+    while ball.data.uv_layers:
+        ball.data.uv_layers.remove(ball.data.uv_layers[0])
+    bpy.ops.mesh.primitive_cylinder_add(vertices=64, radius=0.9, depth=0.1, location=(4.0 * math.tan(0.5), 0, 4.0))
+    slab = bpy.context.object
+    slab.data.materials.append(scenes.glass_material())
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))
+    sun.data.energy, sun.data.angle = 10.0, 0.0
+    sun.rotation_euler = (0.0, 0.5, 0.0)  # travelling along (-sin 0.5, 0, -cos 0.5)
+    bpy.context.scene.collection.objects.link(sun)
+    scenes.add_camera((0.6, -2.6, 1.6), target=(0.0, 0.0, 0.1), lens=85.0)
+    scenes.set_resolution(64, 64)
+    bpy.context.scene.caustic.lamp_rays = 100_000
+    assert bpy.ops.caustic.bake() == {'FINISHED'}
+    kinds = {node.bl_idname for node in bpy.data.node_groups[0].nodes}
+    assert 'ShaderNodeNewGeometry' in kinds and 'ShaderNodeUVMap' not in kinds
+    assert len(ball.data.uv_layers) == 0
+    read = addon.export.read_scene(bpy.context)
+    caustic = addon.caustic_addon.render(read.scene, addon.export.render_settings(bpy.context.scene.caustic,
+                                                                                   spp=16)).passes["caustic"]
+    slab.hide_render = sun.hide_render = True
+    baked = cycles_render(str(tmp_path), samples=64)[..., :3]
+    luminance = caustic[..., 1]
+    pad = np.pad(luminance, 1)
+    lowest = np.min([pad[i:i + 64, j:j + 64] for i in range(3) for j in range(3)], axis=0)
+    lit = lowest > 0.3 * luminance.max()
+    difference = (baked[..., 1] - luminance)[lit] / luminance[lit]
+    print(f"baked in Cycles against the caustic pass over {lit.sum()} lit pixels: mean {difference.mean():+.4f}, "
+          f"mean |difference| {np.abs(difference).mean():.4f}, 99th percentile {np.percentile(np.abs(difference), 99):.4f}")
+    assert lit.sum() > 500
+    assert abs(difference.mean()) < 0.02
+    assert np.percentile(np.abs(difference), 99) < 0.1
