@@ -12,6 +12,7 @@ illumination maps), renderer (all of it, in one call); beneath them util,
 sampling and optics; beside them cli, the command line.
 """
 
+from .cli.image_io import write_exr_channels
 from .errors import Cancelled, SceneError
 from .maps.cache import MapCache
 from .maps.charts import ImageFrame
@@ -24,5 +25,5 @@ from .scene import (AreaLight, Camera, Dielectric, Diffuse, Mesh, Object, PointL
 __all__ = [
     "AreaLight", "Camera", "Cancelled", "Dielectric", "Diffuse", "IlluminationMap", "ImageFrame", "MapCache", "Mesh", "Object", "PointLight", "Reflector",
     "RenderResult", "RenderSettings", "Scene", "SceneError", "SpotLight", "SunLight", "World", "absorption_from_color",
-    "paper", "render", "shapes", "volume_absorption",
+    "paper", "render", "shapes", "volume_absorption", "write_exr_channels",
 ]

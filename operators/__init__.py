@@ -2,6 +2,7 @@
 
 import bpy
 
+from .animation import CAUSTIC_OT_render_animation
 from .bake import CAUSTIC_OT_bake, CAUSTIC_OT_unbake
 from .compare import CAUSTIC_OT_compare_cycles
 from .paper_scene import CAUSTIC_OT_add_paper_scene
@@ -10,6 +11,7 @@ from .render import CAUSTIC_OT_render
 
 register, unregister = bpy.utils.register_classes_factory((
     CAUSTIC_OT_render,
+    CAUSTIC_OT_render_animation,
     CAUSTIC_OT_bake,
     CAUSTIC_OT_unbake,
     CAUSTIC_OT_compare_cycles,

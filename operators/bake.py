@@ -10,7 +10,7 @@ from ..jobs import RenderJob
 from ..writeback.bake_group import baked_nodes, make_group, material_output, unwire, wire
 from ..writeback.images import write_image
 from ..writeback.results import record_run
-from .render import no_render_running
+from .engine_run import no_render_running
 
 IMAGE_PREFIX = "Caustic Map "
 GROUP_PREFIX = "Caustic Bake "

@@ -14,7 +14,8 @@ from ..export.cycles_still import cycles_enabled
 from ..jobs import RenderJob
 from ..writeback.images import show_image, write_image
 from ..writeback.results import record_run
-from .render import RESULT_IMAGE, no_render_running
+from .engine_run import no_render_running
+from .render import RESULT_IMAGE
 
 REFERENCE_IMAGE = "Cycles Reference"
 DIFFERENCE_IMAGE = "Difference"

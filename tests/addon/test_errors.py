@@ -90,8 +90,9 @@ def test_open_glass_mesh_renders_with_a_warning(reports):
     assert bpy.ops.caustic.render() == {'FINISHED'}
     assert "'Ball' is not a closed mesh" in reports() and "light may leak" in reports.last
     after = snapshot_file()
-    # Only the asked-for output changed: the new image and the result fields.
-    assert set(after["images"]) - set(before["images"]) == {"Caustic Render"}
+    # Only the asked-for output changed: the new images (the render and its passes) and the result fields.
+    assert set(after["images"]) - set(before["images"]) == {
+        "Caustic Render", "Caustic Render Direct", "Caustic Render Caustic", "Caustic Render Ambient"}
     for kind in after:
         if kind not in ("images", "scenes"):
             assert after[kind] == before[kind], kind
