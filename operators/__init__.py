@@ -4,6 +4,7 @@ import bpy
 
 from .animation import CAUSTIC_OT_render_animation
 from .bake import CAUSTIC_OT_bake, CAUSTIC_OT_unbake
+from .bake_animation import CAUSTIC_OT_bake_animation
 from .compare import CAUSTIC_OT_compare_cycles
 from .paper_scene import CAUSTIC_OT_add_paper_scene
 from .presets import CAUSTIC_OT_apply_preset
@@ -13,6 +14,7 @@ register, unregister = bpy.utils.register_classes_factory((
     CAUSTIC_OT_render,
     CAUSTIC_OT_render_animation,
     CAUSTIC_OT_bake,
+    CAUSTIC_OT_bake_animation,
     CAUSTIC_OT_unbake,
     CAUSTIC_OT_compare_cycles,
     CAUSTIC_OT_apply_preset,

@@ -19,7 +19,19 @@ def frames_text(frames: list[int]) -> str:
     return f"frame {frames[0]}" if len(frames) == 1 else f"frames {frames[0]}-{frames[-1]}"
 
 
-class CAUSTIC_OT_render_animation(EngineOperator, bpy.types.Operator):
+class FrameRangeOptions:
+    """Operator options for a frame range; unset, the scene's."""
+
+    frame_start: bpy.props.IntProperty(name="Start Frame", options={'SKIP_SAVE'},
+                                       description="First frame (default: the scene's)")
+    frame_end: bpy.props.IntProperty(name="End Frame", options={'SKIP_SAVE'},
+                                     description="Last frame (default: the scene's)")
+
+    def _given(self, name: str):
+        return getattr(self, name) if self.properties.is_property_set(name) else None
+
+
+class CAUSTIC_OT_render_animation(FrameRangeOptions, EngineOperator, bpy.types.Operator):
     bl_idname = "caustic.render_animation"
     bl_label = "Render Caustic Animation"
     bl_description = ("Render the frame range with caustics, each frame to the output path (Output Properties) "
@@ -30,14 +42,6 @@ class CAUSTIC_OT_render_animation(EngineOperator, bpy.types.Operator):
         name="File Path", options={'SKIP_SAVE'},
         description="Where the frames go instead of the output path: // is the .blend's folder, the last # run "
                     "the frame number")
-    frame_start: bpy.props.IntProperty(name="Start Frame", options={'SKIP_SAVE'},
-                                       description="First frame to render (default: the scene's)")
-    frame_end: bpy.props.IntProperty(name="End Frame", options={'SKIP_SAVE'},
-                                     description="Last frame to render (default: the scene's)")
-
-    def _given(self, name: str):
-        return getattr(self, name) if self.properties.is_property_set(name) else None
-
     def _runner(self, context) -> JobRunner | None:
         scene = context.scene
         try:

@@ -44,6 +44,7 @@ class CAUSTIC_PT_render(_CausticPanel, bpy.types.Panel):
             col.label(text=f"  of which refinement added {props.last_refined:,}")
         row = layout.row(align=True)
         row.operator("caustic.bake", icon='TEXTURE')
+        row.operator("caustic.bake_animation", text="Animation", icon='RENDER_ANIMATION')
         row.operator("caustic.unbake", text="", icon='X')
 
 

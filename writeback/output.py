@@ -31,15 +31,22 @@ class OutputError(Exception):
     """The frames cannot be written where they should go; the message says why."""
 
 
-def frame_range(scene, start: int | None = None, end: int | None = None) -> list[int]:
-    """The frames from `start` to `end` (the scene's range where None), every scene.frame_step-th."""
+def frame_range(scene, start: int | None = None, end: int | None = None, step: int | None = None) -> list[int]:
+    """The frames from `start` to `end` (the scene's range where None), every `step`-th (the scene's frame step)."""
     start = scene.frame_start if start is None else start
     end = scene.frame_end if end is None else end
     if end < start:
         what = "is empty" if end == start - 1 else "runs backwards"
         raise OutputError(f"The frame range {start} to {end} {what}: the end frame must not come before "
                           "the start frame")
-    return list(range(start, end + 1, scene.frame_step))
+    return list(range(start, end + 1, scene.frame_step if step is None else step))
+
+
+def check_saved(path: str) -> None:
+    """OutputError if `path` is relative to the .blend (//) and the .blend has no folder yet."""
+    if path.startswith("//") and not bpy.data.is_saved:
+        raise OutputError(f"The output path '{path}' is relative to the .blend file, which is not saved yet: "
+                          "save it, or give an absolute path")
 
 
 def frame_paths(scene, frames: list[int], filepath: str = "") -> dict[int, str]:
@@ -54,9 +61,7 @@ def frame_paths(scene, frames: list[int], filepath: str = "") -> dict[int, str]:
             overrides.set(scene.render, "filepath", filepath)
         template = scene.render.filepath
         paths = {frame: scene.render.frame_path(frame=frame) for frame in frames}
-    if template.startswith("//") and not bpy.data.is_saved:
-        raise OutputError(f"The output path '{template}' is relative to the .blend file, which is not saved yet: "
-                          "save it, or give an absolute path")
+    check_saved(template)
     runs = re.findall("#+", os.path.basename(template))
     digits = len(runs[-1]) if runs else DEFAULT_DIGITS
     widest = max(frames, key=lambda frame: len(str(frame)))
@@ -101,6 +106,11 @@ def blender_reason(exc: RuntimeError) -> str:
     """The first line of a Blender error, without its "Error: Could not write image: " prefix."""
     line = next((line for line in str(exc).splitlines() if line.strip()), "")
     return line.removeprefix("Error: ").removeprefix("Could not write image: ")
+
+
+def write_float_exr(path: str, rgba: np.ndarray) -> None:
+    """`rgba (h,w,4)`, row 0 at the top, as a float32 EXR written whole at `path`."""
+    write_whole(path, lambda temporary: write_exr_channels(temporary, {c: rgba[..., i] for i, c in enumerate("RGBA")}))
 
 
 def multilayer_channels(layer: str, image: np.ndarray, passes: dict[str, np.ndarray]) -> dict[str, np.ndarray]:

@@ -11,7 +11,7 @@ import blender_scenes as scenes
 from snapshot import material_state, snapshot_file
 from test_render import cycles_render
 
-RESULT_FIELDS = {"last_seconds", "last_lamp_rays", "last_refined"}
+RESULT_FIELDS = {"last_seconds", "last_lamp_rays", "last_refined", "progress"}
 
 
 def test_bake_adds_one_node_group_and_unbake_restores_the_material():
