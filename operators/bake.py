@@ -9,6 +9,7 @@ import bpy
 import numpy as np
 
 from ..export import InputError, SceneRead, read_scene, render_settings
+from ..export.materials import albedo_socket
 from ..jobs import JobRunner, RenderJob, StepError
 from ..writeback.bake_group import baked_nodes, files_on_disk, make_group, material_output, unwire, wire
 from ..writeback.images import write_image
@@ -62,7 +63,7 @@ def wire_bake(read: SceneRead, name: str, material, image, imap):
     uv_layer = source.uv_layers.active.name if source.uv_layers.active is not None else ""
     albedo = next(o.material.albedo for o in read.scene.objects if o.name == name)
     group = make_group(GROUP_PREFIX + name, image, imap, albedo, uv_layer)
-    wire(material, group)
+    wire(material, group, albedo_socket(material))
     return group
 
 

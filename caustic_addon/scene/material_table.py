@@ -3,13 +3,14 @@ index in one numpy gather instead of a Python loop per hit."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..optics.dispersion import cauchy_ior
 from ..optics.spectrum import bands
 from .scene import Object
+from .textures import Node, SurfacePoints, as_color
 
 
 @dataclass
@@ -24,6 +25,7 @@ class Materials:
     emission (m,3) radiance a surface gives off
     ior_bands (m,K)             IOR in each of the K wavelength bands
     band_weights (K,3)          each band's RGB share (spectrum.Bands)
+    textures                    object index -> the nodes of its albedo
 
     K is 1, with ior_bands = ior, unless a dielectric disperses.
     """
@@ -40,6 +42,7 @@ class Materials:
     emission: np.ndarray
     ior_bands: np.ndarray
     band_weights: np.ndarray
+    textures: dict[int, Node] = field(default_factory=dict)
 
     @property
     def band_count(self) -> int:
@@ -70,7 +73,23 @@ class Materials:
             exponent=column("exponent", 1.0),
             ior_bands=cauchy_ior(ior[:, None], abbe[:, None], spectral.wavelengths[None, :]),
             band_weights=spectral.weights,
+            textures={index: o.material.texture for index, o in enumerate(objects)
+                      if getattr(o.material, "texture", None) is not None},
         )
+
+    def albedo_at(self, obj: np.ndarray, triangle: np.ndarray, u: np.ndarray, v: np.ndarray,
+                  points: np.ndarray) -> np.ndarray:
+        """(n,3) albedo at surface points of objects `obj (n,)`: a textured
+        object's nodes at its `triangle (n,)` (index in its own mesh),
+        barycentrics `u, v (n,)` and world `points (n,3)`; else its colour."""
+        albedo = np.take(self.albedo, obj, axis=0)
+        for index, texture in self.textures.items():
+            rows = np.flatnonzero(obj == index)
+            if len(rows):
+                at = SurfacePoints(np.take(points, rows, axis=0), np.take(triangle, rows), np.take(u, rows),
+                                   np.take(v, rows))
+                albedo[rows] = as_color(texture.evaluate(at))
+        return albedo
 
     @property
     def specular_surface(self) -> np.ndarray:
