@@ -40,15 +40,18 @@ class SceneRead:
     instanced: set[str] = field(default_factory=set)
 
 
-def read_scene(context, with_camera: bool = True) -> SceneRead:
-    """The engine scene of the context's view layer. Raises InputError if it
-    has no camera (when `with_camera`), no light (neither a lamp nor a
-    world) or no receiver."""
-    scene = context.scene
-    depsgraph = context.evaluated_depsgraph_get()
+def read_scene(context, with_camera: bool = True, depsgraph=None) -> SceneRead:
+    """The engine scene of the context's view layer, or of `depsgraph` (as
+    a render evaluates it) when given. Raises InputError if it has no
+    camera (when `with_camera`), no light (neither a lamp nor a world) or
+    no receiver."""
+    if depsgraph is None:
+        scene, view_layer, depsgraph = context.scene, context.view_layer, context.evaluated_depsgraph_get()
+    else:
+        scene, view_layer = depsgraph.scene, depsgraph.view_layer
     camera = read_camera(scene, depsgraph) if with_camera else dummy_camera()
     warnings = camera_warnings(scene) if with_camera else []
-    renderable = renderable_objects(context.view_layer)
+    renderable = renderable_objects(view_layer)
     read = SceneRead(Scene(objects=[], lights=[], camera=camera), warnings)
     surfaces: dict[Optional[str], Surface] = {}
     seen = set()

@@ -10,7 +10,9 @@ from .paper_scene import CAUSTIC_OT_add_paper_scene
 from .presets import CAUSTIC_OT_apply_preset
 from .render import CAUSTIC_OT_render
 
-register, unregister = bpy.utils.register_classes_factory((
+from . import bake_on_render
+
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory((
     CAUSTIC_OT_render,
     CAUSTIC_OT_render_animation,
     CAUSTIC_OT_bake,
@@ -20,3 +22,13 @@ register, unregister = bpy.utils.register_classes_factory((
     CAUSTIC_OT_apply_preset,
     CAUSTIC_OT_add_paper_scene,
 ))
+
+
+def register() -> None:
+    _register_classes()
+    bake_on_render.register()
+
+
+def unregister() -> None:
+    bake_on_render.unregister()
+    _unregister_classes()

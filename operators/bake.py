@@ -42,9 +42,9 @@ def bakeable(read: SceneRead, names) -> tuple[dict, list[str]]:
     return plan, warnings
 
 
-def read_for_bake(context) -> SceneRead:
-    """The scene to bake; InputError if nothing in it casts caustics."""
-    read = read_scene(context, with_camera=False)
+def read_for_bake(context, depsgraph=None) -> SceneRead:
+    """The scene to bake (as `depsgraph` evaluates it, if given); InputError if nothing in it casts caustics."""
+    read = read_scene(context, with_camera=False, depsgraph=depsgraph)
     if not read.scene.casters:
         raise InputError("Nothing to bake: no object is transparent or a reflector")
     return read
@@ -55,6 +55,16 @@ def map_rgba(imap) -> np.ndarray:
     rgba = np.ones(imap.shape + (4,), dtype=np.float32)
     rgba[..., :3] = imap.irradiance()
     return rgba[::-1]
+
+
+def bake_maps(read: SceneRead, maps) -> tuple[list[str], list[str]]:
+    """Each bakeable receiver's map of `maps` into a packed image its
+    material shows, replacing an earlier bake: (receivers baked, warnings)."""
+    plan, warnings = bakeable(read, maps)
+    for name, material in plan.items():
+        unwire(material)
+        wire_bake(read, name, material, write_image(IMAGE_PREFIX + name, map_rgba(maps[name])), maps[name])
+    return list(plan), warnings
 
 
 def wire_bake(read: SceneRead, name: str, material, image, imap):
@@ -85,17 +95,12 @@ class CAUSTIC_OT_bake(EngineOperator, bpy.types.Operator):
         return JobRunner([context.scene.frame_current], lambda frame: job, self._write)
 
     def _write(self, frame: int, job: RenderJob) -> None:
-        read, maps = self._read, job.result.maps
-        plan, warnings = bakeable(read, maps)
-        for warning in read.warnings + job.result.warnings + warnings:
+        self._baked, warnings = bake_maps(self._read, job.result.maps)
+        for warning in self._read.warnings + job.result.warnings + warnings:
             self.report({'WARNING'}, warning)
-        if not plan:
+        if not self._baked:
             raise StepError("No receiver's material can take a baked caustic")
-        for name, material in plan.items():
-            unwire(material)
-            wire_bake(read, name, material, write_image(IMAGE_PREFIX + name, map_rgba(maps[name])), maps[name])
         record_run(bpy.context.scene.caustic, job)
-        self._baked = list(plan)
 
     def _done(self, context, runner: JobRunner) -> set:
         if runner.cancelled:

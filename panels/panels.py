@@ -46,6 +46,7 @@ class CAUSTIC_PT_render(_CausticPanel, bpy.types.Panel):
         row.operator("caustic.bake", icon='TEXTURE')
         row.operator("caustic.bake_animation", text="Animation", icon='RENDER_ANIMATION')
         row.operator("caustic.unbake", text="", icon='X')
+        layout.prop(props, "use_bake_on_render")
 
 
 class CAUSTIC_PT_photons(_CausticPanel, bpy.types.Panel):

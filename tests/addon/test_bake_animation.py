@@ -13,6 +13,7 @@ import pytest
 
 import blender_scenes as scenes
 from snapshot import material_state, snapshot_file
+from test_animation import file_pixels
 from test_render import cycles_render
 
 
@@ -99,3 +100,39 @@ def test_an_unsaved_file_needs_a_folder(tmp_path):
     assert bpy.ops.caustic.bake_animation(directory=str(tmp_path / "baked"), frame_start=1, frame_end=2) == {
         'FINISHED'}
     assert sorted(os.listdir(tmp_path / "baked")) == ["Floor_0001.exr", "Floor_0002.exr"]
+
+
+def cycles_frames(tmp_path, name, frames):
+    """Cycles (CPU, 4 samples, float EXR) renders of `frames`, as `blender -b -a` renders them: (frame -> pixels)."""
+    scene = bpy.context.scene
+    scene.render.engine = 'CYCLES'
+    scene.cycles.device, scene.cycles.samples, scene.cycles.use_denoising = 'CPU', 4, False
+    scene.render.image_settings.file_format, scene.render.image_settings.color_depth = 'OPEN_EXR', '32'
+    scene.render.filepath = str(tmp_path / name / "f_#")
+    scene.frame_start, scene.frame_end = frames[0], frames[-1]
+    bpy.ops.render.render(animation=True)
+    return {frame: file_pixels(tmp_path / name / f"f_{frame}.exr") for frame in frames}
+
+
+def test_bake_while_rendering_gives_each_frame_its_own_caustic(tmp_path):
+    """A Cycles animation render with Bake While Rendering on equals the
+    render of a Bake Animation's sequence, frame by frame, and differs from
+    frame 1's bake held still."""
+    sliding_ball(tmp_path)
+    scene = bpy.context.scene
+    assert bpy.ops.caustic.bake_animation() == {'FINISHED'}
+    sequence = cycles_frames(tmp_path, "sequence", [2, 3])
+    bpy.ops.caustic.unbake()
+    scene.frame_set(1)
+    assert bpy.ops.caustic.bake() == {'FINISHED'}
+    held = cycles_frames(tmp_path, "held", [2])
+    bpy.ops.caustic.unbake()
+
+    scene.caustic.use_bake_on_render = True
+    scene.frame_set(1)
+    live = cycles_frames(tmp_path, "live", [2, 3])
+    for frame in (2, 3):
+        np.testing.assert_allclose(live[frame], sequence[frame], rtol=1e-4, atol=1e-5)
+    assert np.abs(held[2] - sequence[2])[..., :3].max() > 0.1
+    # the last frame's bake stays in the material, as Bake Caustics leaves it
+    assert bpy.data.images["Caustic Map Floor"].source != 'SEQUENCE'
