@@ -28,12 +28,6 @@ class EngineOperator:
     def poll(cls, context):
         return no_render_running(cls)
 
-    def _runner(self, context) -> JobRunner | None:
-        raise NotImplementedError
-
-    def _done(self, context, runner: JobRunner) -> set:
-        raise NotImplementedError
-
     def _status(self, runner: JobRunner) -> str:
         return f"Caustics: {runner.stage}, {runner.fraction:.0%} (Esc to cancel)"
 
@@ -65,7 +59,13 @@ class EngineOperator:
             return {'RUNNING_MODAL'}
         if event.type != 'TIMER':
             return {'PASS_THROUGH'}
-        if self._run.tick():
+        try:
+            ticking = self._run.tick()
+        except Exception:
+            # a bug in a step: free the UI for the next run before Blender reports it
+            self._stop(context)
+            raise
+        if ticking:
             context.window_manager.progress_update(self._run.fraction)
             context.scene.caustic.progress = self._run.fraction
             context.workspace.status_text_set(self._status(self._run))
