@@ -12,7 +12,7 @@ from snapshot import material_state, snapshot_file
 from test_render import cycles_render
 from test_textures_vs_cycles import random_image
 
-RESULT_FIELDS = {"last_seconds", "last_lamp_rays", "last_refined"}
+RESULT_FIELDS = {"last_seconds", "last_lamp_rays", "last_refined", "progress"}
 
 
 def test_bake_adds_one_node_group_and_unbake_restores_the_material():
