@@ -50,9 +50,8 @@ def read_scene(context, with_camera: bool = True, depsgraph=None) -> SceneRead:
     camera, or a view layer disabled for rendering, which Blender does not
     render, is read as the viewport shows it, and a warning names what a
     render would see otherwise."""
-    scene, view_layer = context.scene, context.view_layer
+    scene, view_layer = (context.scene, context.view_layer) if depsgraph is None else (depsgraph.scene, None)
     if depsgraph is not None:
-        scene = depsgraph.scene
         read = _read_objects(scene, depsgraph, with_camera)
     elif scene.camera is not None and view_layer.use:
         read = read_as_render(scene, view_layer, lambda depsgraph: _read_objects(scene, depsgraph, with_camera))
