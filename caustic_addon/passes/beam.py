@@ -40,6 +40,7 @@ from ..emission.world_sun import extract_sun
 from ..maps.deposits import Deposits
 from ..maps.illumination_map import IlluminationMap
 from ..maps.raster import signed_areas
+from ..sampling.hash import hash_uniform
 from ..scene import RenderSettings, Scene
 from ..scene.material_table import Materials
 from ..tracing.accelerator import Accelerator
@@ -47,10 +48,10 @@ from ..tracing.hits import MISS, Hits
 from ..util.parallel import Monitor, run_chunks
 from ..util.rows import row_ids, take_rows
 from ..util.vectors import DIVISION_FLOOR, max_channel
-from .bounce import Interface, on_maps, split, trace
+from .bounce import SCATTERED, Interface, facets, on_maps, split, trace
 from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
 from .paths import MIN_BRANCH_WEIGHT, Paths, relative_floor
-from .photon import photon_jobs
+from .photon import FACET_STREAM, photon_jobs
 
 # A cell whose two triangles' landed areas differ by more than this factor is
 # split (measured on the ball lens: lower factors spend paths for no gain).
@@ -93,10 +94,12 @@ class Landings:
 class BeamTracer:
     """The beam pass's choices in the bounce (bounce.trace): record where
     each branch lands on a receiver's map after a specular event, and follow
-    both branches at every specular hit."""
+    both branches at every specular hit; at a rough one, about a microfacet
+    normal of the vertex's own (random numbers from its grid key, its bounce
+    and `seed`), which gives the branch a family of its own."""
 
-    def __init__(self, accel: Accelerator, materials: Materials, maps: dict):
-        self.accel, self.materials, self.maps = accel, materials, maps
+    def __init__(self, accel: Accelerator, materials: Materials, maps: dict, seed: int):
+        self.accel, self.materials, self.maps, self.seed = accel, materials, maps, seed
         self.landed: list[Landings] = []
 
     def escaped(self, paths: Paths) -> None:
@@ -111,18 +114,21 @@ class BeamTracer:
                                         np.full(len(rows), obj), xy, scale, weight, throughput))
 
     def scattered(self, paths: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
-        return split(self.accel, self.materials, paths, hits, surface)
+        if surface.rough.any():
+            uv = np.stack([hash_uniform(paths.ids, FACET_STREAM + 2 * depth + k, self.seed) for k in (0, 1)], axis=1)
+            surface = facets(surface, paths.dirs, self.materials, hits.obj, uv)
+        return split(self.accel, self.materials, paths, hits, surface, carries_light=True)
 
 
 def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap], origins: np.ndarray,
                 dirs: np.ndarray, weight: np.ndarray, vertex: np.ndarray, max_depth: int, start_medium: int = MISS,
-                band: int = 0) -> Landings:
+                band: int = 0, seed: int = 0) -> Landings:
     """Follow every branch of the vertex paths `vertex (n,)`, starting
     inside object `start_medium` (MISS: in air), until it lands on a
     receiver (after at least one specular event), leaves, or fades below
     MIN_BRANCH_WEIGHT. Dielectrics refract with their IOR in wavelength band
-    `band`."""
-    tracer = BeamTracer(accel, materials, maps)
+    `band`; rough surfaces scatter by random numbers of `seed`."""
+    tracer = BeamTracer(accel, materials, maps, seed)
     paths = Paths.start(origins, dirs, weight, vertex, start_medium, relative_floor(weight),
                         np.full(len(vertex), band, dtype=np.int64), family=True)
     trace(accel, materials, paths, max_depth, tracer)
@@ -225,11 +231,15 @@ def _diverging(lookup: _Lookup, cells: _Cells, width: int) -> np.ndarray:
     cell's corners land in a family of throughput at least
     REFINE_THROUGHPUT (a silhouette, total internal reflection), or its two
     triangles land with opposite orientation (a fold of the caustic crosses
-    it) or areas more than REFINE_RATIO apart."""
+    it) or areas more than REFINE_RATIO apart. Paths a rough surface
+    scattered (SCATTERED families) part from every neighbour, and splitting
+    would not bring them together: they split no cell."""
     corners = cells.corners(width)
     element, group, landing, count = lookup.pairs(corners)
     split = np.zeros(len(corners), dtype=bool)
-    split[element[(count < 4) & (lookup.landings.throughput[landing] >= REFINE_THROUGHPUT)]] = True
+    strong = lookup.landings.throughput[landing] >= REFINE_THROUGHPUT
+    scattered = (lookup.landings.family[landing] & SCATTERED) != 0
+    split[element[(count < 4) & strong & ~scattered]] = True
     cell, group = lookup.first_of_each(element[count == 4], group[count == 4])
     first, second = _cell_halves(corners[cell], cells.take(cell), width)
     a, b = (signed_areas(np.stack([lookup.landings.xy[lookup.find(group, tri[:, k])] for k in range(3)], axis=1))
@@ -241,7 +251,7 @@ def _diverging(lookup: _Lookup, cells: _Cells, width: int) -> np.ndarray:
 
 def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: Accelerator, materials: Materials,
                maps: dict[int, IlluminationMap], max_depth: int, start_medium: int = MISS,
-               levels: int = 0, band: int = 0) -> JobResult:
+               levels: int = 0, band: int = 0, seed: int = 0) -> JobResult:
     """Trace grid rows [first_row, end_row) of `sources`, grids of one size
     traced as one batch (the points of a lamp with a size, say), in
     wavelength band `band`, whose paths start inside object `start_medium`,
@@ -262,7 +272,7 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
         weight *= materials.band_weights[band]
         order = np.argsort(which, kind="stable")
         return trace_paths(accel, materials, maps, origins, dirs, weight, vertex[order], max_depth, start_medium,
-                           band)
+                           band, seed)
 
     row, col = (a.ravel() * scale for a in np.meshgrid(np.arange(first_row, end_row - 1), np.arange(grid - 1),
                                                          indexing="ij"))
@@ -410,7 +420,7 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
         # size are traced together
         rows = max(1, min(settings.chunk_size // (grid * len(stack)), -(-(grid - 1) // settings.threads)))
         jobs += [partial(band_beams, stack, first, min(first + rows + 1, grid), accel, materials, maps,
-                         settings.max_depth, medium, settings.beam_refinement, band)
+                         settings.max_depth, medium, settings.beam_refinement, band, settings.seed)
                  for band in range(count) for first in range(0, grid - 1, rows)]
     jobs += photon_jobs(emitters, accel, materials, maps, settings)
     stats, deliver = deliverer(maps)
