@@ -39,6 +39,7 @@ from caustic_addon import (Camera, Dielectric, Diffuse, MapCache, Object, PointL
                            Scene, SpotLight, paper, render, shapes)
 from caustic_addon import renderer  # noqa: E402
 from caustic_addon.emission import aims  # noqa: E402
+from caustic_addon.emission.lamp_samples import sample_lamp  # noqa: E402
 from caustic_addon.passes import direct_light, eye, photon  # noqa: E402
 from caustic_addon.tracing.accelerator import Accelerator  # noqa: E402
 from caustic_addon.util.vectors import dot  # noqa: E402
@@ -184,17 +185,17 @@ def targeted_emission(repeats: int, quality: Quality) -> list[dict]:
 
 
 def direct_radiance_shadowing_all(accel, lights, energy, points, shading, facing, view, albedo, specular, exponent,
-                                  far):
+                                  far, *strata):
     """direct_light.direct_radiance, after casting the shadow rays it skips:
-    one per point and lamp behind the surface."""
+    one per point and (point) lamp behind the surface."""
     for light in lights:
-        to_light, dist, _ = direct_light.toward_light(light, energy, points, far)
-        behind = ~((dot(shading, to_light) > 0.0) & (dot(facing, to_light) > 0.0))
+        lamp = sample_lamp(light, energy, points, np.full((len(points), 2), 0.5), far)
+        behind = ~((dot(shading, lamp.dirs) > 0.0) & (dot(facing, lamp.dirs) > 0.0))
         if behind.any():
-            accel.occluded(accel.offset(points[behind], -facing[behind], to_light[behind]), to_light[behind],
-                           dist[behind] - 2.0 * accel.epsilon)
+            accel.occluded(accel.offset(points[behind], -facing[behind], lamp.dirs[behind]), lamp.dirs[behind],
+                           lamp.dist[behind] - 2.0 * accel.epsilon)
     return direct_light.direct_radiance(accel, lights, energy, points, shading, facing, view, albedo, specular, exponent,
-                                        far)
+                                        far, *strata)
 
 
 def shadow_rays_behind(repeats: int) -> dict:

@@ -15,11 +15,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Optional
 
 import bpy
 import numpy as np
 
 from ..caustic_addon import Dielectric, Diffuse, Reflector, absorption_from_color, volume_absorption
+from ..caustic_addon import textures as nodes
+from .textures import Recipe, color_recipe
 
 DEFAULT_ALBEDO = 0.8
 GLASS_NODES = {'ShaderNodeBsdfGlass', 'ShaderNodeBsdfRefraction'}
@@ -39,7 +42,8 @@ class Surface:
     Roughness of glass or metal, `multiscatter` whether its distribution is
     Multiscatter GGX; `emission` the radiance it gives off (an Emission
     shader, or a Principled BSDF's emission), which the engine shows but
-    does not yet light anything with."""
+    does not yet light anything with; `texture` the nodes that drive a
+    receiver's colour (textures.py), if read."""
 
     transparent: bool
     reflector: bool = False
@@ -47,6 +51,7 @@ class Surface:
     ior: float = 1.5
     color: np.ndarray = field(default_factory=lambda: np.ones(3))
     albedo: np.ndarray = field(default_factory=lambda: np.full(3, DEFAULT_ALBEDO))
+    texture: Optional[Recipe] = None
     absorption: np.ndarray = field(default_factory=lambda: np.zeros(3))
     roughness: float = 0.0
     multiscatter: bool = True
@@ -60,6 +65,24 @@ def _value(node, name: str, what: str, warnings: list[str]):
         warnings.append(f"{what}: its {name} comes from other nodes; the unconnected value is used")
     value = socket.default_value
     return np.array(value[:3], dtype=np.float64) if hasattr(value, "__len__") else float(value)
+
+
+def _albedo(node, name: str, what: str, warnings: list[str]) -> tuple[np.ndarray, Optional[Recipe]]:
+    """(a colour input's own value, the recipe of the nodes that drive it or None)."""
+    socket = node.inputs[name]
+    return np.array(socket.default_value[:3], dtype=np.float64), color_recipe(socket, what, warnings)
+
+
+def albedo_socket(material):
+    """The colour input of the receiver shader `material` shows (Base
+    Color or Color), or None: what a bake multiplies the caustic by."""
+    if material is None or material.node_tree is None:
+        return None
+    shader = _shader(material, 'Surface')
+    if shader is None:
+        return None
+    name = {'ShaderNodeBsdfPrincipled': "Base Color", 'ShaderNodeBsdfDiffuse': "Color"}.get(shader.bl_idname)
+    return shader.inputs[name] if name is not None else None
 
 
 def _shader(material, output_socket: str):
@@ -106,10 +129,11 @@ def read_surface(material) -> Surface:
     if kind == 'ShaderNodeBsdfPrincipled':
         emission = _value(shader, "Emission Color", what, warnings) * _value(shader, "Emission Strength", what,
                                                                               warnings)
-        return Surface(transparent=False, albedo=_value(shader, "Base Color", what, warnings), emission=emission,
-                       warnings=warnings)
+        albedo, texture = _albedo(shader, "Base Color", what, warnings)
+        return Surface(transparent=False, albedo=albedo, texture=texture, emission=emission, warnings=warnings)
     if kind == 'ShaderNodeBsdfDiffuse':
-        return Surface(transparent=False, albedo=_value(shader, "Color", what, warnings), warnings=warnings)
+        albedo, texture = _albedo(shader, "Color", what, warnings)
+        return Surface(transparent=False, albedo=albedo, texture=texture, warnings=warnings)
     if kind == 'ShaderNodeEmission':
         return Surface(transparent=False, albedo=np.zeros(3), warnings=warnings,
                        emission=_value(shader, "Color", what, warnings) * _value(shader, "Strength", what, warnings))
@@ -157,15 +181,19 @@ def _read_volume(material, what: str, warnings: list[str]) -> np.ndarray:
     return volume_absorption(np.minimum(color, 1.0), _value(volume, "Density", what, warnings))
 
 
-def engine_material(surface: Surface, settings) -> Dielectric | Diffuse | Reflector:
-    """The engine material for an object of `Object.caustic` `settings` whose material reads as `surface`."""
+def engine_material(surface: Surface, settings,
+                    texture: Optional[nodes.Node] = None) -> Dielectric | Diffuse | Reflector:
+    """The engine material for an object of `Object.caustic` `settings`
+    whose material reads as `surface`, its colour from `texture` (the
+    surface's recipe bound to the object) if it has one."""
     role = settings.role
     if role == 'REFLECTOR' or (role == 'AUTO' and surface.reflector):
         return Reflector(surface.color if surface.reflector else np.ones(3), surface.roughness, surface.multiscatter)
     transparent = role == 'TRANSPARENT' or (role == 'AUTO' and surface.transparent)
     if not transparent:
         opaque = not (surface.transparent or surface.reflector)
-        return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO, emission=surface.emission)
+        return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO, emission=surface.emission,
+                       texture=texture if opaque else None)
     ior = settings.ior if settings.use_ior else (surface.ior if surface.transparent else 1.5)
     color = surface.color if surface.transparent else np.ones(3)
     if settings.absorption_from == 'COLOR':

@@ -16,6 +16,8 @@ from ..scene import RenderSettings, Scene
 
 # RenderSettings fields that change nothing in the maps.
 _EYE_ONLY = {"spp", "lamp_samples", "world_samples", "threads", "chunk_size"}
+# Material fields only the eye pass reads: a receiver's map holds irradiance.
+_SHADING_ONLY = {"albedo", "specular", "exponent", "emission", "texture"}
 
 
 def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
@@ -36,6 +38,8 @@ def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
         for array in (obj.mesh.vertices, obj.mesh.triangles, obj.mesh.corner_normals, obj.mesh.corner_uvs):
             add(array)
         for name, value in vars(obj.material).items():
+            if name in _SHADING_ONLY:
+                continue
             add(name)
             add(value if isinstance(value, np.ndarray) else np.asarray(value))
     for light in [*scene.lights, scene.world]:

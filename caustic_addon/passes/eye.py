@@ -83,7 +83,8 @@ class EyeTracer:
         facing = np.where((dot(facing, view) < 0.0)[:, None], -facing, facing)
         shading = accel.shading_normal(hits.prim, hits.u, hits.v)
         shading = np.where((dot(shading, view) < 0.0)[:, None], -shading, shading)
-        albedo = np.take(m.albedo, hits.obj, axis=0)
+        triangle = hits.prim - np.take(accel.prim_offset, hits.obj)
+        albedo = m.albedo_at(hits.obj, triangle, hits.u, hits.v, hits.points)
 
         points, settings = hits.points, self.settings
         pixel, stratum = rays.ids // self.spp, rays.ids % self.spp

@@ -1,7 +1,7 @@
 """The scene model: plain data in world space, what the engine renders.
 Units follow Blender: metres, radians, watts; colours are linear Rec.709."""
 
-from . import paper, shapes
+from . import paper, shapes, textures
 from .camera import Camera
 from .geometry import Mesh
 from .lights import AreaLight, Light, PointLight, SpotLight, SunLight, World
@@ -10,4 +10,4 @@ from .scene import Object, Scene
 from .settings import RenderSettings
 
 __all__ = ["AreaLight", "Camera", "Dielectric", "Diffuse", "Light", "Material", "Mesh", "Object", "PointLight",
-           "Reflector", "RenderSettings", "Scene", "SpotLight", "SunLight", "World", "paper", "shapes"]
+           "Reflector", "RenderSettings", "Scene", "SpotLight", "SunLight", "World", "paper", "shapes", "textures"]

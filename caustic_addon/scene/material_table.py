@@ -3,7 +3,7 @@ index in one numpy gather instead of a Python loop per hit."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -12,6 +12,7 @@ from ..optics.microfacet import alpha_of
 from ..optics.multiscatter import ALBEDO_COSINES, average_albedo, single_scatter_albedo
 from ..optics.spectrum import bands
 from .scene import Object
+from .textures import Node, SurfacePoints, as_color
 
 
 @dataclass
@@ -32,6 +33,7 @@ class Materials:
                                 ([:, 0]) and leaving ([:, 1]); 1 where no
                                 energy is given back (smooth, or plain GGX)
     facet_albedo_avg (m,2)      its cosine-weighted mean E_avg
+    textures                    object index -> the nodes of its albedo
 
     K is 1, with ior_bands = ior, unless a dielectric disperses.
     """
@@ -51,6 +53,7 @@ class Materials:
     alpha: np.ndarray
     facet_albedo: np.ndarray
     facet_albedo_avg: np.ndarray
+    textures: dict[int, Node] = field(default_factory=dict)
 
     @property
     def band_count(self) -> int:
@@ -86,7 +89,23 @@ class Materials:
             alpha=alpha,
             facet_albedo=facet_albedo,
             facet_albedo_avg=average_albedo(facet_albedo),
+            textures={index: o.material.texture for index, o in enumerate(objects)
+                      if getattr(o.material, "texture", None) is not None},
         )
+
+    def albedo_at(self, obj: np.ndarray, triangle: np.ndarray, u: np.ndarray, v: np.ndarray,
+                  points: np.ndarray) -> np.ndarray:
+        """(n,3) albedo at surface points of objects `obj (n,)`: a textured
+        object's nodes at its `triangle (n,)` (index in its own mesh),
+        barycentrics `u, v (n,)` and world `points (n,3)`; else its colour."""
+        albedo = np.take(self.albedo, obj, axis=0)
+        for index, texture in self.textures.items():
+            rows = np.flatnonzero(obj == index)
+            if len(rows):
+                at = SurfacePoints(np.take(points, rows, axis=0), np.take(triangle, rows), np.take(u, rows),
+                                   np.take(v, rows))
+                albedo[rows] = as_color(texture.evaluate(at))
+        return albedo
 
     @property
     def specular_surface(self) -> np.ndarray:

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Union
+from typing import Optional, Union
 
 import numpy as np
 
 from ..optics.microfacet import alpha_of
 from .color import RGB, rgb
+from .textures import Node
 
 
 @dataclass
@@ -63,6 +64,8 @@ class Diffuse:
     receiver      whether it collects caustics into an illumination map
     emission      (3,) radiance it gives off, W/(m^2 sr), as an Emission
                   shader's Color x Strength: seen, but lighting nothing else
+    texture       the albedo from nodes (textures.py) at each shading point,
+                  in place of `albedo`
     """
 
     albedo: RGB = field(default_factory=lambda: np.full(3, 0.8))
@@ -70,6 +73,7 @@ class Diffuse:
     exponent: float = 50.0
     receiver: bool = True
     emission: RGB = field(default_factory=lambda: np.zeros(3))
+    texture: Optional[Node] = None
 
     def __post_init__(self):
         self.albedo = rgb(self.albedo)
