@@ -2,7 +2,7 @@
 0.1, 0.2 and 0.4, the engine against a long Cycles path-traced render, and
 beam mode's two ways with a rough caster.
 
-    .venv/bin/python benchmarks/rough_glass.py [--cycles-samples 4096] [--roughness 0.1 0.2 0.4]
+    .venv/bin/python benchmarks/rough_glass.py [--cycles-samples 1024] [--roughness 0.1 0.2 0.4]
 
 The scene is issue 4's ball lens (benchmarks/ball_lens.py) at 160x120,
 its glass given Roughness r (Multiscatter GGX, Blender's default), under a
@@ -31,13 +31,16 @@ within REGION shadow radii (the relative L2 error as in sized_lamps.py):
   REPEATS), and its error beyond the reference's own noise (the two are
   independent: sqrt(error^2 - noise^2)), by which the time to reach each
   threshold is counted, three ways:
-  beam mode as the engine ships it (the paths a rough surface scatters
-  land as photons), beam mode with spread beams (SPREAD_REPLICAS grids a
-  lamp point, every vertex of a grid scattering about the microfacet
-  normal of the same random numbers, so that its neighbours stay together
-  and bound beams; patched in here, see `spread_beams`), and the photon
-  pass (density 'adaptive');
-- Cycles at 16 to 1024 samples against the converged engine render, with
+  beam grids whose paths land as photons past the rough surface (beam
+  mode with the lamp's grids of points kept for a rough caster; patched in
+  here, see `grid_photons`), beam mode with spread beams (SPREAD_REPLICAS
+  grids a lamp point, every vertex of a grid scattering about the
+  microfacet normal of the same random numbers, so that its neighbours
+  stay together and bound beams; patched in, see `spread_beams`), and the
+  photon pass (density 'adaptive'), which is what beam mode ships for a
+  lamp that lights a rough caster (passes.beam.photon_lamps), chosen by
+  these figures;
+- Cycles at 16 to 256 samples against the converged engine render, with
   its time.
 Writes benchmarks/results/rough_glass.json, and rough_glass.png: a row
 per roughness of Cycles' reference, the converged engine render and the
@@ -140,6 +143,19 @@ def flux_radius(caustic: np.ndarray, region: np.ndarray, radius: np.ndarray, sha
 
 
 @contextmanager
+def grid_photons():
+    """Beam mode keeping beam grids for lamps that light a rough caster
+    (the way the engine does not ship): their paths land as photons past
+    the rough surface."""
+    original = beam.photon_lamps
+    beam.photon_lamps = lambda lights, scene: []
+    try:
+        yield
+    finally:
+        beam.photon_lamps = original
+
+
+@contextmanager
 def spread_beams(replicas: int):
     """Beam mode with spread beams, the way the engine does not ship: each
     beam source (a lamp point's grid over a caster) becomes `replicas`
@@ -176,7 +192,8 @@ def spread_beams(replicas: int):
     beam.beam_sources, beam.band_beams, beam.BeamTracer.scattered, bounce._next_family = (
         sources, band_beams, scattered, next_family)
     try:
-        yield
+        with grid_photons():
+            yield
     finally:
         beam.beam_sources, beam.band_beams, beam.BeamTracer.scattered, bounce._next_family = original
 
@@ -266,7 +283,8 @@ def measure(roughness: float, cycles_samples: int) -> dict:
     shown = {"Cycles": reference, "engine converged": converged.image[..., :3]}
     print(f"  Cycles' caustic: noise {100 * caustic_noise:.2f}% of it", flush=True)
     args = (cycles_caustic, region, caustic_noise, shown)
-    curves = {"beam (photons past rough)": engine_curve("beam", roughness, "beam", *args)}
+    with grid_photons():
+        curves = {"beam (photons past rough)": engine_curve("beam", roughness, "beam", *args)}
     with spread_beams(SPREAD_REPLICAS):
         curves["beam (spread beams)"] = engine_curve("spread beams", roughness, "beam", *args, SPREAD_LAMP_RAYS)
     curves["photons (adaptive)"] = engine_curve("photons", roughness, "adaptive", *args)
@@ -280,7 +298,7 @@ def measure(roughness: float, cycles_samples: int) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--cycles-samples", type=int, default=4096)
+    parser.add_argument("--cycles-samples", type=int, default=1024)
     parser.add_argument("--roughness", type=float, nargs="+", default=ROUGHNESS)
     args = parser.parse_args()
     shots, runs = zip(*[measure(r, args.cycles_samples) for r in args.roughness])

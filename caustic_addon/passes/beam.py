@@ -20,6 +20,11 @@ Triangles whose three paths still disagree fall back to photons: each
 landed corner carries a third of the triangle's flux into the map's ordinary
 density estimate.
 
+A lamp that can light a rough caster sends photons instead
+(`photon_lamps`); grid paths that meet a rough surface all the same (a
+spot's light turned toward one by another caster) scatter about microfacet
+normals of their own and land as photons.
+
 When a material disperses, every wavelength band traces its own grid with
 its own IOR and carries the band's RGB weight (spectrum.py): beams of
 different bands land apart, which is the colour of a dispersive caustic.
@@ -32,7 +37,7 @@ from functools import partial
 
 import numpy as np
 
-from ..emission.aims import casters_and_bounds
+from ..emission.aims import Sphere, casters_and_bounds, visible_targets
 from ..emission.beam_sources import BeamSource, beam_sources
 from ..emission.lamp_points import beam_lamps
 from ..emission.photons import make_emitters
@@ -41,7 +46,7 @@ from ..maps.deposits import Deposits
 from ..maps.illumination_map import IlluminationMap
 from ..maps.raster import signed_areas
 from ..sampling.hash import hash_uniform
-from ..scene import RenderSettings, Scene
+from ..scene import Light, RenderSettings, Scene
 from ..scene.material_table import Materials
 from ..tracing.accelerator import Accelerator
 from ..tracing.hits import MISS, Hits
@@ -389,6 +394,20 @@ def _beams_and_photons(lookup: _Lookup, triangles: np.ndarray, measure: np.ndarr
     return deposits, int(good.sum()), flux[good].sum(axis=0) + photon_flux.sum(axis=0)
 
 
+def photon_lamps(lights: list[Light], scene: Scene) -> list[Light]:
+    """The lamps whose light beam mode sends as photons: those that can
+    light a rough caster (aims.visible_targets). Its light scatters about
+    random microfacet normals, so neighbouring grid paths part there and
+    bound no beam; and where a lamp with a size would be a grid of point
+    lamps for its beams, photons leave every point of it. Measured on the
+    ball lens under a sphere lamp (benchmarks/rough_glass.py), the photon
+    pass beats both the beam grid's paths landing as photons past the rough
+    surface and beams spread about shared microfacet normals, in time and
+    in error; a smooth caster those lamps also light casts photons too."""
+    rough = [Sphere.around(o.mesh.vertices) for o in scene.casters if not o.material.smooth]
+    return [light for light in lights if rough and visible_targets(light, rough)]
+
+
 def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials, maps: dict,
               monitor: Monitor, share: float) -> LampPassStats:
     """Trace every source's grid in bands of rows into beams on `maps`, once
@@ -398,16 +417,21 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
     count = materials.band_count
     targets, scene_sphere = casters_and_bounds(scene)
     receivers = np.concatenate([o.mesh.vertices for o in scene.receivers])
-    # the world's sun comes as beams, the rest of its light as photons, its
+    # the world's sun comes as beams, the rest of its light as photons, and
+    # so does the light of lamps that light a rough caster; each their
     # share of the lamp rays by its flux
     sun, world = extract_sun(scene.world)
     lights = scene.lights + ([sun] if sun is not None else [])
+    as_photons = photon_lamps(lights, scene)
     emitters = [e for e in make_emitters(lights, world, targets, scene_sphere, "targeted", settings.energy,
-                                         settings.lamp_rays, settings.seed) if e.light is None]
-    from_world = sum(e.count for e in emitters)
-    lamps = beam_lamps(lights, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
-                       min(imap.cell for imap in maps.values()), (settings.lamp_rays - from_world) // count)
-    sources = beam_sources(lamps, targets, scene_sphere, settings.energy, (settings.lamp_rays - from_world) // count)
+                                         settings.lamp_rays, settings.seed)
+                if e.light is None or any(e.light is light for light in as_photons)]
+    beamed = [light for light in lights if not any(light is other for other in as_photons)]
+    from_photons = sum(e.count for e in emitters)
+    lamps = beam_lamps(beamed, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
+                       min(imap.cell for imap in maps.values()), (settings.lamp_rays - from_photons) // count)
+    sources = beam_sources(lamps, targets, scene_sphere, settings.energy,
+                           (settings.lamp_rays - from_photons) // count)
     stacks: dict[tuple[int, int], list[BeamSource]] = {}
     for source in sources:
         stacks.setdefault((source.grid, lamp_medium(accel, source.light)), []).append(source)

@@ -72,7 +72,7 @@ class Materials:
         ior, abbe = column("ior", 1.0), column("abbe", np.inf)
         spectral = bands(band_count if np.isfinite(abbe).any() else 1)
         alpha = alpha_of(column("roughness", 0.0))
-        facet_albedo = np.stack([_facet_albedo(o, a) for o, a in zip(objects, alpha)]).reshape(-1, 2, ALBEDO_COSINES)
+        facet_albedo = np.array([_facet_albedo(o, a) for o, a in zip(objects, alpha)]).reshape(-1, 2, ALBEDO_COSINES)
         return Materials(
             dielectric=np.array([o.is_transparent for o in objects], dtype=bool),
             reflector=np.array([o.is_reflector for o in objects], dtype=bool),

@@ -5,12 +5,14 @@ The half-scale ball lens (blender_scenes.ball_lens_scene) under a small
 sphere lamp (radius 0.05 m, Soft Falloff off: Cycles' path tracing reaches
 a point lamp through rough glass only by the light sampling at the glass's
 last vertex, which the sphere's own hits help), its Glass BSDF of Roughness
-0.2 and 0.4 (Multiscatter GGX), in a black world. Cycles: MNEE off, Filter
+0.3 and 0.6 (Multiscatter GGX), in a black world. Cycles: MNEE off, Filter
 Glossy 0 (its default would roughen the glass further after the floor's
-bounce), 12 glass bounces after the floor's, as the engine's max_depth.
-The width is the radius within which three quarters of the caustic's flux
-in the lamp's shadow lands, from rings of the pixels' floor radii (which
-the engine's own camera rays give)."""
+bounce), 12 glass bounces after the floor's, as the engine's max_depth, 64
+samples. The width is the radius within which three quarters of the
+caustic's flux in the lamp's shadow lands, from rings of the pixels' floor
+radii (which the engine's own camera rays give); the add-on renders at its
+defaults but 20,000 lamp rays: in beam mode the lamp sends photons, since
+it lights a rough caster."""
 
 import math
 import os
@@ -23,12 +25,12 @@ import blender_scenes as scenes
 
 PIXELS = (96, 72)
 RADIUS = 0.05
-SAMPLES = 256
+SAMPLES = 64
 
 
 def rough_ball(roughness: float):
     """The scene, the ball's glass of `roughness`."""
-    parts = scenes.ball_lens_scene(*PIXELS, lamp_rays=40_000)
+    parts = scenes.ball_lens_scene(*PIXELS, lamp_rays=20_000)
     bpy.context.scene.caustic.density = 'BEAM'
     parts["camera"].data.lens = 80.0
     parts["camera"].location = (0.0, -3.0, 2.6)
@@ -100,7 +102,7 @@ def cycles(folder: str) -> np.ndarray:
 
 def test_a_rough_balls_caustic_widens_with_roughness_as_in_cycles(addon, tmp_path):
     widths = {}
-    for roughness in (0.2, 0.4):
+    for roughness in (0.3, 0.6):
         bpy.ops.wm.read_factory_settings(use_empty=True)
         rough_ball(roughness)
         region, radius = floor_radius(addon)
@@ -111,5 +113,5 @@ def test_a_rough_balls_caustic_widens_with_roughness_as_in_cycles(addon, tmp_pat
         widths[roughness] = (flux_radius(ours, region, radius), flux_radius(theirs, region, radius))
     print("75% flux radius, ours / Cycles:", {r: tuple(round(w, 4) for w in pair) for r, pair in widths.items()})
     for ours, theirs in widths.values():
-        assert ours == pytest.approx(theirs, rel=0.1)
-    assert widths[0.4][1] > 1.3 * widths[0.2][1] and widths[0.4][0] > 1.3 * widths[0.2][0]
+        assert ours == pytest.approx(theirs, rel=0.04)
+    assert widths[0.6][1] > 1.3 * widths[0.3][1] and widths[0.6][0] > 1.3 * widths[0.3][0]

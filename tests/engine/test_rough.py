@@ -275,8 +275,8 @@ def ring_profile(ring_means: np.ndarray, rings: np.ndarray) -> tuple[float, floa
 def test_a_rough_mirrors_caustic_is_the_microfacet_closed_form():
     """The floor under the rough ceiling mirror against the closed form's
     quadrature, single scattering and Multiscatter GGX, as photons (the
-    paper's splat map, whose cells blur least) and as beam mode's photons
-    past a rough surface (the adaptive estimate): the flux landed (within
+    paper's splat map, whose cells blur least) and in beam mode (photons
+    for a lamp that lights a rough caster, the adaptive estimate): the flux landed (within
     0.12% of it, the floor's rim and the quadrature's error), and ring by
     ring out to 3 m the radii that hold half and three quarters of the flux
     (within 0.6%, the map cell's blur; the adaptive estimate's reach adds
@@ -352,13 +352,29 @@ def test_rough_caster_is_named_in_one_warning_and_bad_roughness_is_an_error():
         render(scene)
 
 
-def test_beam_grid_neighbours_past_a_rough_surface_bound_no_beam():
-    """Beam mode turns no path a rough surface scattered into a beam (its
-    neighbours took other microfacets): a rough mirror's caustic comes
-    as photons, and refinement spends no rays on it."""
-    result = render(ceiling(0.3), RenderSettings(lamp_rays=4000, spp=1, beam_refinement=2))
-    assert result.stats["landed"] == 0
-    assert result.stats["lamp_rays_refined"] == 0
+def test_beam_mode_sends_the_light_of_lamps_that_light_a_rough_caster_as_photons():
+    """In beam mode a lamp that can light a rough caster sends photons, the
+    photon pass's own: the same render as the adaptive density; with the
+    mirror smooth it sends beams."""
+    beams = render(ceiling(0.3), RenderSettings(lamp_rays=4000, spp=1))
+    photons = render(ceiling(0.3), RenderSettings(lamp_rays=4000, spp=1, density="adaptive"))
+    assert beams.stats["landed"] == photons.stats["landed"] > 2000 and beams.stats["lamp_rays_refined"] == 0
+    assert np.allclose(beams.image, photons.image, rtol=1e-6, atol=1e-9)
+    assert render(ceiling(0.0), RenderSettings(lamp_rays=4000, spp=1)).stats["lamp_rays_refined"] > 0
+
+
+def test_beam_grid_paths_past_a_rough_surface_bound_no_beam(monkeypatch):
+    """Grid paths that meet a rough surface after all (a lamp taken not to
+    light it, as a spot whose light another caster turns toward it) bound
+    no beam (their neighbours took other microfacets; no landing counts
+    as a beam's): they land as photons, with the flux the photon pass
+    brings, and refinement spends no rays on them."""
+    from caustic_addon.passes import beam
+    monkeypatch.setattr(beam, "photon_lamps", lambda lights, scene: [])
+    result = render(ceiling(0.3), RenderSettings(lamp_rays=40_000, spp=1, beam_refinement=2))
+    photons = render(ceiling(0.3), RenderSettings(lamp_rays=40_000, spp=1, density="adaptive"))
+    assert result.stats["lamp_rays_refined"] == 0 and result.stats["landed"] == 0
+    assert result.stats["flux_landed_w"][0] == pytest.approx(photons.stats["flux_landed_w"][0], rel=0.01)
 
 
 def test_roughness_zero_is_the_smooth_interface_exactly():
@@ -431,3 +447,12 @@ def test_a_lamps_highlight_on_a_rough_mirror_is_the_brdf_times_its_irradiance():
     expected = (1000.0 / (4.0 * math.pi) / dist2 * f * color / e1).reshape(16, 4, 16, 4).mean(axis=(1, 3))
     assert seen.max() > 5.0 * seen.min()
     assert np.sqrt(np.mean((seen - expected) ** 2)) < 0.01 * np.sqrt(np.mean(expected ** 2))
+
+
+def test_roughness_and_distribution_key_the_kept_maps():
+    """The maps kept between renders are redone when a caster's Roughness
+    or its distribution changes."""
+    from caustic_addon.maps.cache import lamp_pass_key
+    settings = RenderSettings()
+    keys = {lamp_pass_key(ceiling(r, m), settings) for r, m in ((0.3, True), (0.4, True), (0.3, False))}
+    assert len(keys) == 3 and lamp_pass_key(ceiling(0.3), settings) in keys
