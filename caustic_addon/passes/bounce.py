@@ -129,8 +129,9 @@ def multiscatter(surface: Interface, materials: Materials, obj: np.ndarray, dirs
     light (photons, beam vertices, `carries_light`) it is where it goes, so
     the caustic is the one Cycles' camera paths gather. The factor is not
     reciprocal: taken on the light's side instead, a white surface would
-    give back exactly the flux each photon brings (the factors differ by up
-    to 7% when light leaves glass of Roughness 0.4)."""
+    give back exactly the flux each photon brings; the two sides' tables
+    differ, at Roughness 0.4 and 60 degrees E is 0.91 leaving glass and
+    0.98 entering it."""
     factor = np.ones((len(dirs), 3))
     rough = np.flatnonzero(surface.rough)
     if len(rough) == 0:

@@ -128,9 +128,9 @@ class EyeTracer:
     def _highlights(self, rays: Paths, hits: Hits, surface: Interface) -> None:
         """The lamps' direct light on the rough rows of `surface`, into the
         direct pass, times the tint and Multiscatter GGX's factor."""
-        rows = np.flatnonzero(surface.rough)
         if not self.scene.lights:
             return
+        rows = np.flatnonzero(surface.rough)
         m, obj = self.materials, hits.obj[rows]
         pixel, stratum = rays.ids[rows] // self.spp, rays.ids[rows] % self.spp
         radiance = rough_specular_radiance(
