@@ -19,7 +19,7 @@ from .passes.lamp_pass import LampPassStats, lamps_in_glass
 from .passes.photon import photon_pass
 from .scene import RenderSettings, Scene
 from .scene.material_table import Materials
-from .scene.validate import validate_scene
+from .scene.validate import rough_caster_warnings, validate_scene
 from .tracing.accelerator import Accelerator
 from .util.parallel import Cancel, Monitor, Progress
 
@@ -54,7 +54,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
     culprit) for scenes that cannot render."""
     settings = settings or RenderSettings()
     settings.validate()
-    warnings = validate_scene(scene)
+    warnings = validate_scene(scene) + rough_caster_warnings(scene, settings.density)
     monitor = Monitor(progress, cancel)
     seconds = {}
 

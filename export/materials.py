@@ -1,13 +1,14 @@
-"""A Blender material read as the engine's: Glass BSDF, or Principled BSDF
-that mostly transmits, is a Dielectric; Glossy BSDF, or Principled BSDF that
-is mostly metal and smooth, is a Reflector; Principled and Diffuse BSDFs,
-plain viewport colours and anything not understood are Diffuse receivers, a
-Principled BSDF's with its specular layer (Roughness, IOR, Specular IOR
-Level, Specular Tint, the GGX or Multiscatter GGX distribution); a material
-with no output node, or nothing connected to it, is black, as Cycles
-renders it. A Volume Absorption node on the Volume output gives glass its
-absorption. What is read approximately comes back as a warning naming the
-material.
+"""A Blender material read as the engine's: Glass or Refraction BSDF, or
+Principled BSDF that mostly transmits, is a Dielectric; Glossy BSDF, or
+Principled BSDF that is mostly metal, is a Reflector, each with its
+Roughness and whether its distribution is Multiscatter GGX; Principled and
+Diffuse BSDFs, plain viewport colours and anything not understood are
+Diffuse receivers, a Principled BSDF's with its specular layer (Roughness,
+IOR, Specular IOR Level, Specular Tint, the GGX or Multiscatter GGX
+distribution); a material with no output node, or nothing connected to it,
+is black, as Cycles renders it. A Volume Absorption node on the Volume
+output gives glass its absorption. What is read approximately comes back as
+a warning naming the material.
 
 No Glass or Principled BSDF has a Dispersion input in Blender 4.2, 4.5 or 5.3
 (checked with each bpy module of the test matrix), so dispersion comes only from the object's
@@ -32,27 +33,29 @@ BAKE_TAG = "caustic_bake"
 GLASS_NODES = {'ShaderNodeBsdfGlass', 'ShaderNodeBsdfRefraction'}
 # Blender 4.0 merged Anisotropic BSDF into Glossy BSDF; both names still make the node.
 GLOSSY_NODES = {'ShaderNodeBsdfGlossy', 'ShaderNodeBsdfAnisotropic'}
-# A Principled BSDF with Metallic above 0.5 is a mirror up to this Roughness,
-# and diffuse beyond it; either way a warning names it when Roughness > 0.
-MIRROR_ROUGHNESS = 0.2
 # A Principled receiver's inputs the engine does not render, with the value
 # that leaves them out (Blender's default).
 UNRENDERED = {"Coat Weight": 0.0, "Sheen Weight": 0.0, "Subsurface Weight": 0.0, "Anisotropic": 0.0,
               "Thin Film Thickness": 0.0, "Diffuse Roughness": 0.0, "Metallic": 0.0, "Transmission Weight": 0.0,
               "Alpha": 1.0}
+# The engine's microfacets are GGX; these distributions are read as GGX, with a warning.
+OTHER_DISTRIBUTIONS = {'BECKMANN': "Beckmann", 'ASHIKHMIN_SHIRLEY': "Ashikhmin-Shirley"}
+# Inputs that make a microfacet lobe anisotropic, which the engine's is not.
+ANISOTROPY_INPUTS = ("Anisotropy", "Anisotropic")
 
 
 @dataclass
 class Surface:
     """How a material reads: `transparent` (glass) or `reflector` (mirror,
     metal) pick the engine material; neither is a diffuse receiver.
-    `color` is the glass tint or the reflectance; `emission` the radiance
-    it gives off (an Emission shader, or a Principled BSDF's emission),
-    which the engine shows but does not yet light anything with; `texture`
-    the nodes that drive a receiver's colour (textures.py), if read;
-    `specular` a Principled receiver's specular layer. `black` says why a
-    material renders black, as Cycles renders it: no output node, or no
-    shader connected to it."""
+    `color` is the glass tint or the reflectance; `roughness` Blender's
+    Roughness of glass or metal, `multiscatter` whether its distribution is
+    Multiscatter GGX; `emission` the radiance it gives off (an Emission
+    shader, or a Principled BSDF's emission), which the engine shows but
+    does not yet light anything with; `texture` the nodes that drive a
+    receiver's colour (textures.py), if read; `specular` a Principled
+    receiver's specular layer. `black` says why a material renders black,
+    as Cycles renders it: no output node, or no shader connected to it."""
 
     transparent: bool
     reflector: bool = False
@@ -62,6 +65,8 @@ class Surface:
     albedo: np.ndarray = field(default_factory=lambda: np.full(3, DEFAULT_ALBEDO))
     texture: Optional[Recipe] = None
     absorption: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    roughness: float = 0.0
+    multiscatter: bool = True
     specular: Specular | None = None
     warnings: list[str] = field(default_factory=list)
     black: Optional[str] = None
@@ -133,19 +138,15 @@ def read_surface(material) -> Surface:
     if kind in GLASS_NODES or (kind == 'ShaderNodeBsdfPrincipled'
                                and _value(shader, "Transmission Weight", what, warnings) > 0.5):
         color_input = "Color" if kind in GLASS_NODES else "Base Color"
-        surface = Surface(transparent=True, ior=_value(shader, "IOR", what, warnings),
-                          color=_value(shader, color_input, what, warnings),
-                          absorption=_read_volume(material, what, warnings), warnings=warnings)
-        if _value(shader, "Roughness", what, warnings) > 0.0:
-            warnings.append(f"{what}: rough glass is rendered as smooth glass")
-        return surface
+        roughness, multiscatter = _microfacets(shader, what, warnings)
+        return Surface(transparent=True, ior=_value(shader, "IOR", what, warnings),
+                       color=_value(shader, color_input, what, warnings),
+                       absorption=_read_volume(material, what, warnings), roughness=roughness,
+                       multiscatter=multiscatter, warnings=warnings)
     if kind in GLOSSY_NODES:
         return _mirror(shader, "Color", what, warnings)
     if kind == 'ShaderNodeBsdfPrincipled' and _value(shader, "Metallic", what, warnings) > 0.5:
-        if _value(shader, "Roughness", what, warnings) <= MIRROR_ROUGHNESS:
-            return _mirror(shader, "Base Color", what, warnings)
-        warnings.append(f"{what}: rough metal (Roughness above {MIRROR_ROUGHNESS}) is rendered as diffuse and "
-                        "casts no caustics")
+        return _mirror(shader, "Base Color", what, warnings)
     if kind == 'ShaderNodeBsdfPrincipled':
         emission = _value(shader, "Emission Color", what, warnings) * _value(shader, "Emission Strength", what,
                                                                               warnings)
@@ -179,12 +180,26 @@ def _specular_layer(shader, what: str, warnings: list[str]) -> Specular:
 
 
 def _mirror(shader, color_input: str, what: str, warnings: list[str]) -> Surface:
-    """A reflector of the shader's colour; its roughness, if any, named in a warning."""
+    """A reflector of the shader's colour and roughness."""
     color = _value(shader, color_input, what, warnings)
-    roughness = _value(shader, "Roughness", what, warnings)
-    if roughness > 0.0:
-        warnings.append(f"{what}: glossy Roughness {roughness:.3g} is rendered as a perfect mirror")
-    return Surface(transparent=False, reflector=True, color=np.clip(color, 0.0, 1.0), warnings=warnings)
+    roughness, multiscatter = _microfacets(shader, what, warnings)
+    return Surface(transparent=False, reflector=True, color=np.clip(color, 0.0, 1.0), roughness=roughness,
+                   multiscatter=multiscatter, warnings=warnings)
+
+
+def _microfacets(shader, what: str, warnings: list[str]) -> tuple[float, bool]:
+    """(Roughness clamped to 0..1, whether the distribution is Multiscatter
+    GGX) of a glass, glossy or Principled node. A rough Beckmann or
+    Ashikhmin-Shirley lobe is read as GGX, and an anisotropic one as
+    isotropic, each named in a warning."""
+    roughness = min(max(_value(shader, "Roughness", what, warnings), 0.0), 1.0)
+    distribution = shader.distribution
+    if roughness > 0.0 and distribution in OTHER_DISTRIBUTIONS:
+        warnings.append(f"{what}: its {OTHER_DISTRIBUTIONS[distribution]} distribution is rendered as GGX")
+    anisotropy = next((shader.inputs[name] for name in ANISOTROPY_INPUTS if name in shader.inputs), None)
+    if roughness > 0.0 and anisotropy is not None and (anisotropy.is_linked or anisotropy.default_value != 0.0):
+        warnings.append(f"{what}: its {anisotropy.name} is not rendered: its microfacets are isotropic")
+    return roughness, distribution == 'MULTI_GGX'
 
 
 def _read_volume(material, what: str, warnings: list[str]) -> np.ndarray:
@@ -210,7 +225,7 @@ def engine_material(surface: Surface, settings,
     surface's recipe bound to the object) if it has one."""
     role = settings.role
     if role == 'REFLECTOR' or (role == 'AUTO' and surface.reflector):
-        return Reflector(surface.color if surface.reflector else np.ones(3))
+        return Reflector(surface.color if surface.reflector else np.ones(3), surface.roughness, surface.multiscatter)
     transparent = role == 'TRANSPARENT' or (role == 'AUTO' and surface.transparent)
     if not transparent:
         opaque = not (surface.transparent or surface.reflector)
@@ -225,4 +240,5 @@ def engine_material(surface: Surface, settings,
     else:
         absorption = surface.absorption if surface.transparent else np.zeros(3)
     return Dielectric(ior=ior, color=color, absorption=absorption,
-                      abbe=settings.abbe if settings.abbe > 0 else math.inf)
+                      abbe=settings.abbe if settings.abbe > 0 else math.inf, roughness=surface.roughness,
+                      multiscatter=surface.multiscatter)

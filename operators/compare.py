@@ -23,16 +23,17 @@ DIFFERENCE_IMAGE = "Difference"
 
 
 def reflector_warning(read) -> str | None:
-    """What the comparison cannot show when the scene has reflectors: MNEE
-    solves only for refracting casters, and a path tracer cannot reach a
-    point or sun lamp through a perfect mirror, so Cycles renders no
-    caustic from them."""
-    names = [o.name for o in read.scene.objects if o.is_reflector]
+    """What the comparison cannot show when the scene has smooth
+    reflectors: MNEE solves only for refracting casters, and a path tracer
+    cannot reach a point or sun lamp through a perfect mirror, so Cycles
+    renders no caustic from them. A rough one's caustic Cycles path-traces
+    by its lamp sampling, so it is in the reference."""
+    names = [o.name for o in read.scene.objects if o.is_reflector and o.material.smooth]
     if not names:
         return None
     listed = ", ".join(f"'{n}'" for n in names)
-    return (f"Cycles (MNEE) cannot render caustics cast by reflectors ({listed}): MNEE handles refraction only, "
-            "so the Cycles Reference lacks them and the error includes them in full")
+    return (f"Cycles (MNEE) cannot render caustics cast by smooth reflectors ({listed}): MNEE handles refraction "
+            "only, so the Cycles Reference lacks them and the error includes them in full")
 
 
 class CAUSTIC_OT_compare_cycles(EngineOperator, bpy.types.Operator):

@@ -8,12 +8,13 @@ class CausticObjectSettings(bpy.types.PropertyGroup):
     role: EnumProperty(
         name="Role",
         description="What the object does in the caustic render",
-        items=[('AUTO', "Auto", "From the material: Glass BSDF, or Principled BSDF with Transmission Weight "
-                                "above 0.5, is transparent; Glossy BSDF, or Principled BSDF with Metallic above "
-                                "0.5 and Roughness up to 0.2, is a reflector; anything else receives caustics"),
+        items=[('AUTO', "Auto", "From the material: Glass or Refraction BSDF, or Principled BSDF with "
+                                "Transmission Weight above 0.5, is transparent; Glossy BSDF, or Principled BSDF "
+                                "with Metallic above 0.5, is a reflector, each with its Roughness; anything else "
+                                "receives caustics"),
                ('TRANSPARENT', "Transparent", "Refracts and reflects light: glass, water, gems"),
-               ('REFLECTOR', "Reflector", "A perfect mirror or polished metal: reflects light in its "
-                                          "material's colour (white if the material has none)"),
+               ('REFLECTOR', "Reflector", "A mirror or a metal: reflects light in its material's colour (white "
+                                          "if the material has none), smooth or as rough as its Roughness"),
                ('RECEIVER', "Receiver", "An opaque diffuse surface that collects caustics"),
                ('IGNORE', "Ignore", "Left out of the caustic render")],
         default='AUTO')

@@ -78,6 +78,8 @@ Colours are linear RGB, a number (grey) or [r, g, b]. Positions are metres.
   abbe         Abbe number V_d > 0, dispersion around the IOR (given at
                587.6 nm): 55 diamond, 58 crown glass, 33 cubic zirconia;
                inf for none (glass) [inf]
+  roughness    Blender's Roughness, 0..1: GGX microfacets of width
+               roughness^2 (Multiscatter GGX) blur the caustic [0.0]
 
 [render]
   spp          eye samples per pixel, integer >= 1 [4]
@@ -267,6 +269,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "absorption_color": triple("in (0, 1]", lambda x: 0 < x <= 1, None),
         "absorption_distance": number("> 0", _positive, 1.0),
         "abbe": abbe_number(math.inf),
+        "roughness": number("in 0..1", _unit, 0.0),
     },
     "render": {
         "spp": integer(1, 4),
@@ -284,8 +287,8 @@ RENAMED = {("photons", "count"): "photons.lamp_rays", ("render", "background"): 
 
 OBJECT_KEYS = {
     "glass": ("material", "ior", "position", "scale", "color", "absorption", "absorption_color",
-              "absorption_distance", "abbe"),
-    "reflector": ("material", "position", "scale", "color"),
+              "absorption_distance", "abbe", "roughness"),
+    "reflector": ("material", "position", "scale", "color", "roughness"),
 }
 
 # The keys each lamp type takes.
@@ -360,8 +363,9 @@ def parse(text: str, name: str = "<config>") -> Config:
                                  camera["look_at"], camera["up"]),
         floor=Object("Plane", shapes.plane(plane["size"], (0.0, 0.0, plane["height"])), Diffuse(plane["albedo"])),
         lamp=_lamp(lamp, name),
-        material=(Reflector(obj["color"]) if obj["material"] == "reflector"
-                  else Dielectric(obj["ior"], obj["color"], _glass_absorption(obj, document, name), obj["abbe"])),
+        material=(Reflector(obj["color"], obj["roughness"]) if obj["material"] == "reflector"
+                  else Dielectric(obj["ior"], obj["color"], _glass_absorption(obj, document, name), obj["abbe"],
+                                  obj["roughness"])),
         placement=placement,
         ambient=render["ambient"],
         world=render["world"],

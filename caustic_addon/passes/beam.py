@@ -20,6 +20,11 @@ Triangles whose three paths still disagree fall back to photons: each
 landed corner carries a third of the triangle's flux into the map's ordinary
 density estimate.
 
+A lamp that can light a rough caster sends photons instead
+(`photon_lamps`); grid paths that meet a rough surface all the same (a
+spot's light turned toward one by another caster) scatter about microfacet
+normals of their own and land as photons.
+
 When a material disperses, every wavelength band traces its own grid with
 its own IOR and carries the band's RGB weight (spectrum.py): beams of
 different bands land apart, which is the colour of a dispersive caustic.
@@ -32,7 +37,7 @@ from functools import partial
 
 import numpy as np
 
-from ..emission.aims import casters_and_bounds
+from ..emission.aims import Sphere, casters_and_bounds, visible_targets
 from ..emission.beam_sources import BeamSource, beam_sources
 from ..emission.lamp_points import beam_lamps
 from ..emission.photons import make_emitters
@@ -41,17 +46,18 @@ from ..maps.deposits import Deposits
 from ..maps.illumination_map import IlluminationMap
 from ..maps.receivers import GUTTER_CELLS
 from ..maps.raster import signed_areas
-from ..scene import RenderSettings, Scene
+from ..sampling.hash import hash_uniform
+from ..scene import Light, RenderSettings, Scene
 from ..scene.material_table import Materials
 from ..tracing.accelerator import Accelerator
 from ..tracing.hits import MISS, Hits
 from ..util.parallel import Monitor, run_chunks
 from ..util.rows import row_ids, take_rows
 from ..util.vectors import DIVISION_FLOOR, cross_rows, length, max_channel
-from .bounce import Interface, on_maps, split, trace
+from .bounce import SCATTERED, Interface, facets, on_maps, split, trace
 from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
 from .paths import MIN_BRANCH_WEIGHT, Paths, relative_floor
-from .photon import photon_jobs
+from .photon import FACET_STREAM, photon_jobs
 
 # A cell whose two triangles' landed areas differ by more than this factor is
 # split (measured on the ball lens: lower factors spend paths for no gain).
@@ -108,10 +114,12 @@ class Landings:
 class BeamTracer:
     """The beam pass's choices in the bounce (bounce.trace): record where
     each branch lands on a receiver's map after a specular event, and follow
-    both branches at every specular hit."""
+    both branches at every specular hit; at a rough one, about a microfacet
+    normal of the vertex's own (random numbers from its grid key, its bounce
+    and `seed`), which gives the branch a family of its own."""
 
-    def __init__(self, accel: Accelerator, materials: Materials, maps: dict):
-        self.accel, self.materials, self.maps = accel, materials, maps
+    def __init__(self, accel: Accelerator, materials: Materials, maps: dict, seed: int):
+        self.accel, self.materials, self.maps, self.seed = accel, materials, maps, seed
         self.landed: list[Landings] = []
 
     def escaped(self, paths: Paths) -> None:
@@ -127,18 +135,21 @@ class BeamTracer:
                                         scale, weight, throughput))
 
     def scattered(self, paths: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
-        return split(self.accel, self.materials, paths, hits, surface)
+        if surface.rough.any():
+            uv = np.stack([hash_uniform(paths.ids, FACET_STREAM + 2 * depth + k, self.seed) for k in (0, 1)], axis=1)
+            surface = facets(surface, paths.dirs, self.materials, hits.obj, uv)
+        return split(self.accel, self.materials, paths, hits, surface, carries_light=True)
 
 
 def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap], origins: np.ndarray,
                 dirs: np.ndarray, weight: np.ndarray, vertex: np.ndarray, max_depth: int, start_medium: int = MISS,
-                band: int = 0) -> Landings:
+                band: int = 0, seed: int = 0) -> Landings:
     """Follow every branch of the vertex paths `vertex (n,)`, starting
     inside object `start_medium` (MISS: in air), until it lands on a
     receiver (after at least one specular event), leaves, or fades below
     MIN_BRANCH_WEIGHT. Dielectrics refract with their IOR in wavelength band
-    `band`."""
-    tracer = BeamTracer(accel, materials, maps)
+    `band`; rough surfaces scatter by random numbers of `seed`."""
+    tracer = BeamTracer(accel, materials, maps, seed)
     paths = Paths.start(origins, dirs, weight, vertex, start_medium, relative_floor(weight),
                         np.full(len(vertex), band, dtype=np.int64), family=True)
     trace(accel, materials, paths, max_depth, tracer)
@@ -247,11 +258,15 @@ def _diverging(lookup: _Lookup, cells: _Cells, width: int) -> np.ndarray:
     cell's corners land in a family of throughput at least
     REFINE_THROUGHPUT (a silhouette, total internal reflection), or its two
     triangles land with opposite orientation (a fold of the caustic crosses
-    it) or areas more than REFINE_RATIO apart."""
+    it) or areas more than REFINE_RATIO apart. Paths a rough surface
+    scattered (SCATTERED families) part from every neighbour, and splitting
+    would not bring them together: they split no cell."""
     corners = cells.corners(width)
     element, group, landing, count = lookup.pairs(corners)
     split = np.zeros(len(corners), dtype=bool)
-    split[element[(count < 4) & (lookup.landings.throughput[landing] >= REFINE_THROUGHPUT)]] = True
+    strong = lookup.landings.throughput[landing] >= REFINE_THROUGHPUT
+    scattered = (lookup.landings.family[landing] & SCATTERED) != 0
+    split[element[(count < 4) & strong & ~scattered]] = True
     cell, group = lookup.first_of_each(element[count == 4], group[count == 4])
     first, second = _cell_halves(corners[cell], cells.take(cell), width)
     a, b = (signed_areas(np.stack([lookup.landings.xy[lookup.find(group, tri[:, k])] for k in range(3)], axis=1))
@@ -266,7 +281,7 @@ def _diverging(lookup: _Lookup, cells: _Cells, width: int) -> np.ndarray:
 
 def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: Accelerator, materials: Materials,
                maps: dict[int, IlluminationMap], max_depth: int, start_medium: int = MISS,
-               levels: int = 0, band: int = 0) -> JobResult:
+               levels: int = 0, band: int = 0, seed: int = 0) -> JobResult:
     """Trace grid rows [first_row, end_row) of `sources`, grids of one size
     traced as one batch (the points of a lamp with a size, say), in
     wavelength band `band`, whose paths start inside object `start_medium`,
@@ -287,7 +302,7 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
         weight *= materials.band_weights[band]
         order = np.argsort(which, kind="stable")
         return trace_paths(accel, materials, maps, origins, dirs, weight, vertex[order], max_depth, start_medium,
-                           band)
+                           band, seed)
 
     row, col = (a.ravel() * scale for a in np.meshgrid(np.arange(first_row, end_row - 1), np.arange(grid - 1),
                                                          indexing="ij"))
@@ -442,6 +457,20 @@ def _seam_copies(island: np.ndarray, world: np.ndarray, world_area: np.ndarray, 
     return first & mixed[:, None]
 
 
+def photon_lamps(lights: list[Light], scene: Scene) -> list[Light]:
+    """The lamps whose light beam mode sends as photons: those that can
+    light a rough caster (aims.visible_targets). Its light scatters about
+    random microfacet normals, so neighbouring grid paths part there and
+    bound no beam; and where a lamp with a size would be a grid of point
+    lamps for its beams, photons leave every point of it. Measured on the
+    ball lens under a sphere lamp (benchmarks/rough_glass.py), the photon
+    pass beats both the beam grid's paths landing as photons past the rough
+    surface and beams spread about shared microfacet normals, in time and
+    in error; a smooth caster those lamps also light casts photons too."""
+    rough = [Sphere.around(o.mesh.vertices) for o in scene.casters if not o.material.smooth]
+    return [light for light in lights if rough and visible_targets(light, rough)]
+
+
 def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials, maps: dict,
               monitor: Monitor, share: float) -> LampPassStats:
     """Trace every source's grid in bands of rows into beams on `maps`, once
@@ -451,16 +480,21 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
     count = materials.band_count
     targets, scene_sphere = casters_and_bounds(scene)
     receivers = np.concatenate([o.mesh.vertices for o in scene.receivers])
-    # the world's sun comes as beams, the rest of its light as photons, its
+    # the world's sun comes as beams, the rest of its light as photons, and
+    # so does the light of lamps that light a rough caster; each their
     # share of the lamp rays by its flux
     sun, world = extract_sun(scene.world)
     lights = scene.lights + ([sun] if sun is not None else [])
+    as_photons = photon_lamps(lights, scene)
     emitters = [e for e in make_emitters(lights, world, targets, scene_sphere, "targeted", settings.energy,
-                                         settings.lamp_rays, settings.seed) if e.light is None]
-    from_world = sum(e.count for e in emitters)
-    lamps = beam_lamps(lights, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
-                       min(imap.cell for imap in maps.values()), (settings.lamp_rays - from_world) // count)
-    sources = beam_sources(lamps, targets, scene_sphere, settings.energy, (settings.lamp_rays - from_world) // count)
+                                         settings.lamp_rays, settings.seed)
+                if e.light is None or any(e.light is light for light in as_photons)]
+    beamed = [light for light in lights if not any(light is other for other in as_photons)]
+    from_photons = sum(e.count for e in emitters)
+    lamps = beam_lamps(beamed, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
+                       min(imap.cell for imap in maps.values()), (settings.lamp_rays - from_photons) // count)
+    sources = beam_sources(lamps, targets, scene_sphere, settings.energy,
+                           (settings.lamp_rays - from_photons) // count)
     stacks: dict[tuple[int, int], list[BeamSource]] = {}
     for source in sources:
         stacks.setdefault((source.grid, lamp_medium(accel, source.light)), []).append(source)
@@ -473,7 +507,7 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
         # size are traced together
         rows = max(1, min(settings.chunk_size // (grid * len(stack)), -(-(grid - 1) // settings.threads)))
         jobs += [partial(band_beams, stack, first, min(first + rows + 1, grid), accel, materials, maps,
-                         settings.max_depth, medium, settings.beam_refinement, band)
+                         settings.max_depth, medium, settings.beam_refinement, band, settings.seed)
                  for band in range(count) for first in range(0, grid - 1, rows)]
     jobs += photon_jobs(emitters, accel, materials, maps, settings)
     stats, deliver = deliverer(maps)

@@ -1,4 +1,4 @@
-"""Direct light at opaque surface points, with shadow rays: from each lamp
+"""Direct light at opaque surface points and at rough casters, with shadow rays: from each lamp
 (emission/lamp_samples.py) and from the world.
 
 Radiance leaving a point toward the eye v, per sample of a lamp bringing
@@ -14,6 +14,8 @@ stratified over a pixel: eye sample s of a pixel uses points s K .. s K +
 K - 1 of the R2 sequence, rotated by a hash of the pixel. A sample behind
 the surface gets no shadow ray. Dielectrics and reflectors block shadow
 rays: the light they redirect arrives through the illumination maps.
+Rough casters show the lamps' highlights (`rough_specular_radiance`), as
+Cycles' glossy and glass closures do.
 
 The world lights a surface with E = int L(w) V(w) cos(theta) dw over the
 hemisphere, and its lobe with int L(w) V(w) f_s(v, w) cos(theta) dw, what
@@ -31,6 +33,7 @@ import numpy as np
 from ..emission import radiometry
 from ..emission.environment import Environment
 from ..emission.lamp_samples import sample_lamp
+from ..optics.microfacet import bsdf_cosine
 from ..optics.principled import Lobe
 from ..sampling.hash import hash_uniform
 from ..sampling.sequences import r2_sequence
@@ -39,8 +42,10 @@ from ..scene import Light
 from ..tracing.accelerator import Accelerator
 from ..util.vectors import dot, max_channel
 
-# Hash streams of the strata's rotations: two per lamp, two for each of the world's strategies.
+# Hash streams of the strata's rotations: two per lamp, two for each of the
+# world's strategies, two per lamp seen in rough casters.
 _WORLD_STREAM = 1 << 16
+_ROUGH_STREAM = 1 << 18
 
 
 def strata(ids: np.ndarray, index: np.ndarray, stream: int, seed: int) -> np.ndarray:
@@ -127,3 +132,40 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
                 glossy[idx] += radiance * lobe.take(idx).weight(np.take(shading, idx, axis=0),
                                                                  np.take(view, idx, axis=0), toward)
     return irradiance, glossy
+
+
+def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,
+                            shading: np.ndarray, facing: np.ndarray, view: np.ndarray, alpha: np.ndarray,
+                            eta: np.ndarray, mirror: np.ndarray, far: float, pixel: np.ndarray,
+                            first_stratum: np.ndarray, samples: int, seed: int) -> np.ndarray:
+    """Radiance (n,3) toward the eye from all lamps' direct light at points
+    of rough casters, before their tint: each lamp sample's irradiance
+    times the GGX interface's f |cos| (optics.microfacet.bsdf_cosine), what
+    Cycles adds at a glossy or glass closure by next-event estimation. A
+    lamp on the far side of glass (`eta (n,)` eta_view / eta_lamp, not a
+    `mirror (n,)`) shines through it; shadow rays as in direct_radiance.
+
+    shading, facing   (n,3) shading and geometric normals, both on the eye's side
+    view              (n,3) unit vectors from the points toward the eye
+    alpha             (n,) GGX width, > 0
+    """
+    out = np.zeros((len(points), 3))
+    for number, light in enumerate(lights):
+        count = 1 if radiometry.is_delta(light) else samples
+        for k in range(count):
+            uv = strata(pixel, first_stratum * count + k, _ROUGH_STREAM + 2 * number, seed)
+            lamp = sample_lamp(light, energy, points, uv, far)
+            above, along = dot(facing, lamp.dirs), dot(shading, lamp.dirs)
+            sides = ((above > 0.0) & (along > 0.0)) | ((above < 0.0) & (along < 0.0) & ~mirror)
+            idx = np.flatnonzero(sides & (max_channel(lamp.irradiance) > 0.0))
+            dirs = np.take(lamp.dirs, idx, axis=0)
+            f = bsdf_cosine(np.take(view, idx, axis=0), dirs, np.take(shading, idx, axis=0), alpha[idx], eta[idx],
+                            mirror[idx])
+            idx, dirs, f = idx[f > 0.0], dirs[f > 0.0], f[f > 0.0]
+            if len(idx) == 0:
+                continue
+            origins = accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), dirs)
+            blocked = accel.occluded(origins, dirs, np.take(lamp.dist, idx) - 2.0 * accel.epsilon)
+            idx, f = idx[~blocked], f[~blocked]
+            out[idx] += np.take(lamp.irradiance, idx, axis=0) * (f / count)[:, None]
+    return out

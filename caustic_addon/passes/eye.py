@@ -15,7 +15,11 @@ world, but not the caustic, whose directions the map does not keep.
 At a dielectric: both the reflected ray (weight F) and the refracted ray
 (weight 1 - F) carry on, each tinted by the glass colour and by
 Beer-Lambert absorption inside, up to `max_depth` bounces. At a reflector the reflected ray carries on, times the reflectance
-colour. A ray that leaves the scene sees the world. Eye rays refract with a dispersive glass's
+colour. At a rough surface both branches leave about one GGX microfacet
+normal per eye sample (bounce.facets), the pixel's samples stratified over
+the visible normals, so rough glass and metal look rough, and lamps add
+their highlights there by next-event estimation (direct_light.py), as in
+Cycles. A ray that leaves the scene sees the world. Eye rays refract with a dispersive glass's
 IOR at 587.6 nm: the caustics it throws are spectral (photon pass), the view
 through it is not.
 """
@@ -37,14 +41,16 @@ from ..tracing.hits import Hits
 from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.rows import take_rows
 from ..util.vectors import dot
-from .bounce import Interface, split, trace
+from .bounce import Interface, facets, multiscatter, split, trace
 from .camera_rays import eye_rays, pixel_offsets, ray_differentials
-from .direct_light import direct_radiance, world_light
+from .direct_light import direct_radiance, rough_specular_radiance, strata, world_light
 from .paths import Paths, relative_floor
 
 PASSES = ("direct", "caustic", "ambient")
 # The buffer of each pixel's share cut out by holdouts (its alpha is 1 minus it).
 HOLDOUT = "holdout"
+# Hash streams of the rotations of a pixel's microfacet strata: two a bounce.
+_FACET_STREAM = 1 << 17
 
 
 class EyeTracer:
@@ -138,7 +144,28 @@ class EyeTracer:
         cut = self._cut_out(rays, hits)
         if cut.any():
             rays, hits, surface = rays.select(~cut), hits.select(~cut), surface.select(~cut)
-        return split(self.accel, self.materials, rays, hits, surface)
+        if surface.rough.any():
+            self._highlights(rays, hits, surface)
+            uv = strata(rays.ids // self.spp, rays.ids % self.spp, _FACET_STREAM + 2 * depth, self.settings.seed)
+            surface = facets(surface, rays.dirs, self.materials, hits.obj, uv)
+        return split(self.accel, self.materials, rays, hits, surface, carries_light=False)
+
+    def _highlights(self, rays: Paths, hits: Hits, surface: Interface) -> None:
+        """The lamps' direct light on the rough rows of `surface`, into the
+        direct pass, times the tint and Multiscatter GGX's factor."""
+        if not self.scene.lights:
+            return
+        rows = np.flatnonzero(surface.rough)
+        m, obj = self.materials, hits.obj[rows]
+        pixel, stratum = rays.ids[rows] // self.spp, rays.ids[rows] % self.spp
+        radiance = rough_specular_radiance(
+            self.accel, self.scene.lights, self.energy, np.take(surface.points, rows, axis=0),
+            np.take(surface.shading, rows, axis=0), np.take(surface.facing, rows, axis=0),
+            -np.take(rays.dirs, rows, axis=0), surface.alpha[rows], surface.eta[rows], m.reflector[obj], self.far,
+            pixel, stratum, self.settings.lamp_samples, self.settings.seed)
+        factor = multiscatter(surface, m, hits.obj, rays.dirs, rays.dirs, np.zeros(len(rays), dtype=bool), False)
+        tint = np.take(m.color, obj, axis=0) * np.take(factor, rows, axis=0)
+        self._add("direct", pixel, np.take(rays.weight, rows, axis=0) * tint * radiance)
 
 
 def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,

@@ -3,7 +3,11 @@ the reflectors, in any order, onto the receivers' illumination maps.
 
 At a dielectric a photon reflects with the Fresnel probability F and refracts
 otherwise, keeping its flux: Russian roulette with the exact probability, so
-the estimate stays unbiased with a single path per photon. At a reflector it
+the estimate stays unbiased with a single path per photon. At a rough
+surface it first draws a GGX normal visible from its direction and makes
+that choice there (bounce.facets), as Cycles samples its glass and glossy
+BSDFs; its flux keeps G2/G1 and Multiscatter GGX's factor (taken, as
+Cycles does, on the eye's side: at the direction it leaves along). At a reflector it
 always reflects, r = d - 2 (d.n) n, its flux times the reflectance colour
 (Russian roulette ends the photons it dims below ROULETTE_FRACTION, keeping
 the expected flux). Inside a medium
@@ -35,13 +39,16 @@ from ..tracing.accelerator import Accelerator
 from ..tracing.hits import MISS, Hits
 from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.vectors import DIVISION_FLOOR, max_channel
-from .bounce import Interface, crossed_medium, on_maps, scatter, trace
+from .bounce import Interface, crossed_medium, facets, multiscatter, on_maps, scatter, trace
 from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
 from .paths import Paths
 
 # Below this fraction of its starting flux (max channel), a photon plays
 # Russian roulette and survives with probability flux / threshold.
 ROULETTE_FRACTION = 0.05
+# The first of the random streams a photon draws its microfacet normals
+# from, two a bounce, past those of its Fresnel choices and roulette.
+FACET_STREAM = 1 << 16
 
 
 class PhotonTracer:
@@ -64,8 +71,14 @@ class PhotonTracer:
             self.landed += len(rows)
 
     def scattered(self, paths: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
-        dirs, crossed = scatter(surface, paths.dirs, hash_uniform(paths.ids, 2 * depth, self.seed) < surface.fresnel)
+        if surface.rough.any():
+            uv = np.stack([hash_uniform(paths.ids, FACET_STREAM + 2 * depth + k, self.seed) for k in (0, 1)], axis=1)
+            surface = facets(surface, paths.dirs, self.materials, hits.obj, uv)
+        reflect = hash_uniform(paths.ids, 2 * depth, self.seed) < surface.fresnel
+        dirs, crossed, kept = scatter(surface, paths.dirs, reflect)
         weight = paths.weight * np.take(self.materials.color, hits.obj, axis=0)
+        if surface.rough.any():
+            weight *= kept[:, None] * multiscatter(surface, self.materials, hits.obj, paths.dirs, dirs, crossed, True)
         weight, alive = roulette(weight, paths.floor, hash_uniform(paths.ids, 2 * depth + 1, self.seed))
         paths = Paths(self.accel.offset(surface.points, surface.facing, dirs), dirs, weight,
                       crossed_medium(surface, crossed, hits.obj, paths.medium), paths.ids, paths.floor,

@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..optics.dispersion import cauchy_ior
+from ..optics.microfacet import alpha_of
+from ..optics.multiscatter import ALBEDO_COSINES, average_albedo, single_scatter_albedo
 from ..optics.principled import Layer, Lobe
 from ..optics.spectrum import bands
 from .materials import Diffuse
@@ -28,6 +30,12 @@ class Materials:
     ior_bands (m,K)             IOR in each of the K wavelength bands
     band_weights (K,3)          each band's RGB share (spectrum.Bands)
     layers                      object index -> its specular layer (principled.Layer)
+    alpha (m,)                  GGX width, roughness^2; 0 where smooth
+    facet_albedo (m,2,k)        single-scattering albedo E at the k cosines
+                                of multiscatter.albedo_cosines, entering
+                                ([:, 0]) and leaving ([:, 1]); 1 where no
+                                energy is given back (smooth, or plain GGX)
+    facet_albedo_avg (m,2)      its cosine-weighted mean E_avg
     textures                    object index -> the nodes of its albedo
 
     K is 1, with ior_bands = ior, unless a dielectric disperses.
@@ -43,6 +51,9 @@ class Materials:
     emission: np.ndarray
     ior_bands: np.ndarray
     band_weights: np.ndarray
+    alpha: np.ndarray
+    facet_albedo: np.ndarray
+    facet_albedo_avg: np.ndarray
     layers: dict[int, Layer] = field(default_factory=dict)
     textures: dict[int, Node] = field(default_factory=dict)
 
@@ -62,6 +73,8 @@ class Materials:
 
         ior, abbe = column("ior", 1.0), column("abbe", np.inf)
         spectral = bands(band_count if np.isfinite(abbe).any() else 1)
+        alpha = alpha_of(column("roughness", 0.0))
+        facet_albedo = np.array([_facet_albedo(o, a) for o, a in zip(objects, alpha)]).reshape(-1, 2, ALBEDO_COSINES)
         return Materials(
             dielectric=np.array([o.is_transparent for o in objects], dtype=bool),
             reflector=np.array([o.is_reflector for o in objects], dtype=bool),
@@ -73,6 +86,9 @@ class Materials:
             emission=rgb_column("emission", 0.0),
             ior_bands=cauchy_ior(ior[:, None], abbe[:, None], spectral.wavelengths[None, :]),
             band_weights=spectral.weights,
+            alpha=alpha,
+            facet_albedo=facet_albedo,
+            facet_albedo_avg=average_albedo(facet_albedo),
             textures={index: o.material.texture for index, o in enumerate(objects)
                       if getattr(o.material, "texture", None) is not None},
             layers=_layers(objects),
@@ -126,3 +142,16 @@ def _layers(objects: list[Object]) -> dict[int, Layer]:
             if layer is not None:
                 layers[index] = layer
     return layers
+
+
+def _facet_albedo(obj: Object, alpha: float) -> np.ndarray:
+    """(2,k) the single-scattering albedo of `obj`'s rough surface entering
+    and leaving it (multiscatter.single_scatter_albedo, at its IOR at
+    587.6 nm); ones where nothing is given back: smooth, plain GGX or not a
+    caster."""
+    if alpha <= 0.0 or not obj.is_caster or not obj.material.multiscatter:
+        return np.ones((2, ALBEDO_COSINES))
+    if obj.is_reflector:
+        return np.tile(single_scatter_albedo(float(alpha), None), (2, 1))
+    ior = float(obj.material.ior)
+    return np.stack([single_scatter_albedo(float(alpha), 1.0 / ior), single_scatter_albedo(float(alpha), ior)])

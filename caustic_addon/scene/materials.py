@@ -8,6 +8,7 @@ from typing import Optional, Union
 
 import numpy as np
 
+from ..optics.microfacet import alpha_of
 from ..optics.principled import Layer
 from .color import RGB, rgb
 from .textures import Node
@@ -28,16 +29,30 @@ class Dielectric:
     abbe          Abbe number V_d: the IOR follows Cauchy's law through `ior`
                   at 587.6 nm with this dispersion (optics.cauchy_ior); 55
                   diamond, 58 crown glass, 33 cubic zirconia; inf for none
+    roughness     Blender's Roughness, 0..1: light scatters about GGX
+                  microfacet normals of width alpha = roughness^2
+                  (optics.microfacet); 0 is a perfectly smooth interface
+    multiscatter  True for Blender's Multiscatter GGX (the default), which
+                  gives back the light a single microfacet bounce loses
+                  (optics.multiscatter); False for plain GGX
     """
 
     ior: float = 1.5
     color: RGB = field(default_factory=lambda: np.ones(3))
     absorption: RGB = field(default_factory=lambda: np.zeros(3))
     abbe: float = math.inf
+    roughness: float = 0.0
+    multiscatter: bool = True
 
     def __post_init__(self):
         self.color = rgb(self.color)
         self.absorption = rgb(self.absorption)
+
+    @property
+    def smooth(self) -> bool:
+        """Rendered as a perfectly smooth interface: Roughness 0, or so low
+        that Cycles takes it for one (optics.microfacet.alpha_of)."""
+        return bool(alpha_of(self.roughness) == 0.0)
 
 
 @dataclass
@@ -100,20 +115,28 @@ class Diffuse:
 
 @dataclass
 class Reflector:
-    """A specular mirror or polished metal: every ray reflects, r = d - 2 (d.n) n
-    about the shading normal, and its colour is multiplied by `color`.
+    """A mirror or a metal: every ray reflects, r = d - 2 (d.n) n about the
+    shading normal (smooth) or about a GGX microfacet normal (rough), and
+    its colour is multiplied by `color`.
 
     color         (3,) reflectance, the same at every angle (a metal's
                   Schlick/F82 rise toward grazing incidence is ignored)
-
-    It is perfectly smooth: the add-on names glossy materials with a
-    roughness above 0 in a warning, as it does rough glass.
+    roughness     Blender's Roughness, 0..1, as Dielectric's
+    multiscatter  Multiscatter GGX (True) or plain GGX, as Dielectric's
     """
 
     color: RGB = field(default_factory=lambda: np.full(3, 0.9))
+    roughness: float = 0.0
+    multiscatter: bool = True
 
     def __post_init__(self):
         self.color = rgb(self.color)
+
+    @property
+    def smooth(self) -> bool:
+        """Rendered as a perfectly smooth interface: Roughness 0, or so low
+        that Cycles takes it for one (optics.microfacet.alpha_of)."""
+        return bool(alpha_of(self.roughness) == 0.0)
 
 
 Material = Union[Dielectric, Diffuse, Reflector]

@@ -44,6 +44,8 @@ def validate_scene(scene: Scene) -> list[str]:
             if mesh.corner_normals.shape != (len(mesh.triangles), 3, 3):
                 raise SceneError(f"{obj.name}: corner_normals must have shape (triangles, 3, 3)")
         material = obj.material
+        if isinstance(material, (Dielectric, Reflector)) and not 0.0 <= material.roughness <= 1.0:
+            raise SceneError(f"{obj.name}: roughness must be between 0 and 1 (got {material.roughness})")
         if isinstance(material, Dielectric):
             if not (math.isfinite(material.ior) and material.ior > 0):
                 raise SceneError(f"{obj.name}: IOR must be a positive number (got {material.ior})")
@@ -141,3 +143,19 @@ def _check_world(world: World) -> None:
         _finite("the world", "its environment image", image)
         if np.any(image < 0):
             raise SceneError("the world: its environment image must not be negative")
+
+
+def rough_caster_warnings(scene: Scene, density: str) -> list[str]:
+    """What is still approximated about each rough caster, in one warning
+    each: in beam mode the light it scatters lands as photons (the
+    adaptive estimate's noise, not beams: spread beams measured slower and
+    worse, benchmarks/rough_glass.py), and the eye sees through it or in it
+    one microfacet normal per eye sample, grainy at few samples."""
+    warnings = []
+    for obj in scene.casters:
+        roughness = obj.material.roughness
+        if not obj.material.smooth:
+            as_photons = "in beam mode its caustic comes as photons, with their noise; " if density == "beam" else ""
+            warnings.append(f"{obj.name}: rough (Roughness {roughness:.3g}): {as_photons}the view through it or "
+                            "in it takes one microfacet normal per eye sample (more Samples smooth its grain)")
+    return warnings

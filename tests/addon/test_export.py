@@ -174,16 +174,54 @@ def test_mirrors_and_metals_read_as_reflectors(addon):
     shapes["Chalk"].caustic.role = 'REFLECTOR'
     result = read(addon)
     materials = {o.name: o.material for o in result.scene.objects}
-    Reflector, Diffuse = addon.caustic_addon.Reflector, addon.caustic_addon.Diffuse
+    Reflector = addon.caustic_addon.Reflector
     assert isinstance(materials["Chrome"], Reflector) and np.allclose(materials["Chrome"].color, (0.9, 0.8, 0.7))
-    assert isinstance(materials["Brushed"], Reflector)
+    assert materials["Chrome"].roughness == 0.0
+    assert isinstance(materials["Brushed"], Reflector) and materials["Brushed"].roughness == pytest.approx(0.1)
     assert isinstance(materials["Gold"], Reflector) and np.allclose(materials["Gold"].color, (1.0, 0.8, 0.3))
-    assert isinstance(materials["Pewter"], Diffuse) and materials["Pewter"].receiver
+    assert isinstance(materials["Pewter"], Reflector) and materials["Pewter"].roughness == pytest.approx(0.6)
+    assert materials["Pewter"].multiscatter and materials["Brushed"].multiscatter
     assert isinstance(materials["Chalk"], Reflector) and np.allclose(materials["Chalk"].color, 1.0)
-    warnings = "\n".join(result.warnings)
-    assert "material 'Brushed': glossy Roughness 0.1 is rendered as a perfect mirror" in warnings
-    assert "material 'Pewter': rough metal (Roughness above 0.2) is rendered as diffuse" in warnings
-    assert "Chrome" not in warnings and "Gold" not in warnings
+    assert not any("oughness" in w for w in result.warnings)
+
+
+def test_roughness_and_distribution_of_glass_and_metal(addon):
+    """Glass, Refraction, Glossy and Principled BSDFs (transmissive and
+    metal) give the engine their Roughness, clamped to 0..1 as Cycles does,
+    and whether they are Multiscatter GGX; no warning names roughness."""
+    lamp_scene()
+    frosted = scenes.glass_material("Frosted")
+    frosted.node_tree.nodes["Glass BSDF"].inputs["Roughness"].default_value = 0.3
+    plain = scenes.glass_material("Plain GGX")
+    plain.node_tree.nodes["Glass BSDF"].inputs["Roughness"].default_value = 0.2
+    plain.node_tree.nodes["Glass BSDF"].distribution = 'GGX'
+    refraction = bpy.data.materials.new("Refraction")
+    if refraction.node_tree is None:
+        refraction.use_nodes = True
+    nodes = refraction.node_tree.nodes
+    nodes.clear()
+    node = nodes.new('ShaderNodeBsdfRefraction')
+    node.inputs["Roughness"].default_value, node.inputs["IOR"].default_value, node.distribution = 0.25, 1.33, 'GGX'
+    refraction.node_tree.links.new(node.outputs[0], nodes.new('ShaderNodeOutputMaterial').inputs['Surface'])
+    cases = {"Frosted": frosted, "Plain GGX": plain, "Refraction": refraction,
+             "Principled glass": principled("Principled glass", **{"Transmission Weight": 1.0, "Roughness": 0.5}),
+             "Rough metal": principled("Rough metal", **{"Metallic": 1.0, "Roughness": 0.45}),
+             "Satin": scenes.glossy_material("Satin", roughness=0.35)}
+    cases["Rough metal"].node_tree.nodes["Principled BSDF"].distribution = 'GGX'
+    for k, (name, material) in enumerate(cases.items()):
+        scenes.add_sphere(0.2, (k * 0.5 - 1.0, 0.0, 0.5), material, name=name, segments=8, rings=4)
+    result = read(addon)
+    materials = {o.name: o.material for o in result.scene.objects}
+    Dielectric, Reflector = addon.caustic_addon.Dielectric, addon.caustic_addon.Reflector
+    expected = {"Frosted": (Dielectric, 0.3, True), "Plain GGX": (Dielectric, 0.2, False),
+                "Refraction": (Dielectric, 0.25, False), "Principled glass": (Dielectric, 0.5, True),
+                "Rough metal": (Reflector, 0.45, False), "Satin": (Reflector, 0.35, True)}
+    for name, (kind, roughness, multiscatter) in expected.items():
+        assert isinstance(materials[name], kind), name
+        assert materials[name].roughness == pytest.approx(roughness), name
+        assert materials[name].multiscatter == multiscatter, name
+    assert materials["Refraction"].ior == pytest.approx(1.33)
+    assert not any("oughness" in w for w in result.warnings)
 
 
 def test_approximations_are_named_in_warnings(addon):
@@ -194,7 +232,11 @@ def test_approximations_are_named_in_warnings(addon):
     material.node_tree.links.new(texture.outputs['Color'], shader.inputs['Color'])
     rough = scenes.glass_material("Frosted")
     rough.node_tree.nodes["Glass BSDF"].inputs["Roughness"].default_value = 0.3
+    rough.node_tree.nodes["Glass BSDF"].distribution = 'BECKMANN'
     scenes.add_sphere(0.3, (1.0, 0.0, 0.5), rough, segments=8, rings=4)
+    brushed = scenes.glossy_material("Brushed", roughness=0.2)
+    brushed.node_tree.nodes["Glossy BSDF"].inputs["Anisotropy"].default_value = 0.5
+    scenes.add_sphere(0.2, (0.0, 1.0, 0.5), brushed, name="Brushed", segments=8, rings=4)
     bpy.ops.curve.primitive_bezier_circle_add()
     curve = bpy.context.object.name
     neon = scenes.add_sphere(0.2, (-1.0, 0.0, 0.5), scenes.diffuse_material("Neon"), name="Neon", segments=8, rings=4)
@@ -206,7 +248,8 @@ def test_approximations_are_named_in_warnings(addon):
     warnings = "\n".join(result.warnings)
     assert ("material 'Floor': its Color comes from 'Checker Texture', a Checker Texture node, which the caustic "
             "render does not read; the unconnected value is used") in warnings
-    assert "material 'Frosted': rough glass is rendered as smooth glass" in warnings
+    assert "material 'Frosted': its Beckmann distribution is rendered as GGX" in warnings
+    assert "material 'Brushed': its Anisotropy is not rendered: its microfacets are isotropic" in warnings
     assert f"'{curve}': curve objects are not supported" in warnings
     assert "'Neon': its material 'Neon' emits light" in warnings
     neon_material = next(o.material for o in result.scene.objects if o.name == "Neon")

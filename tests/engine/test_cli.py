@@ -152,10 +152,11 @@ def test_command_line_overrides_the_scene_file(tmp_path):
     (lambda t: t.replace("ior = 1.5", "ior = 1.5\nabsorption_color = 0.5\nabsorption = 1.0"),
      ["object.absorption and object.absorption_color"]),
     (lambda t: t.replace("map_scale = 5.0", "map_scale = 5.0\nbands = 65"), ["photons.bands", "1..64"]),
+    (lambda t: t.replace("ior = 1.5", "ior = 1.5\nroughness = 1.2"), ["object.roughness", "in 0..1"]),
 ], ids=["syntax", "unknown-key", "unknown-table", "negative-count", "fractional-count", "renamed-count", "string-pixx",
         "missing-eye", "zero-map-scale", "key-of-another-lamp", "nan-ior", "beam-refinement-too-deep",
         "ior-of-a-reflector", "unknown-material", "zero-abbe", "nan-abbe", "black-absorption-color",
-        "negative-absorption-distance", "two-absorptions", "too-many-bands"])
+        "negative-absorption-distance", "two-absorptions", "too-many-bands", "roughness-above-1"])
 def test_bad_scene_file(tmp_path, edit, fragments):
     scene = write(tmp_path / "scene.toml", edit(SMALL))
     assert_bad_input(run_cli("render", scene, EXAMPLES / "round.obj", "-o", tmp_path / "out.png"), *fragments)
@@ -260,6 +261,13 @@ def test_scene_file_dispersion_and_absorption_colour():
     cfg = config.parse(text)
     assert cfg.material.abbe == 55.0 and cfg.settings.bands == 4
     np.testing.assert_allclose(np.exp(-cfg.material.absorption * 0.02), [0.9, 0.5, 0.25], rtol=1e-12)
+
+
+def test_scene_file_roughness_of_glass_and_reflector():
+    assert config.parse(SMALL.replace("ior = 1.5", "ior = 1.5\nroughness = 0.3")).material.roughness == 0.3
+    reflector = config.parse(SMALL.replace("ior = 1.5", 'material = "reflector"\nroughness = 0.4')).material
+    assert isinstance(reflector, Reflector) and reflector.roughness == 0.4
+    assert config.parse(SMALL).material.roughness == 0.0
 
 
 def test_a_reflector_in_the_scene_file_casts_a_caustic(tmp_path):

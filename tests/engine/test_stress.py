@@ -222,7 +222,7 @@ def follow(accel: Accelerator, materials: Materials, origins: np.ndarray, dirs: 
         alive, points, dirs, hits = alive[glass], points[glass], dirs[glass], hits.select(glass)
 
         surface = orient(accel, hits, dirs, materials, paths.medium[alive])
-        dirs, crossed = scatter(surface, dirs, hash_uniform(alive + 1, 2 * depth, seed) < surface.fresnel)
+        dirs, crossed, _ = scatter(surface, dirs, hash_uniform(alive + 1, 2 * depth, seed) < surface.fresnel)
         inside = paths.medium[alive] != MISS
         paths.double_entries[alive] += surface.entering & inside
         paths.phantom_exits[alive] += ~surface.entering & ~inside
@@ -386,7 +386,7 @@ def test_scatter_with_shading_normals_tilted_against_the_geometry(tilt, azimuth,
     assert np.all((surface.fresnel >= 0.0) & (surface.fresnel <= 1.0))
     assert np.all(surface.fresnel[critical > 0] == 1.0) and np.all(surface.fresnel[critical < 0] < 1.0)
     for mirror in (np.zeros(m, dtype=bool), np.ones(m, dtype=bool), rng.random(m) < surface.fresnel):
-        out, crossed = scatter(surface, d, mirror)
+        out, crossed, _ = scatter(surface, d, mirror)
         assert np.isfinite(out).all()
         np.testing.assert_allclose(np.linalg.norm(out, axis=1), 1.0, atol=1e-12)
         side = dot(out, surface.facing)
