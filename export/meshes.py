@@ -9,7 +9,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..caustic_addon import Mesh, Object
+from ..caustic_addon import Dielectric, Mesh, Object, Reflector
 from .materials import engine_material, read_surface
 
 
@@ -75,20 +75,48 @@ def _main_material(ob_eval, material_index: np.ndarray, name: str, warnings: lis
     return main
 
 
+def flattened(matrix: np.ndarray, vertices: np.ndarray) -> bool:
+    """True if the object matrix `matrix (4,4)` scales the mesh of object
+    space `vertices (n,3)` to 0 along an axis it has depth along (a plane
+    scaled to 0 across itself is not flattened)."""
+    _, scales, axes = np.linalg.svd(matrix[:3, :3])
+    extent = float(np.ptp(vertices, axis=0).max(initial=0.0)) if len(vertices) else 0.0
+    null = axes[scales <= 1e-12 * max(float(scales.max()), 1e-300)]
+    return bool(len(null)) and float(np.ptp(vertices @ null.T, axis=0).max()) > 1e-9 * extent
+
+
 def mesh_object(ob, name: str, matrix: np.ndarray, surfaces: dict, warnings: list[str]):
-    """(engine Object in world space or None if the mesh has no faces, name of its material or None).
-    `surfaces` holds each material's reading, so that a material shared by
-    several objects is read, and warned about, once."""
+    """(engine Object in world space or None if it renders nothing, name of
+    its material or None). `surfaces` holds each material's reading, so that
+    a material shared by several objects is read, and warned about, once.
+    A glass or mirror with no faces, glass scaled to 0 along an axis, and
+    an object scaled to nothing are left out with a warning that names them."""
     with evaluated_mesh(ob) as mesh:
         local, material_index = _local_mesh(mesh)
-        material = _main_material(ob, material_index, name, warnings) if local is not None else None
-    if local is None:
-        return None, None
+        material = (_main_material(ob, material_index, name, warnings) if local is not None
+                    else next((slot.material for slot in ob.material_slots), None))
     key = material.original.name if material is not None else None
     if key not in surfaces:
         surfaces[key] = read_surface(material)
         warnings += surfaces[key].warnings
+    engine = engine_material(surfaces[key], ob.original.caustic)
+    caster = isinstance(engine, (Dielectric, Reflector))
+    if local is None:
+        if caster or ob.original.caustic.role == 'RECEIVER':
+            warnings.append(f"'{name}' has no faces, so it {'casts' if caster else 'receives'} no caustics: "
+                            "it was left out")
+        return None, None
+    world = local.transformed(matrix)
+    if len(world.triangles) == 0:
+        warnings.append(f"'{name}' is scaled to 0, so none of its faces has any area: it was left out")
+        return None, None
+    if flattened(matrix, local.vertices):
+        if isinstance(engine, Dielectric):
+            warnings.append(f"'{name}' is scaled to 0 along an axis: glass with no thickness bends no light, "
+                            "so it was left out")
+            return None, None
+        warnings.append(f"'{name}' is scaled to 0 along an axis: it is rendered flat")
     if np.any(surfaces[key].emission > 0.0):
         warnings.append(f"'{name}': its material '{key}' emits light; the caustic render shows it but lights "
                         "nothing with it and casts no caustics from it yet (a lamp in its place would)")
-    return Object(name, local.transformed(matrix), engine_material(surfaces[key], ob.original.caustic)), key
+    return Object(name, world, engine), key

@@ -11,13 +11,25 @@ from ..errors import SceneError
 from ..optics.dispersion import cauchy_ior
 from ..optics.spectrum import VISIBLE_NM
 from .lights import AreaLight, SpotLight, SunLight, World
-from .materials import Dielectric, Reflector
+from .materials import Dielectric, Diffuse, Reflector
 from .scene import Scene
 
 
 def _finite(name: str, what: str, array) -> None:
     if not np.all(np.isfinite(np.asarray(array, dtype=np.float64))):
         raise SceneError(f"{name}: {what} contains NaN or infinite values")
+
+
+def _material_finite(name: str, material) -> None:
+    if isinstance(material, Dielectric):
+        parts = [("its colour", material.color), ("its absorption", material.absorption)]
+    elif isinstance(material, Diffuse):
+        parts = [("its colour", material.albedo), ("its specular colour", material.specular),
+                 ("its specular exponent", material.exponent), ("its emission", material.emission)]
+    else:
+        parts = []
+    for what, value in parts:
+        _finite(name, what, value)
 
 
 def validate_scene(scene: Scene) -> list[str]:
@@ -39,11 +51,14 @@ def validate_scene(scene: Scene) -> list[str]:
             raise SceneError(f"{obj.name}: the mesh has no triangles")
         if mesh.triangles.min() < 0 or mesh.triangles.max() >= len(mesh.vertices):
             raise SceneError(f"{obj.name}: a triangle refers to a vertex that does not exist")
+        if mesh.corner_uvs is not None:
+            _finite(obj.name, "its UV map", mesh.corner_uvs)
         if mesh.corner_normals is not None:
             _finite(obj.name, "its normals", mesh.corner_normals)
             if mesh.corner_normals.shape != (len(mesh.triangles), 3, 3):
                 raise SceneError(f"{obj.name}: corner_normals must have shape (triangles, 3, 3)")
         material = obj.material
+        _material_finite(obj.name, material)
         if isinstance(material, Dielectric):
             if not (math.isfinite(material.ior) and material.ior > 0):
                 raise SceneError(f"{obj.name}: IOR must be a positive number (got {material.ior})")

@@ -76,6 +76,12 @@ def broken(**changes):
             glass.mesh = Mesh(glass.mesh.vertices, np.zeros((0, 3), int))
         elif key == "power":
             scene.lights = [PointLight((0, 0, 6), value, name="Lamp")]
+        elif key == "absorption":
+            glass.material = Dielectric(1.5, absorption=value)
+        elif key == "albedo":
+            scene.objects[0].material = Diffuse(albedo=value)
+        elif key == "uv":
+            scene.objects[0].mesh.corner_uvs[0, 0] = value
     return scene
 
 
@@ -85,6 +91,9 @@ def broken(**changes):
     (dict(vertices=[np.nan, 0, 0]), "Glass: its vertex coordinates contains NaN"),
     (dict(empty=True), "Glass: the mesh has no triangles"),
     (dict(power=-5.0), "lamp 'Lamp': its power must be"),
+    (dict(absorption=[np.nan, 0.0, 0.0]), "Glass: its absorption contains NaN"),
+    (dict(albedo=[0.5, np.inf, 0.5]), "Floor: its colour contains NaN or infinite"),
+    (dict(uv=[np.nan, 0.0]), "Floor: its UV map contains NaN"),
 ])
 def test_bad_scenes_name_the_culprit(changes, message):
     with pytest.raises(SceneError, match=message):
@@ -175,3 +184,16 @@ def test_the_wavy_slab_is_closed_faces_out_and_holds_its_volume():
     assert signed_volume(mesh.corners) == pytest.approx(exact, rel=1e-4)
     normals, _ = triangle_normals(mesh.corners)
     assert np.all(np.einsum("ij,ij->i", normals, mesh.corner_normals.mean(axis=1)) > 0.5)
+
+
+def test_a_mesh_scaled_to_0_along_an_axis_keeps_the_faces_across_it():
+    """The inverse transpose does not exist there: the cofactor matrix gives
+    the faces that keep an area their normals, and those flattened to no
+    area are dropped."""
+    box = shapes.cylinder(1.0, 1.0, segments=16)
+    flat = box.transformed(np.diag([2.0, 1.0, 0.0, 1.0]))
+    caps = np.abs(box.corner_normals[:, 0, 2]) > 0.5
+    assert len(flat.triangles) == caps.sum() > 0  # the walls are flattened to nothing, the caps stay
+    assert np.isfinite(flat.corner_normals).all()
+    np.testing.assert_allclose(np.abs(flat.corner_normals[..., 2]), 1.0)
+    assert len(box.transformed(np.diag([0.0, 0.0, 0.0, 1.0])).triangles) == 0
