@@ -5,13 +5,14 @@ from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
 from ..util.rows import take_rows
 from .grid import bilinear_sample, channel_tables, rect_means
 from .illumination_map import IlluminationMap
-from .raster import rasterise_triangles, signed_areas
+from .raster import Coverage, signed_areas
 
 
 @dataclass
@@ -27,15 +28,9 @@ class _Layer:
     tables: np.ndarray
 
     @staticmethod
-    def of_beams(lo: np.ndarray, hi: np.ndarray, cell: float, corners: np.ndarray,
-                 irradiance: np.ndarray) -> "_Layer":
-        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2,
-        rasterised over the chart box [lo, hi]; parts outside it are dropped."""
-        shape = tuple(np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)[::-1])
-        if (irradiance == irradiance[:, :1]).all():
-            irradiance = irradiance[:, :1]
-        values = np.ascontiguousarray(rasterise_triangles(shape, (corners - lo) / cell, irradiance))
-        return _Layer(lo, cell, values, channel_tables(values))
+    def of_coverage(grid: "_LayerGrid") -> "_Layer":
+        values = np.ascontiguousarray(grid.coverage.planes())
+        return _Layer(grid.lo, grid.cell, values, channel_tables(values))
 
     def _rc(self, xy: np.ndarray) -> np.ndarray:
         """(n,2) continuous (row, col), cell centres at integers."""
@@ -65,6 +60,26 @@ class _Layer:
         out = np.zeros((len(lo), len(self.values)))
         out[meets] = rect_means(self.tables, self.origin[::-1], self.cell, *take_rows(meets, lo, hi))
         return out
+
+
+class _LayerGrid:
+    """A layer being rasterised: cells of edge `cell` m over the chart box
+    [lo (2,), hi (2,)], on the lattice of such cells from chart point
+    `anchor (2,)` (so that layers of one cell laid over different boxes
+    share their cells), and the coverage of the beams added so far (one
+    channel while they are all white)."""
+
+    def __init__(self, lo: np.ndarray, hi: np.ndarray, cell: float, anchor: np.ndarray):
+        lo = anchor + np.floor((lo - anchor) / cell) * cell
+        self.lo, self.cell = lo, cell
+        self.coverage = Coverage(tuple(np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)[::-1]), 1)
+
+    def add(self, corners: np.ndarray, irradiance: np.ndarray) -> None:
+        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2;
+        parts outside the box are dropped."""
+        if not (irradiance == irradiance[:, :1]).all():
+            self.coverage.widen(3)
+        self.coverage.add((corners - self.lo) / self.cell, irradiance[:, :len(self.coverage.acc)])
 
 
 def _weighted_quantiles(values: np.ndarray, weights: np.ndarray, q) -> np.ndarray:
@@ -106,60 +121,104 @@ class BeamMap(IlluminationMap):
     FINE_RAMP = (1.0, 2.5)
     COARSE_RAMP = (16.0, 32.0)
     COARSE_CELL = 4
+    # Beams held back before they are rasterised: bounds their memory (about
+    # 100 B a beam) whatever the number of lamp rays.
+    FLUSH_BEAMS = 1 << 20
+    # The fine grid laid out from the first FLUSH_BEAMS beams spans their
+    # flux's box widened by this share of it on each side.
+    FINE_PAD = 0.1
 
     def __init__(self, *args, threads: int = 1, **kwargs):
         super().__init__(*args, **kwargs)
         self.threads = threads
         self._beam_parts: list[tuple[np.ndarray, np.ndarray]] = []
+        self._pending_beams = 0
+        self._grids: Optional[list[Optional[_LayerGrid]]] = None
         self._layers: list[_Layer] = []
         self.beams = 0
 
     def add_beams(self, corners: np.ndarray, irradiance: np.ndarray) -> None:
-        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2."""
+        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2.
+        Past FLUSH_BEAMS pending, they are rasterised into layers laid out
+        over the whole chart (but the fine one, laid over the first ones'
+        flux), so that later beams find a layer wherever they land."""
         with self._lock:
             self._beam_parts.append((corners, irradiance))
+            self._pending_beams += len(corners)
             self.beams += len(corners)
+            if self._pending_beams >= self.FLUSH_BEAMS:
+                self._rasterise_pending(whole_chart=True)
 
-    def _take_layer_specs(self) -> list[tuple]:
-        """Takes the pending beams and shares each among the layers by its
-        size (`layer_shares`): returns the `_Layer.of_beams` arguments of
-        each layer."""
-        corners = np.concatenate([c for c, _ in self._beam_parts])
-        irradiance = np.concatenate([e for _, e in self._beam_parts])
-        self._beam_parts = []
+    def _layout(self, corners: np.ndarray, irradiance: np.ndarray, fine: np.ndarray, coarse: np.ndarray,
+                whole_chart: bool) -> list[Optional[_LayerGrid]]:
+        """The (fine, own, coarse) layer grids for beams with `fine, coarse
+        (m,)` shares of the fine and coarse layers: the fine one over where 99.9% of its flux
+        lands, the others over the chart, or over their beams' bounding box
+        unless `whole_chart`; None for a layer no beam has a share of."""
         lo, hi = self.chart.origin, self.chart.origin + self.chart.size
-        fine, coarse = layer_shares(np.ptp(corners, axis=1).max(axis=1) / self.cell)
-        specs = []
+        grids: list[Optional[_LayerGrid]] = [None, None, None]
         small = fine > 0.0
         if small.any():
             centre = corners[small].mean(axis=1)
             flux = fine[small] * irradiance[small].sum(axis=1) * np.abs(signed_areas(corners[small]))
             bounds = np.array([_weighted_quantiles(centre[:, a], flux, (5e-4, 1 - 5e-4)) for a in (0, 1)])
-            small[small] = ((centre >= bounds[:, 0]) & (centre <= bounds[:, 1])).all(axis=1)
-            fine = np.where(small, fine, 0.0)
+            if whole_chart:
+                # the first beams stand for all of them: leave room for those that land further out
+                bounds += np.outer(bounds[:, 1] - bounds[:, 0], [-self.FINE_PAD, self.FINE_PAD])
             # a beam with a fine share reaches at most 2.5 map cells from its centre
             fine_lo, fine_hi = bounds[:, 0] - 2.5 * self.cell, bounds[:, 1] + 2.5 * self.cell
             cell = max(self.cell / self.FINE, float((fine_hi - fine_lo).max()) / self.FINE_LIMIT)
-            specs.append((fine_lo, fine_hi, cell, corners[small], irradiance[small] * fine[small, None]))
-        own = (1.0 - fine) * (1.0 - coarse)
-        for share, cell in ((own, self.cell), (coarse, self.COARSE_CELL * self.cell)):
-            chosen = share > 0.0
-            if chosen.any():
-                # over the chosen beams' bounding box only
+            grids[0] = _LayerGrid(fine_lo, fine_hi, cell, lo)
+        # the own grid also takes the fine share of beams outside the fine grid
+        for k, chosen, cell in ((1, coarse < 1.0, self.cell), (2, coarse > 0.0, self.COARSE_CELL * self.cell)):
+            if whole_chart:
+                grids[k] = _LayerGrid(lo, hi, cell, lo)
+            elif chosen.any():
                 points = corners[chosen].reshape(-1, 2)
                 box_lo, box_hi = np.maximum(lo, points.min(axis=0)), np.minimum(hi, points.max(axis=0))
-                specs.append((box_lo, box_hi + cell, cell, corners[chosen], irradiance[chosen] * share[chosen, None]))
-        return specs
+                grids[k] = _LayerGrid(box_lo, box_hi, cell, lo)
+        return grids
+
+    def _rasterise_pending(self, whole_chart: bool) -> None:
+        """Share the pending beams among the layers by their size
+        (`layer_shares`) and add them to the layers' grids, laying those out
+        first if there are none; a beam whose centre is outside the fine
+        grid's box gives its fine share to the map's own grid. Each layer
+        is rasterised on a thread of its own (of `threads`)."""
+        corners = np.concatenate([c for c, _ in self._beam_parts])
+        irradiance = np.concatenate([e for _, e in self._beam_parts])
+        self._beam_parts, self._pending_beams = [], 0
+        fine, coarse = layer_shares(np.ptp(corners, axis=1).max(axis=1) / self.cell)
+        if self._grids is None:
+            self._grids = self._layout(corners, irradiance, fine, coarse, whole_chart)
+        grid = self._grids[0]
+        if grid is not None:
+            centre = corners.mean(axis=1)
+            end = grid.lo + grid.cell * np.array(grid.coverage.shape[::-1])
+            fine = np.where(((centre >= grid.lo + 2.5 * self.cell) & (centre <= end - 2.5 * self.cell)).all(axis=1),
+                            fine, 0.0)
+        else:
+            fine = np.zeros(len(corners))
+        shares = (fine, (1.0 - fine) * (1.0 - coarse), coarse)
+        work = [(g, share > 0.0, share) for g, share in zip(self._grids, shares) if g is not None and (share > 0).any()]
+
+        def rasterise(job) -> None:
+            g, chosen, share = job
+            g.add(corners[chosen], irradiance[chosen] * share[chosen, None])
+
+        with ThreadPoolExecutor(max(1, min(self.threads, len(work)))) as pool:
+            list(pool.map(rasterise, work))
 
     def prepare(self) -> None:
-        """Rasterise the pending beams, a layer per thread (of `threads`),
-        and prepare the fallback photons' map."""
+        """Rasterise the pending beams and turn the layers' grids into
+        look-up tables, and prepare the fallback photons' map."""
         super().prepare()
         with self._lock:
             if self._beam_parts:
-                specs = self._take_layer_specs()
-                with ThreadPoolExecutor(max(1, min(self.threads, len(specs)))) as pool:
-                    self._layers += pool.map(lambda spec: _Layer.of_beams(*spec), specs)
+                self._rasterise_pending(whole_chart=False)
+            if self._grids is not None:
+                self._layers += [_Layer.of_coverage(g) for g in self._grids if g is not None]
+                self._grids = None
 
     def irradiance_at(self, xy: np.ndarray) -> np.ndarray:
         return super().irradiance_at(xy) + sum(layer.at(xy) for layer in self._layers)

@@ -412,7 +412,21 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
         jobs += [partial(band_beams, stack, first, min(first + rows + 1, grid), accel, materials, maps,
                          settings.max_depth, medium, settings.beam_refinement, band)
                  for band in range(count) for first in range(0, grid - 1, rows)]
-    jobs += photon_jobs(emitters, accel, materials, maps, settings)
+    # bands of rows spread over the grids in any first part of the jobs: the
+    # maps lay their layers out from the first beams they get (BeamMap)
+    jobs = [jobs[i] for i in spread_order(len(jobs))] + photon_jobs(emitters, accel, materials, maps, settings)
     stats, deliver = deliverer(maps)
     run_chunks(jobs, settings.threads, monitor, 0.0, share, "beam pass", deliver)
     return stats
+
+
+def spread_order(count: int) -> np.ndarray:
+    """(count,) 0..count-1 in the order of their bit-reversed binary (van
+    der Corput's radical inverse), so that every first part of the order
+    spreads evenly over the whole range."""
+    bits = max(int(count - 1).bit_length(), 1)
+    index = np.arange(count)
+    reversed_bits = np.zeros(count, dtype=np.int64)
+    for b in range(bits):
+        reversed_bits |= ((index >> b) & 1) << (bits - 1 - b)
+    return index[np.argsort(reversed_bits, kind="stable")]

@@ -125,7 +125,7 @@ def test_beams_land_on_a_receiver_listed_after_the_glass():
     np.testing.assert_allclose(second, first, rtol=1e-9)
 
 
-def layered_beam_map(threads: int) -> tuple[BeamMap, np.ndarray, np.ndarray]:
+def layered_beam_map(threads: int, flush: int = BeamMap.FLUSH_BEAMS) -> tuple[BeamMap, np.ndarray, np.ndarray]:
     """A 4 m square floor of 5 cm cells holding, on one side, one beam wide
     enough for the coarse layer and, on the other, beams of the map's size
     and beams for the fine layer, in both windings and colours. Returns the
@@ -133,13 +133,16 @@ def layered_beam_map(threads: int) -> tuple[BeamMap, np.ndarray, np.ndarray]:
     verts = np.array([[0, 0, 0], [4, 0, 0], [4, 4, 0], [0, 4, 0]], dtype=float)
     chart = PlaneChart(np.array([2.0, 2.0, 0.0]), np.array([0.0, 0.0, 1.0]), verts)
     imap = BeamMap("floor", chart, 0.05, MapEstimate(16), threads=threads)
+    imap.FLUSH_BEAMS = flush
     rng = np.random.default_rng(5)
     wide = np.array([[[0.2, 0.2], [1.8, 0.3], [0.4, 3.6]]])
     medium = rng.uniform(2.4, 3.4, (40, 1, 2)) + rng.uniform(-0.15, 0.15, (40, 3, 2))
     small = rng.uniform(2.4, 3.4, (400, 1, 2)) + rng.uniform(-0.03, 0.03, (400, 3, 2))
     corners = np.concatenate([wide, medium, small])
     irradiance = rng.uniform(0.5, 2.0, (len(corners), 3))
-    imap.add_beams(corners + chart.origin, irradiance)
+    order = rng.permutation(len(corners))
+    for part in np.array_split(order, 9):
+        imap.add_beams(corners[part] + chart.origin, irradiance[part])
     return imap, corners + chart.origin, irradiance
 
 
@@ -205,3 +208,21 @@ def test_beams_of_about_a_cell_share_their_light_between_layers_smoothly():
     assert fine[0] == 1.0 and fine[-1] == 0.0 and coarse[0] == 0.0 and coarse[-1] == 1.0
     assert np.abs(np.diff(fine)).max() < 0.01 and np.abs(np.diff(coarse)).max() < 0.01
     assert (fine * coarse == 0.0).all()
+
+
+def test_a_beam_map_rasterised_in_batches_is_the_map_rasterised_at_once():
+    """Beams rasterised as they come, FLUSH_BEAMS at a time (so that memory
+    stays bounded whatever the lamp rays), give the map that rasterising
+    them all at the end gives: the same flux over the floor and the same
+    means inside the fine and the coarse beams' regions."""
+    at_once = layered_beam_map(threads=2)[0]
+    batched, corners, irradiance = layered_beam_map(threads=2, flush=100)
+    assert batched._layers == [] and batched._grids is not None  # rasterised before the map is read
+    lo, hi = at_once.chart.origin, at_once.chart.origin + at_once.chart.size
+    np.testing.assert_allclose(batched.mean_over(lo[None], hi[None]), at_once.mean_over(lo[None], hi[None]),
+                               rtol=1e-12)
+    rng = np.random.default_rng(7)
+    boxes_lo = at_once.chart.origin + np.concatenate([rng.uniform(2.4, 3.3, (100, 2)), rng.uniform(0.3, 1.0, (100, 2))])
+    boxes_hi = boxes_lo + rng.uniform(0.01, 0.1, (200, 2))
+    np.testing.assert_allclose(batched.mean_over(boxes_lo, boxes_hi), at_once.mean_over(boxes_lo, boxes_hi),
+                               rtol=1e-9, atol=1e-9)
