@@ -41,6 +41,11 @@ def negative_ior_override(parts):
     parts["ball"].caustic.ior = 0.0
 
 
+def a_resolution_too_large_for_memory(parts):
+    bpy.context.scene.render.resolution_x = bpy.context.scene.render.resolution_y = 65536
+    bpy.context.scene.render.resolution_percentage = 100
+
+
 CASES = [
     (no_camera, "The scene has no active camera", {"render", "compare_cycles"}),
     (no_lamp, "Nothing lights the scene: it has no lamp, and its world is black", {"render", "compare_cycles", "bake"}),
@@ -49,6 +54,7 @@ CASES = [
     (zero_lamp_rays, "Lamp Rays is 0", {"render", "compare_cycles", "bake"}),
     (zero_ior_in_the_material, "Ball: IOR must be a positive number", {"render", "compare_cycles", "bake"}),
     (negative_ior_override, "Ball: IOR must be a positive number", {"render", "compare_cycles", "bake"}),
+    (a_resolution_too_large_for_memory, "this render needs about 860.2 GB of memory", {"render"}),
 ]
 
 

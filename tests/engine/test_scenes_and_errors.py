@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from caustic_addon import (Cancelled, Dielectric, Diffuse, MapCache, Mesh, Object, PointLight, RenderSettings,
-                           Scene, SceneError, SpotLight, SunLight, render, shapes)
+from caustic_addon import (Camera, Cancelled, Dielectric, Diffuse, MapCache, Mesh, Object, PointLight,
+                           RenderSettings, Scene, SceneError, SpotLight, SunLight, render, shapes)
 from caustic_addon.tracing.topology import open_edge_count, signed_volume, triangle_normals
 from metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
@@ -197,3 +197,19 @@ def test_a_mesh_scaled_to_0_along_an_axis_keeps_the_faces_across_it():
     assert np.isfinite(flat.corner_normals).all()
     np.testing.assert_allclose(np.abs(flat.corner_normals[..., 2]), 1.0)
     assert len(box.transformed(np.diag([0.0, 0.0, 0.0, 1.0])).triangles) == 0
+
+
+def test_a_render_that_cannot_fit_in_memory_is_refused_up_front_with_the_number():
+    """Memory does not grow with the lamp rays (every pass streams its
+    chunks), so 50M of them fit where 100,000 do; a 100,000 x 100,000
+    image does not, and is refused before anything is traced."""
+    from caustic_addon.memory import needed_bytes, refusal
+
+    scene = ball_lens(pixels=8)
+    few, many = (sum(needed_bytes(scene, quick(lamp_rays=n, density="beam")).values()) for n in (100_000, 50_000_000))
+    assert few == many < 2e9
+    assert refusal(scene, quick(lamp_rays=50_000_000, density="beam"), memory=4e9) is None
+    scene.camera = Camera.look_at((0, -6, 4), (0, 0, 0.6), pixx=100_000, pixy=100_000)
+    with pytest.raises(SceneError, match=r"this render needs about 2,00\d\.\d GB of memory, more than this machine's "
+                                         r"[\d,.]+ GB; 2,000.0 GB of it for the image: lower the resolution"):
+        render(scene, quick(lamp_rays=1000))
