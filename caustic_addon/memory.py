@@ -48,7 +48,8 @@ def needed_bytes(scene: Scene, settings: RenderSettings) -> dict[str, float]:
         "the engine": _BASE,
     }
     if settings.density == "beam":
-        parts["the illumination maps"] += (len(scene.receivers) * _PER_FINE_CELL * BeamMap.FINE_LIMIT ** 2
+        fine_cells = (BeamMap.FINE_LIMIT * (1.0 + 2.0 * BeamMap.FINE_PAD)) ** 2
+        parts["the illumination maps"] += (len(scene.receivers) * _PER_FINE_CELL * fine_cells
                                            + _PER_PENDING_BEAM * BeamMap.FLUSH_BEAMS)
     return parts
 

@@ -111,18 +111,18 @@ class BeamMap(IlluminationMap):
 
     Beams are rasterised with exact area coverage (`raster.py`), so flux is
     conserved exactly and a beam squeezed to nothing at a fold cannot spike.
-    Beams under about 2 map cells across (the sharp part of a caustic) go
-    to a grid FINE times finer, laid over where 99.9% of their flux lands (at
-    most FINE_LIMIT cells a side); beams about 24 cells across or more (dim,
-    wide light) to a grid COARSE_CELL times coarser; the others to the map's
-    own grid, each beam's light shared between two layers where its size is
-    in between (`layer_shares`). Each layer spans only its beams' bounding
-    box.
+    Beams under 2 to 4 map cells across (the sharp part of a caustic) go
+    to a grid FINE times finer (coarser by steps of 2^(1/4) where that would
+    take more than FINE_LIMIT cells a side), laid over where 99.9% of their
+    flux lands; beams about 24 cells across or more (dim, wide light) to a
+    grid COARSE_CELL times coarser; the others to the map's own grid, each
+    beam's light shared between two layers where its size is in between
+    (`layer_shares`). Each layer spans only its beams' bounding box.
     """
 
     FINE = 8
     FINE_LIMIT = 2048
-    FINE_RAMP = (1.0, 2.5)
+    FINE_RAMP = (2.0, 4.0)
     COARSE_RAMP = (16.0, 32.0)
     COARSE_CELL = 4
     # Beams held back before they are rasterised: bounds their memory (about
@@ -166,12 +166,17 @@ class BeamMap(IlluminationMap):
             centre = corners[small].mean(axis=1)
             flux = fine[small] * irradiance[small].sum(axis=1) * np.abs(signed_areas(corners[small]))
             bounds = np.array([_weighted_quantiles(centre[:, a], flux, (5e-4, 1 - 5e-4)) for a in (0, 1)])
+            # the map's cell over FINE, widened in steps of 2^(1/4) to fit
+            # FINE_LIMIT cells: grids laid out from different beams over
+            # about the same box share a lattice
+            cell = self.cell / self.FINE
+            while float((bounds[:, 1] - bounds[:, 0]).max()) / cell > self.FINE_LIMIT and cell < self.cell:
+                cell *= 2.0 ** 0.25
             if whole_chart:
                 # the first beams stand for all of them: leave room for those that land further out
                 bounds += np.outer(bounds[:, 1] - bounds[:, 0], [-self.FINE_PAD, self.FINE_PAD])
-            # a beam with a fine share reaches at most 2.5 map cells from its centre
-            fine_lo, fine_hi = bounds[:, 0] - 2.5 * self.cell, bounds[:, 1] + 2.5 * self.cell
-            cell = max(self.cell / self.FINE, float((fine_hi - fine_lo).max()) / self.FINE_LIMIT)
+            # a beam with a fine share reaches at most 4 map cells from its centre
+            fine_lo, fine_hi = bounds[:, 0] - 4.0 * self.cell, bounds[:, 1] + 4.0 * self.cell
             grids[0] = _LayerGrid(fine_lo, fine_hi, cell, lo)
         # the own grid also takes the fine share of beams outside the fine grid
         for k, chosen, cell in ((1, coarse < 1.0, self.cell), (2, coarse > 0.0, self.COARSE_CELL * self.cell)):
@@ -199,7 +204,7 @@ class BeamMap(IlluminationMap):
         if grid is not None:
             centre = corners.mean(axis=1)
             end = grid.lo + grid.cell * np.array(grid.coverage.shape[::-1])
-            fine = np.where(((centre >= grid.lo + 2.5 * self.cell) & (centre <= end - 2.5 * self.cell)).all(axis=1),
+            fine = np.where(((centre >= grid.lo + 4.0 * self.cell) & (centre <= end - 4.0 * self.cell)).all(axis=1),
                             fine, 0.0)
         else:
             fine = np.zeros(len(corners))

@@ -57,9 +57,7 @@ class Mesh:
             length = np.linalg.norm(normals, axis=-1, keepdims=True)
             normals = normals / np.maximum(length, 1e-300)
         if det == 0.0:
-            corners = np.take(verts, tris, axis=0)
-            area = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
-            keep = area > 0.0
+            keep = with_area(verts, tris)
             tris = tris[keep]
             normals = None if normals is None else normals[keep]
             uvs = None if uvs is None else uvs[keep]
@@ -72,3 +70,10 @@ def cofactor_matrix(m: np.ndarray) -> np.ndarray:
     det(m) m^-T where m is invertible."""
     c = m.T
     return np.stack([np.cross(c[1], c[2]), np.cross(c[2], c[0]), np.cross(c[0], c[1])], axis=1)
+
+
+def with_area(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(nt,) bool: the triangles `triangles (nt,3)` of `vertices (nv,3)`
+    whose area is not 0."""
+    corners = np.take(vertices, triangles, axis=0)
+    return np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1) > 0.0
