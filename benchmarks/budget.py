@@ -82,9 +82,9 @@ def recorded_batches(scene, settings: RenderSettings) -> list[tuple]:
     batches = []
     original = Accelerator._run
 
-    def recording(self, origins, dirs, **kwargs):
+    def recording(self, embree, origins, dirs, **kwargs):
         batches.append((np.array(origins), np.array(dirs), dict(kwargs)))
-        return original(self, origins, dirs, **kwargs)
+        return original(self, embree, origins, dirs, **kwargs)
 
     with patched(Accelerator, "_run", recording):
         render(scene, settings)
@@ -95,10 +95,11 @@ def replay(scene, batches: list[tuple], threads: int) -> float:
     """Seconds Embree takes over `batches`, one after another, each split
     over `threads` as the engine splits it."""
     accel = Accelerator(scene.objects, scene.extent(), threads)
-    accel._run(*batches[0][:2], **batches[0][2])  # builds the BVH outside the clock
+    embree = accel._all.embree  # the budget's scene: every ray sees every object
+    accel._run(embree, *batches[0][:2], **batches[0][2])  # builds the BVH outside the clock
     start = time.perf_counter()
     for origins, dirs, kwargs in batches:
-        accel._run(origins, dirs, **kwargs)
+        accel._run(embree, origins, dirs, **kwargs)
     seconds = time.perf_counter() - start
     accel.close()
     return seconds

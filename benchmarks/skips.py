@@ -184,8 +184,8 @@ def targeted_emission(repeats: int, quality: Quality) -> list[dict]:
     return out
 
 
-def direct_radiance_shadowing_all(accel, lights, energy, points, shading, facing, view, albedo, specular, exponent,
-                                  far, *strata):
+def direct_radiance_shadowing_all(accel, lights, energy, points, shading, facing, view, diffuse, lobe, far,
+                                  *strata):
     """direct_light.direct_radiance, after casting the shadow rays it skips:
     one per point and (point) lamp behind the surface."""
     for light in lights:
@@ -194,8 +194,8 @@ def direct_radiance_shadowing_all(accel, lights, energy, points, shading, facing
         if behind.any():
             accel.occluded(accel.offset(points[behind], -facing[behind], lamp.dirs[behind]), lamp.dirs[behind],
                            lamp.dist[behind] - 2.0 * accel.epsilon)
-    return direct_light.direct_radiance(accel, lights, energy, points, shading, facing, view, albedo, specular, exponent,
-                                        far, *strata)
+    return direct_light.direct_radiance(accel, lights, energy, points, shading, facing, view, diffuse, lobe, far,
+                                        *strata)
 
 
 def shadow_rays_behind(repeats: int) -> dict:

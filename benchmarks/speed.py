@@ -63,7 +63,7 @@ def raw_embree_rays_per_second(scene: Scene, rays: int, threads: int) -> float:
     (aim,) = aims(scene.lights[0], [sphere], sphere)
     origins, dirs = (a.astype(np.float32) for a in aim.rays(sample_disc(1.0, np.random.default_rng(0).random((rays, 2)))))
     parts = np.array_split(np.arange(rays), threads)
-    embree = accel._embree
+    embree = accel._all.embree
     with ThreadPoolExecutor(threads) as pool:
         start = time.perf_counter()
         list(pool.map(lambda p: embree.run(origins[p], dirs[p], output=1), parts))

@@ -19,10 +19,11 @@ from .maps.illumination_map import IlluminationMap
 from .optics.media import absorption_from_color, volume_absorption
 from .renderer import RenderResult, render
 from .scene import (AreaLight, Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector, RenderSettings,
-                    Scene, SpotLight, SunLight, World, paper, shapes)
+                    Scene, Specular, SpotLight, SunLight, Visibility, World, paper, shapes, textures)
 
 __all__ = [
     "AreaLight", "Camera", "Cancelled", "Dielectric", "Diffuse", "IlluminationMap", "ImageFrame", "MapCache", "Mesh", "Object", "PointLight", "Reflector",
-    "RenderResult", "RenderSettings", "Scene", "SceneError", "SpotLight", "SunLight", "World", "absorption_from_color",
-    "paper", "render", "shapes", "volume_absorption",
+    "RenderResult", "RenderSettings", "Scene", "SceneError", "Specular", "SpotLight", "SunLight", "Visibility", "World",
+    "absorption_from_color",
+    "paper", "render", "shapes", "textures", "volume_absorption",
 ]

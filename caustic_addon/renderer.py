@@ -16,7 +16,7 @@ from .maps.illumination_map import IlluminationMap
 from .maps.receivers import build_maps
 from .memory import refusal
 from .passes.beam import beam_pass
-from .passes.eye import PASSES, eye_pass
+from .passes.eye import HOLDOUT, PASSES, eye_pass
 from .passes.lamp_pass import LampPassStats, lamps_in_glass
 from .passes.photon import photon_pass
 from .scene import RenderSettings, Scene
@@ -31,7 +31,8 @@ _LAMP_SHARE = 0.6
 
 @dataclass
 class RenderResult:
-    """image     (pixy, pixx, 4) float32 linear RGBA, row 0 at the top
+    """image     (pixy, pixx, 4) float32 linear RGBA, row 0 at the top;
+              alpha is 1 but where holdouts cut the pixel out
     passes    name -> (pixy, pixx, 3) float32: 'direct' (lamps), 'caustic'
               (illumination maps), 'ambient' (ambient term and the world);
               they sum to the image's RGB
@@ -110,8 +111,9 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
             warnings.append(f"{int(bad.sum())} non-finite values in the {name} pass were set to 0")
             buf[bad] = 0.0
         passes[name] = buf.reshape(cam.pixy, cam.pixx, 3).astype(np.float32)
-    image = np.ones((cam.pixy, cam.pixx, 4), dtype=np.float32)
+    image = np.empty((cam.pixy, cam.pixx, 4), dtype=np.float32)
     image[..., :3] = sum(passes[name] for name in PASSES)
+    image[..., 3] = 1.0 - buffers[HOLDOUT].mean(axis=1).reshape(cam.pixy, cam.pixx)
 
     stats = {
         "lamp_rays": lamp_stats.lamp_rays,

@@ -1,9 +1,13 @@
 """A Blender material read as the engine's: Glass BSDF, or Principled BSDF
 that mostly transmits, is a Dielectric; Glossy BSDF, or Principled BSDF that
 is mostly metal and smooth, is a Reflector; Principled and Diffuse BSDFs,
-plain viewport colours and anything not understood are Diffuse receivers. A
-Volume Absorption node on the Volume output gives glass its absorption. What
-is read approximately comes back as a warning naming the material.
+plain viewport colours and anything not understood are Diffuse receivers, a
+Principled BSDF's with its specular layer (Roughness, IOR, Specular IOR
+Level, Specular Tint, the GGX or Multiscatter GGX distribution); a material
+with no output node, or nothing connected to it, is black, as Cycles
+renders it. A Volume Absorption node on the Volume output gives glass its
+absorption. What is read approximately comes back as a warning naming the
+material.
 
 No Glass or Principled BSDF has a Dispersion input in Blender 4.2, 4.5 or 5.3
 (checked with each bpy module of the test matrix), so dispersion comes only from the object's
@@ -13,11 +17,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Optional
 
 import bpy
 import numpy as np
 
-from ..caustic_addon import Dielectric, Diffuse, Reflector, absorption_from_color, volume_absorption
+from ..caustic_addon import Dielectric, Diffuse, Reflector, Specular, absorption_from_color, volume_absorption
+from ..caustic_addon import textures as nodes
+from .textures import Recipe, color_recipe
 
 DEFAULT_ALBEDO = 0.8
 GLASS_NODES = {'ShaderNodeBsdfGlass', 'ShaderNodeBsdfRefraction'}
@@ -26,6 +33,11 @@ GLOSSY_NODES = {'ShaderNodeBsdfGlossy', 'ShaderNodeBsdfAnisotropic'}
 # A Principled BSDF with Metallic above 0.5 is a mirror up to this Roughness,
 # and diffuse beyond it; either way a warning names it when Roughness > 0.
 MIRROR_ROUGHNESS = 0.2
+# A Principled receiver's inputs the engine does not render, with the value
+# that leaves them out (Blender's default).
+UNRENDERED = {"Coat Weight": 0.0, "Sheen Weight": 0.0, "Subsurface Weight": 0.0, "Anisotropic": 0.0,
+              "Thin Film Thickness": 0.0, "Diffuse Roughness": 0.0, "Metallic": 0.0, "Transmission Weight": 0.0,
+              "Alpha": 1.0}
 
 
 @dataclass
@@ -34,7 +46,11 @@ class Surface:
     metal) pick the engine material; neither is a diffuse receiver.
     `color` is the glass tint or the reflectance; `emission` the radiance
     it gives off (an Emission shader, or a Principled BSDF's emission),
-    which the engine shows but does not yet light anything with."""
+    which the engine shows but does not yet light anything with; `texture`
+    the nodes that drive a receiver's colour (textures.py), if read;
+    `specular` a Principled receiver's specular layer. `black` says why a
+    material renders black, as Cycles renders it: no output node, or no
+    shader connected to it."""
 
     transparent: bool
     reflector: bool = False
@@ -42,8 +58,11 @@ class Surface:
     ior: float = 1.5
     color: np.ndarray = field(default_factory=lambda: np.ones(3))
     albedo: np.ndarray = field(default_factory=lambda: np.full(3, DEFAULT_ALBEDO))
+    texture: Optional[Recipe] = None
     absorption: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    specular: Specular | None = None
     warnings: list[str] = field(default_factory=list)
+    black: Optional[str] = None
 
 
 def _value(node, name: str, what: str, warnings: list[str]):
@@ -53,6 +72,24 @@ def _value(node, name: str, what: str, warnings: list[str]):
         warnings.append(f"{what}: its {name} comes from other nodes; the unconnected value is used")
     value = socket.default_value
     return np.array(value[:3], dtype=np.float64) if hasattr(value, "__len__") else float(value)
+
+
+def _albedo(node, name: str, what: str, warnings: list[str]) -> tuple[np.ndarray, Optional[Recipe]]:
+    """(a colour input's own value, the recipe of the nodes that drive it or None)."""
+    socket = node.inputs[name]
+    return np.array(socket.default_value[:3], dtype=np.float64), color_recipe(socket, what, warnings)
+
+
+def albedo_socket(material):
+    """The colour input of the receiver shader `material` shows (Base
+    Color or Color), or None: what a bake multiplies the caustic by."""
+    if material is None or material.node_tree is None:
+        return None
+    shader = _shader(material, 'Surface')
+    if shader is None:
+        return None
+    name = {'ShaderNodeBsdfPrincipled': "Base Color", 'ShaderNodeBsdfDiffuse': "Color"}.get(shader.bl_idname)
+    return shader.inputs[name] if name is not None else None
 
 
 def _shader(material, output_socket: str):
@@ -71,17 +108,19 @@ def _shader(material, output_socket: str):
 
 
 def read_surface(material) -> Surface:
-    """The engine's view of `material` (None: Blender's default grey)."""
+    """The engine's view of `material` (None: Cycles' default surface, a
+    grey Diffuse BSDF before Blender 5.0 and a grey Principled BSDF since)."""
     if material is None:
-        return Surface(transparent=False)
+        return Surface(transparent=False, specular=Specular() if bpy.app.version >= (5, 0, 0) else None)
     what = f"material '{material.name}'"
     viewport = np.array(material.diffuse_color[:3], dtype=np.float64)
     if material.node_tree is None or not (bpy.app.version >= (5, 0, 0) or material.use_nodes):
         return Surface(transparent=False, albedo=viewport)
     shader = _shader(material, 'Surface')
     if shader is None:
-        return Surface(transparent=False, albedo=viewport,
-                       warnings=[f"{what}: no shader reaches its output; its viewport colour is used"])
+        missing = ("has no Material Output node" if material.node_tree.get_output_node('CYCLES') is None
+                   else "has no shader connected to its Material Output's Surface")
+        return Surface(transparent=False, albedo=np.zeros(3), black=missing)
     warnings: list[str] = []
     kind = shader.bl_idname
     if kind in GLASS_NODES or (kind == 'ShaderNodeBsdfPrincipled'
@@ -103,16 +142,33 @@ def read_surface(material) -> Surface:
     if kind == 'ShaderNodeBsdfPrincipled':
         emission = _value(shader, "Emission Color", what, warnings) * _value(shader, "Emission Strength", what,
                                                                               warnings)
-        return Surface(transparent=False, albedo=_value(shader, "Base Color", what, warnings), emission=emission,
-                       warnings=warnings)
+        albedo, texture = _albedo(shader, "Base Color", what, warnings)
+        return Surface(transparent=False, albedo=albedo, texture=texture, emission=emission,
+                       specular=_specular_layer(shader, what, warnings), warnings=warnings)
     if kind == 'ShaderNodeBsdfDiffuse':
-        return Surface(transparent=False, albedo=_value(shader, "Color", what, warnings), warnings=warnings)
+        albedo, texture = _albedo(shader, "Color", what, warnings)
+        return Surface(transparent=False, albedo=albedo, texture=texture, warnings=warnings)
     if kind == 'ShaderNodeEmission':
         return Surface(transparent=False, albedo=np.zeros(3), warnings=warnings,
                        emission=_value(shader, "Color", what, warnings) * _value(shader, "Strength", what, warnings))
     return Surface(transparent=False, albedo=viewport,
                    warnings=[f"{what}: a '{shader.name}' shader is not understood; it is rendered as diffuse "
                              "with the material's viewport colour"])
+
+
+def _specular_layer(shader, what: str, warnings: list[str]) -> Specular:
+    """A Principled BSDF's specular layer, its inputs clamped as Cycles clamps
+    them (svm/closure.h); a warning names the inputs left out of the render."""
+    unrendered = [name for name, off in UNRENDERED.items()
+                  if name in shader.inputs and _value(shader, name, what, warnings) != off]
+    if unrendered:
+        warnings.append(f"{what}: its {', '.join(unrendered)} are not rendered; it is rendered as a diffuse base "
+                        "under a specular layer")
+    return Specular(roughness=min(max(_value(shader, "Roughness", what, warnings), 0.0), 1.0),
+                    ior=max(_value(shader, "IOR", what, warnings), 1e-5),
+                    level=max(_value(shader, "Specular IOR Level", what, warnings), 0.0),
+                    tint=np.maximum(_value(shader, "Specular Tint", what, warnings), 0.0),
+                    multiscatter=shader.distribution == 'MULTI_GGX')
 
 
 def _mirror(shader, color_input: str, what: str, warnings: list[str]) -> Surface:
@@ -140,15 +196,19 @@ def _read_volume(material, what: str, warnings: list[str]) -> np.ndarray:
     return volume_absorption(np.minimum(color, 1.0), _value(volume, "Density", what, warnings))
 
 
-def engine_material(surface: Surface, settings) -> Dielectric | Diffuse | Reflector:
-    """The engine material for an object of `Object.caustic` `settings` whose material reads as `surface`."""
+def engine_material(surface: Surface, settings,
+                    texture: Optional[nodes.Node] = None) -> Dielectric | Diffuse | Reflector:
+    """The engine material for an object of `Object.caustic` `settings`
+    whose material reads as `surface`, its colour from `texture` (the
+    surface's recipe bound to the object) if it has one."""
     role = settings.role
     if role == 'REFLECTOR' or (role == 'AUTO' and surface.reflector):
         return Reflector(surface.color if surface.reflector else np.ones(3))
     transparent = role == 'TRANSPARENT' or (role == 'AUTO' and surface.transparent)
     if not transparent:
         opaque = not (surface.transparent or surface.reflector)
-        return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO, emission=surface.emission)
+        return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO, emission=surface.emission,
+                       texture=texture if opaque else None, specular=surface.specular if opaque else None)
     ior = settings.ior if settings.use_ior else (surface.ior if surface.transparent else 1.5)
     color = surface.color if surface.transparent else np.ones(3)
     if settings.absorption_from == 'COLOR':

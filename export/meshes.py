@@ -1,29 +1,27 @@
 """Blender's evaluated meshes as the engine's objects in world space:
-triangles, corner normals and UVs read with foreach_get, the objects the view
-layer renders, and the one material each object is rendered with."""
+triangles, corner normals and UVs read with foreach_get, one engine object
+for each material the triangles use, and how the object is seen (its ray
+visibility and holdout, as Cycles reads them)."""
 
 from __future__ import annotations
 
 from contextlib import contextmanager
 from typing import Optional
 
+import bpy
 import numpy as np
 
-from ..caustic_addon import Dielectric, Mesh, Object, Reflector
+from ..caustic_addon import Dielectric, Mesh, Object, Reflector, Visibility
+from ..caustic_addon.scene.geometry import with_area
 from .materials import engine_material, read_surface
+from .textures import ObjectFrame, bind
 
-
-def renderable_objects(view_layer) -> set[str]:
-    """Names of the objects the view layer renders: in included collections
-    not disabled for renders, and not disabled for renders themselves."""
-    names, stack = set(), [view_layer.layer_collection]
-    while stack:
-        layer = stack.pop()
-        if layer.exclude or layer.collection.hide_render:
-            continue
-        names.update(ob.name for ob in layer.collection.objects if not ob.hide_render)
-        stack.extend(layer.children)
-    return names
+# Faces of an empty slot: Cycles renders them with its default surface, a
+# grey Diffuse BSDF (0.8) in Blender 4.2 and 4.5 and a grey Principled BSDF
+# (0.8, Roughness 0.5) in 5.x (both rendered to check); read_surface(None)
+# gives the same.
+EMPTY_SLOT = ("its faces are rendered as Cycles renders them, with its default grey "
+              + ("diffuse surface" if bpy.app.version < (5, 0, 0) else "Principled BSDF"))
 
 
 @contextmanager
@@ -36,12 +34,13 @@ def evaluated_mesh(ob_eval):
         ob_eval.to_mesh_clear()
 
 
-def _local_mesh(mesh) -> tuple[Optional[Mesh], np.ndarray]:
-    """(Mesh in object space or None if it has no faces, material_index (nt,))."""
+def _local_mesh(mesh) -> tuple[Optional[Mesh], np.ndarray, dict[str, np.ndarray]]:
+    """(Mesh in object space or None if it has no faces, material_index (nt,),
+    UV map name -> (nt,3,2) corner coordinates, "" the active map)."""
     tris = mesh.loop_triangles
     nt = len(tris)
     if nt == 0:
-        return None, np.zeros(0, dtype=np.int32)
+        return None, np.zeros(0, dtype=np.int32), {}
     co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
     mesh.vertices.foreach_get("co", co)
     tri_vertices = np.empty(nt * 3, dtype=np.int32)
@@ -53,26 +52,36 @@ def _local_mesh(mesh) -> tuple[Optional[Mesh], np.ndarray]:
     mesh.corner_normals.foreach_get("vector", corner_normals)
     material_index = np.empty(nt, dtype=np.int32)
     tris.foreach_get("material_index", material_index)
-    corner_uvs = None
-    if mesh.uv_layers.active is not None:
+    uv_maps = {}
+    for layer in mesh.uv_layers:
         uvs = np.empty(len(mesh.loops) * 2, dtype=np.float32)
-        mesh.uv_layers.active.data.foreach_get("uv", uvs)
-        corner_uvs = uvs.reshape(-1, 2)[tri_loops]
-    return Mesh(co.reshape(-1, 3), tri_vertices.reshape(nt, 3), corner_normals.reshape(-1, 3)[tri_loops],
-                corner_uvs), material_index
+        layer.data.foreach_get("uv", uvs)
+        uv_maps[layer.name] = uvs.reshape(-1, 2)[tri_loops].astype(np.float64)
+    if mesh.uv_layers.active is not None:
+        uv_maps[""] = uv_maps[mesh.uv_layers.active.name]
+    return (Mesh(co.reshape(-1, 3), tri_vertices.reshape(nt, 3), corner_normals.reshape(-1, 3)[tri_loops],
+                 uv_maps.get("")), material_index, uv_maps)
 
 
-def _main_material(ob_eval, material_index: np.ndarray, name: str, warnings: list[str]):
-    """The material on most of the object's triangles; a warning if it has several."""
+def _material_parts(ob_eval, material_index: np.ndarray, name: str, warnings: list[str]) -> list:
+    """[(material or None, triangle rows (k,) in mesh order, slot numbers
+    from 1)]: the object's triangles by the material of their slot, a slot
+    index past the last slot taking the last one, as Cycles does. Slots
+    holding the same material are one part. A warning names each empty
+    slot that faces use (EMPTY_SLOT: what the engine and Cycles render there)."""
     slots = [slot.material for slot in ob_eval.material_slots]
     if not slots:
-        return None
-    counts = np.bincount(np.clip(material_index, 0, len(slots) - 1), minlength=len(slots))
-    main = slots[int(counts.argmax())]
-    if len({slots[i].name if slots[i] else None for i in np.flatnonzero(counts)}) > 1:
-        warnings.append(f"'{name}' has several materials; all of it is rendered with "
-                        f"'{main.name if main else 'no material'}'")
-    return main
+        return [(None, np.arange(len(material_index)), [])]
+    slot_of = np.clip(material_index, 0, len(slots) - 1)
+    parts: dict = {}
+    for slot in np.unique(slot_of).tolist():
+        material = slots[slot]
+        if material is None:
+            warnings.append(f"'{name}': material slot {slot + 1} is empty; {EMPTY_SLOT}")
+        key = None if material is None else material.original.name
+        _, rows, numbers = parts.get(key, (None, np.zeros(0, dtype=np.int64), []))
+        parts[key] = (material, np.union1d(rows, np.flatnonzero(slot_of == slot)), numbers + [slot + 1])
+    return list(parts.values())
 
 
 def flattened(matrix: np.ndarray, vertices: np.ndarray) -> bool:
@@ -85,38 +94,105 @@ def flattened(matrix: np.ndarray, vertices: np.ndarray) -> bool:
     return bool(len(null)) and float(np.ptp(vertices @ null.T, axis=0).max()) > 1e-9 * extent
 
 
-def mesh_object(ob, name: str, matrix: np.ndarray, surfaces: dict, warnings: list[str]):
-    """(engine Object in world space or None if it renders nothing, name of
-    its material or None). `surfaces` holds each material's reading, so that
-    a material shared by several objects is read, and warned about, once.
-    A glass or mirror with no faces, glass scaled to 0 along an axis, and
-    an object scaled to nothing are left out with a warning that names them."""
-    with evaluated_mesh(ob) as mesh:
-        local, material_index = _local_mesh(mesh)
-        material = (_main_material(ob, material_index, name, warnings) if local is not None
-                    else next((slot.material for slot in ob.material_slots), None))
+def _surface(material, surfaces: dict, warnings: list[str]):
+    """The reading of `material` (or None), read and warned about once."""
     key = material.original.name if material is not None else None
     if key not in surfaces:
         surfaces[key] = read_surface(material)
         warnings += surfaces[key].warnings
-    engine = engine_material(surfaces[key], ob.original.caustic)
-    caster = isinstance(engine, (Dielectric, Reflector))
-    if local is None:
-        if caster or ob.original.caustic.role == 'RECEIVER':
-            warnings.append(f"'{name}' has no faces, so it {'casts' if caster else 'receives'} no caustics: "
-                            "it was left out")
-        return None, None
-    world = local.transformed(matrix)
-    if len(world.triangles) == 0:
-        warnings.append(f"'{name}' is scaled to 0, so none of its faces has any area: it was left out")
-        return None, None
+    return surfaces[key]
+
+
+def _warn_faceless(ob, name: str, surfaces: dict, warnings: list[str]) -> None:
+    """A warning for a mesh with no faces that would be a glass, a mirror
+    or a receiver it was made to be, by its first slot's material."""
+    material = next((slot.material for slot in ob.material_slots), None)
+    engine = engine_material(_surface(material, surfaces, warnings), ob.original.caustic)
+    if isinstance(engine, (Dielectric, Reflector)):
+        warnings.append(f"'{name}' has no faces, so it casts no caustics: it was left out")
+    elif ob.original.caustic.role == 'RECEIVER':
+        warnings.append(f"'{name}' has no faces, so it receives no caustics: it was left out")
+
+
+def object_visibility(instance, view_layer) -> Visibility:
+    """The rays that see a depsgraph object instance, as Cycles reads them
+    (intern/cycles/blender/object.cpp): the object's ray visibility, and its
+    instancer's too; holdout (the object's or its collection's) and Indirect
+    Only (its collection's, which hides it from camera rays) from the
+    instancer, if any, in `view_layer`."""
+    owners = [instance.object] + ([instance.parent] if instance.is_instance else [])
+    holder = (instance.parent if instance.is_instance else instance.object).original
+    holdout = holder.holdout_get(view_layer=view_layer)
+    indirect_only = not holdout and holder.indirect_only_get(view_layer=view_layer)
+
+    def seen(flag: str) -> bool:
+        return all(getattr(owner, flag) for owner in owners)
+
+    return Visibility(camera=seen("visible_camera") and not indirect_only, glossy=seen("visible_glossy"),
+                      transmission=seen("visible_transmission"), shadow=seen("visible_shadow"), holdout=holdout)
+
+
+def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surfaces: dict,
+                 warnings: list[str]) -> list[tuple[Object, Optional[str]]]:
+    """[(engine Object in world space, name of its material or None)]: one
+    for each material the mesh's triangles use, named `name` if there is
+    one and "name [material]" if there are several, which are then parts of
+    one body; none if the mesh has no faces. `surfaces` holds each
+    material's reading, so that a material shared by several objects is
+    read, and warned about, once. A glass or mirror with no faces, glass
+    scaled to 0 along an axis, and an object scaled to nothing are left out
+    with a warning that names them; faces an object's scale flattens to no
+    area are dropped."""
+    with evaluated_mesh(ob) as mesh:
+        local, material_index, uv_maps = _local_mesh(mesh)
+        if local is None:
+            _warn_faceless(ob, name, surfaces, warnings)
+            return []
+        world = local.transformed(matrix)
+        if np.linalg.det(matrix[:3, :3]) == 0.0:
+            # Mesh.transformed drops them too; the triangles' materials and UVs must follow
+            kept = np.flatnonzero(with_area(world.vertices, local.triangles))
+            if len(kept) == 0:
+                warnings.append(f"'{name}' is scaled to 0, so none of its faces has any area: it was left out")
+                return []
+            local, material_index = local.subset(kept), material_index[kept]
+            uv_maps = {layer: corners[kept] for layer, corners in uv_maps.items()}
+            world = local.transformed(matrix)
+        parts = _material_parts(ob, material_index, name, warnings)
     if flattened(matrix, local.vertices):
-        if isinstance(engine, Dielectric):
+        if any(isinstance(engine_material(_surface(m, surfaces, warnings), ob.original.caustic), Dielectric)
+               for m, _, _ in parts):
             warnings.append(f"'{name}' is scaled to 0 along an axis: glass with no thickness bends no light, "
                             "so it was left out")
-            return None, None
+            return []
         warnings.append(f"'{name}' is scaled to 0 along an axis: it is rendered flat")
-    if np.any(surfaces[key].emission > 0.0):
-        warnings.append(f"'{name}': its material '{key}' emits light; the caustic render shows it but lights "
-                        "nothing with it and casts no caustics from it yet (a lamp in its place would)")
-    return Object(name, world, engine), key
+    if np.linalg.det(matrix[:3, :3]) < 0:
+        # a mirroring matrix turns the engine's triangles around (Mesh.transformed)
+        uv_maps = {layer: corners[:, ::-1] for layer, corners in uv_maps.items()}
+    several = len(parts) > 1
+    objects = []
+    for material, rows, slots in parts:
+        key = material.original.name if material is not None else None
+        _surface(material, surfaces, warnings)
+        if surfaces[key].black is not None:
+            warnings.append(f"'{name}': material '{key}' (slot {', '.join(map(str, slots))}) {surfaces[key].black}; "
+                            "Cycles renders its faces black, and so does the caustic render")
+        if np.any(surfaces[key].emission > 0.0):
+            warnings.append(f"'{name}': its material '{key}' emits light; the caustic render shows it but lights "
+                            "nothing with it and casts no caustics from it yet (a lamp in its place would)")
+        part = f"{name} [{key if key is not None else 'no material'}]" if several else name
+        texture = None
+        if surfaces[key].texture is not None:
+            data = ob.original.data
+            frame = ObjectFrame({layer: np.take(corners, rows, axis=0) for layer, corners in uv_maps.items()},
+                                np.linalg.pinv(matrix), np.array(data.texspace_location[:], dtype=np.float64),
+                                np.array(data.texspace_size[:], dtype=np.float64))
+            texture = bind(surfaces[key].texture, frame, f"'{part}'", warnings)
+        objects.append((Object(part, world.subset(rows) if several else world,
+                               engine_material(surfaces[key], ob.original.caustic, texture), visibility,
+                               body=name if several else None), key))
+    if not ob.visible_diffuse and any(obj.is_caster for obj, _ in objects):
+        warnings.append(f"'{name}': its Diffuse ray visibility is off, which hides it from Cycles' diffuse "
+                        "bounces and the caustics they find through it; the caustic render's light goes from the "
+                        "lamps, so it still casts its caustic")
+    return objects

@@ -3,6 +3,8 @@ stores rows bottom to top)."""
 
 import numpy as np
 
+from ..caustic_addon import textures
+
 # Colour spaces whose byte values are linear already
 LINEAR_SPACES = ("Non-Color", "Linear Rec.709", "Linear", "Raw")
 
@@ -15,14 +17,16 @@ def image_pixels(image) -> np.ndarray:
     return pixels.reshape(h, w, image.channels)[::-1]
 
 
+def is_srgb_encoded(image) -> bool:
+    """Whether `image`'s pixels are sRGB-encoded: a byte image whose colour
+    space is not linear or data (float images are linear)."""
+    return not image.is_float and image.colorspace_settings.name not in LINEAR_SPACES
+
+
 def linear_rgb(image) -> np.ndarray:
-    """(h, w, 3) float64 linear RGB of `image`: float images are linear
-    already; byte images are decoded from sRGB (IEC 61966-2-1) unless their
-    colour space says they are linear or data."""
+    """(h, w, 3) float64 linear RGB of `image`, decoded from sRGB if it is encoded."""
     rgb = image_pixels(image)[..., :3].astype(np.float64)
-    if not image.is_float and image.colorspace_settings.name not in LINEAR_SPACES:
-        rgb = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
-    return rgb
+    return textures.srgb_to_linear(rgb) if is_srgb_encoded(image) else rgb
 
 
 def can_read(image) -> bool:

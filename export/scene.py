@@ -1,6 +1,7 @@
-"""Blender's evaluated scene (modifiers applied, instances expanded) copied
-into the engine's numpy Scene, in world space. It runs on the main thread;
-what it returns holds no bpy data, so the engine can run on a worker thread."""
+"""Blender's scene as a render evaluates it (modifiers at their render
+settings, instances expanded; see render_view.py) copied into the engine's
+numpy Scene, in world space. It runs on the main thread; what it returns
+holds no bpy data, so the engine can run on a worker thread."""
 
 from __future__ import annotations
 
@@ -16,7 +17,8 @@ from .errors import InputError
 from .lamps import engine_light
 from .materials import Surface
 from .matrices import numpy_matrix
-from .meshes import mesh_object, renderable_objects
+from .meshes import mesh_objects, object_visibility
+from .render_view import adaptive_subdivision, read_as_render, renderable_objects, viewport_differences
 from .world import engine_world
 
 # Object types with geometry the engine cannot take.
@@ -41,23 +43,52 @@ class SceneRead:
 
 
 def read_scene(context, with_camera: bool = True) -> SceneRead:
-    """The engine scene of the context's view layer. Raises InputError if it
-    has no camera (when `with_camera`), no light (neither a lamp nor a
-    world) or no receiver."""
-    scene = context.scene
-    depsgraph = context.evaluated_depsgraph_get()
+    """The engine scene of the context's view layer, as a render sees it.
+    Raises InputError if it has no camera (when `with_camera`), no light
+    (neither a lamp nor a world) or no receiver. A scene without a camera,
+    or a view layer disabled for rendering, which Blender does not render,
+    is read as the viewport shows it, and a warning names what a render
+    would see otherwise."""
+    scene, view_layer = context.scene, context.view_layer
+    if scene.camera is not None and view_layer.use:
+        read = read_as_render(scene, view_layer, lambda depsgraph: _read_objects(scene, depsgraph, with_camera))
+        adaptive = sorted({read.sources[name] for name in read.materials
+                           if adaptive_subdivision(scene, bpy.data.objects[read.sources[name]])})
+        read.warnings += [f"'{name}': Cycles subdivides it adaptively when it renders; the caustic render uses "
+                          "its Subdivision Surface's Render levels" for name in adaptive]
+    elif with_camera and scene.camera is None:
+        raise InputError("The scene has no active camera")
+    else:
+        renderable = renderable_objects(view_layer)
+        read = _read_objects(scene, context.evaluated_depsgraph_get(), with_camera, renderable)
+        differ = viewport_differences(view_layer, set(read.sources.values()))
+        why = ("The scene has no camera" if scene.camera is None
+               else f"The view layer '{view_layer.name}' is disabled for rendering (Use for Rendering)")
+        if differ:
+            read.warnings.append(f"{why}, so Blender cannot evaluate it as it renders: it was read as the viewport "
+                                 "shows it, which differs for " + ", ".join(differ))
+    read.scene.world = engine_world(scene.world, read.warnings)
+    read.scene.ambient = np.array(scene.caustic.ambient[:], dtype=np.float64)
+    if not read.scene.lights and read.scene.world.is_black:
+        raise InputError("Nothing lights the scene: it has no lamp, and its world is black")
+    if not read.scene.receivers:
+        raise InputError("No object receives caustics: give a mesh a diffuse material or set its "
+                         "Caustics role to Receiver")
+    return read
+
+
+def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[str]] = None) -> SceneRead:
+    """The camera, lamps and meshes of `depsgraph`; with `renderable`, only
+    the objects it names (and instances of them)."""
     camera = read_camera(scene, depsgraph) if with_camera else dummy_camera()
     warnings = camera_warnings(scene) if with_camera else []
-    renderable = renderable_objects(context.view_layer)
     read = SceneRead(Scene(objects=[], lights=[], camera=camera), warnings)
     surfaces: dict[Optional[str], Surface] = {}
-    seen = set()
     for number, inst in enumerate(depsgraph.object_instances):
         ob = inst.object
         source = ob.original
-        if (inst.parent.original if inst.is_instance else source).name not in renderable:
+        if renderable is not None and (inst.parent.original if inst.is_instance else source).name not in renderable:
             continue
-        seen.add(source.name)
         name = f"{source.name} [{inst.parent.original.name} #{number}]" if inst.is_instance else source.name
         matrix = numpy_matrix(inst.matrix_world)
         if ob.type == 'LIGHT':
@@ -66,19 +97,10 @@ def read_scene(context, with_camera: bool = True) -> SceneRead:
         elif ob.type in UNSUPPORTED_GEOMETRY:
             warnings.append(f"'{name}': {ob.type.lower()} objects are not supported; convert it to a mesh")
         elif ob.type == 'MESH' and source.caustic.role != 'IGNORE':
-            obj, material = mesh_object(ob, name, matrix, surfaces, warnings)
-            if obj is not None:
+            visibility = object_visibility(inst, depsgraph.view_layer)
+            for obj, material in mesh_objects(ob, name, matrix, visibility, surfaces, warnings):
                 read.scene.objects.append(obj)
-                read.sources[name], read.materials[name] = source.name, material
+                read.sources[obj.name], read.materials[obj.name] = source.name, material
                 if inst.is_instance:
-                    read.instanced.add(name)
-    hidden = sorted(n for n in renderable - seen if bpy.data.objects[n].type in {'MESH', 'LIGHT'})
-    warnings += [f"'{n}' is hidden in the viewport, so it was left out; unhide it to render it" for n in hidden]
-    read.scene.world = engine_world(scene.world, warnings)
-    read.scene.ambient = np.array(scene.caustic.ambient[:], dtype=np.float64)
-    if not read.scene.lights and read.scene.world.is_black:
-        raise InputError("Nothing lights the scene: it has no lamp, and its world is black")
-    if not read.scene.receivers:
-        raise InputError("No object receives caustics: give a mesh a diffuse material or set its "
-                         "Caustics role to Receiver")
+                    read.instanced.add(obj.name)
     return read

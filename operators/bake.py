@@ -6,6 +6,7 @@ import bpy
 import numpy as np
 
 from ..export import InputError, SceneRead, read_scene, render_settings
+from ..export.materials import albedo_socket
 from ..jobs import RenderJob
 from ..writeback.bake_group import baked_nodes, make_group, material_output, unwire, wire
 from ..writeback.images import write_image
@@ -80,8 +81,10 @@ class CAUSTIC_OT_bake(bpy.types.Operator):
             image = write_image(IMAGE_PREFIX + name, rgba[::-1])
             source = bpy.data.objects[read.sources[name]].data
             uv_layer = source.uv_layers.active.name if source.uv_layers.active is not None else ""
-            albedo = next(o.material.albedo for o in read.scene.objects if o.name == name)
-            wire(material, make_group(GROUP_PREFIX + name, image, imap, albedo, uv_layer))
+            receiver = next(o.material for o in read.scene.objects if o.name == name)
+            share = receiver.specular.diffuse_share if receiver.specular is not None else None
+            wire(material, make_group(GROUP_PREFIX + name, image, imap, receiver.albedo, uv_layer, share),
+                 albedo_socket(material))
         record_run(props, job)
         self.report({'INFO'}, f"Baked caustics onto {', '.join(plan)} in {job.seconds:.1f} s")
         return {'FINISHED'}

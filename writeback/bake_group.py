@@ -1,7 +1,12 @@
 """The node group a bake adds to a receiver's material: the illumination map
 looked up at the shading point and added to the material's own shader as
-emission of radiance E * albedo / pi, so EEVEE and the Cycles viewport show
-the caustic. `unwire` takes out exactly what `wire` put in."""
+emission of radiance E * albedo / pi, the albedo from the material's own
+colour nodes where it has them, so EEVEE and the Cycles viewport show the
+caustic. Under a Principled BSDF's specular layer the albedo is times the
+share of the diffuse base the layer leaves toward the eye, as the eye pass
+shades it: a Color Ramp of it over Layer Weight's Facing, 1 - |cos|, which
+the ramp interpolates linearly between SHARE_STOPS view cosines. `unwire`
+takes out exactly what `wire` put in."""
 
 from __future__ import annotations
 
@@ -16,6 +21,8 @@ from ..caustic_addon import ImageFrame
 NODE_NAME = "Caustic Bake"
 # Custom property marking the node groups a bake made.
 TAG = "caustic_bake"
+# A Color Ramp's most elements.
+SHARE_STOPS = 32
 
 
 def _chart_coordinates(nodes, links, frame: ImageFrame, uv_layer: str):
@@ -37,31 +44,67 @@ def _chart_coordinates(nodes, links, frame: ImageFrame, uv_layer: str):
     return source, mapping
 
 
-def make_group(name: str, image, imap, albedo: np.ndarray, uv_layer: str):
-    """A shader node group: Shader in, Shader out = in + emission of the map
-    `image` (irradiance, W/m^2) times `albedo (3,)` / pi."""
+def _view_share(nodes, links, share):
+    """A Color Ramp node giving the diffuse share `share(cos_v (k,)) -> (k,)`
+    at each shading point, from Layer Weight's Facing (blend 0.5: 1 - |cos_v|,
+    Cycles' svm_node_layer_weight)."""
+    facing = nodes.new('ShaderNodeLayerWeight')
+    facing.inputs['Blend'].default_value = 0.5
+    ramp = nodes.new('ShaderNodeValToRGB')
+    ramp.color_ramp.interpolation = 'LINEAR'
+    positions = np.linspace(0.0, 1.0, SHARE_STOPS)
+    values = share(1.0 - positions)
+    elements = ramp.color_ramp.elements
+    elements[0].position, elements[-1].position = 0.0, 1.0
+    for position in positions[1:-1]:
+        elements.new(float(position))
+    for element, value in zip(sorted(elements, key=lambda e: e.position), values):
+        element.color = (float(value), float(value), float(value), 1.0)
+    links.new(facing.outputs['Facing'], ramp.inputs['Fac'])
+    return facing, ramp
+
+
+def make_group(name: str, image, imap, albedo: np.ndarray, uv_layer: str, share=None):
+    """A shader node group: Shader and Albedo in, Shader out = in + emission
+    of the map `image` (irradiance, W/m^2) times Albedo / pi; Albedo is
+    `albedo (3,)` unless `wire` links the material's own colour to it, and
+    is times `share(cos_v (k,)) -> (k,)` toward the eye if given (a
+    Principled BSDF's diffuse share under its specular layer)."""
     group = bpy.data.node_groups.new(name, 'ShaderNodeTree')
     group[TAG] = True
     group.interface.new_socket(name="Shader", in_out='INPUT', socket_type='NodeSocketShader')
+    colour = group.interface.new_socket(name="Albedo", in_out='INPUT', socket_type='NodeSocketColor')
+    colour.default_value = (*np.asarray(albedo, dtype=float).tolist(), 1.0)
     group.interface.new_socket(name="Shader", in_out='OUTPUT', socket_type='NodeSocketShader')
     nodes, links = group.nodes, group.links
     inputs, outputs = nodes.new('NodeGroupInput'), nodes.new('NodeGroupOutput')
     source, mapping = _chart_coordinates(nodes, links, imap.image_frame(), uv_layer)
     texture = nodes.new('ShaderNodeTexImage')
     texture.image, texture.interpolation, texture.extension = image, 'Linear', 'CLIP'
-    radiance = nodes.new('ShaderNodeVectorMath')
-    radiance.operation = 'MULTIPLY'
-    radiance.inputs[1].default_value = (np.asarray(albedo) / math.pi).tolist()
+    shaded, radiance = nodes.new('ShaderNodeVectorMath'), nodes.new('ShaderNodeVectorMath')
+    shaded.operation, radiance.operation = 'MULTIPLY', 'SCALE'
+    radiance.inputs['Scale'].default_value = 1.0 / math.pi
     emission, add = nodes.new('ShaderNodeEmission'), nodes.new('ShaderNodeAddShader')
     links.new(mapping.outputs['Vector'], texture.inputs['Vector'])
-    links.new(texture.outputs['Color'], radiance.inputs[0])
+    links.new(texture.outputs['Color'], shaded.inputs[0])
+    links.new(inputs.outputs['Albedo'], shaded.inputs[1])
+    if share is None:
+        links.new(shaded.outputs['Vector'], radiance.inputs[0])
+    else:
+        facing, ramp = _view_share(nodes, links, share)
+        viewed = nodes.new('ShaderNodeVectorMath')
+        viewed.operation = 'MULTIPLY'
+        links.new(shaded.outputs['Vector'], viewed.inputs[0])
+        links.new(ramp.outputs['Color'], viewed.inputs[1])
+        links.new(viewed.outputs['Vector'], radiance.inputs[0])
+        facing.location, ramp.location, viewed.location = (220.0, -400.0), (440.0, -400.0), (660.0, -400.0)
     links.new(radiance.outputs['Vector'], emission.inputs['Color'])
-    links.new(inputs.outputs[0], add.inputs[0])
+    links.new(inputs.outputs['Shader'], add.inputs[0])
     links.new(emission.outputs['Emission'], add.inputs[1])
     links.new(add.outputs['Shader'], outputs.inputs[0])
-    for column, node in enumerate((source, mapping, texture, radiance, emission, add, outputs)):
+    for column, node in enumerate((source, mapping, texture, shaded, radiance, emission, add, outputs)):
         node.location = (220.0 * column, 0.0)
-    inputs.location = (880.0, -200.0)
+    inputs.location = (440.0, -200.0)
     return group
 
 
@@ -75,8 +118,10 @@ def material_output(material):
     return material.node_tree.get_output_node('CYCLES')
 
 
-def wire(material, group) -> None:
-    """Put a node of `group` between the material's surface shader and its output."""
+def wire(material, group, albedo_socket=None) -> None:
+    """Put a node of `group` between the material's surface shader and its
+    output; what drives `albedo_socket` (the shader's colour), if anything,
+    drives the group's Albedo too, so a texture shades the caustic."""
     tree = material.node_tree
     output = material_output(material)
     node = tree.nodes.new('ShaderNodeGroup')
@@ -87,8 +132,10 @@ def wire(material, group) -> None:
         link = surface.links[0]
         source = link.from_socket
         tree.links.remove(link)
-        tree.links.new(source, node.inputs[0])
-    tree.links.new(node.outputs[0], surface)
+        tree.links.new(source, node.inputs['Shader'])
+    if albedo_socket is not None and albedo_socket.is_linked:
+        tree.links.new(albedo_socket.links[0].from_socket, node.inputs['Albedo'])
+    tree.links.new(node.outputs['Shader'], surface)
 
 
 def baked_nodes(material) -> list:
@@ -107,7 +154,7 @@ def unwire(material) -> int:
     removed = baked_nodes(material)
     for node in removed:
         group = node.node_tree
-        source = node.inputs[0].links[0].from_socket if node.inputs[0].is_linked else None
+        source = node.inputs['Shader'].links[0].from_socket if node.inputs['Shader'].is_linked else None
         targets = [link.to_socket for link in node.outputs[0].links]
         tree.nodes.remove(node)
         if source is not None:

@@ -40,9 +40,13 @@ class Sphere:
 
 def casters_and_bounds(scene: Scene) -> tuple[list[Sphere], Sphere]:
     """The casters' (transparent and reflecting objects') bounding spheres,
-    which lamps aim at, and the sphere around the whole scene."""
+    one around the casters of each body, which lamps aim at, and the sphere
+    around the whole scene."""
     lo, hi = scene.bounds()
-    return ([Sphere.around(o.mesh.vertices) for o in scene.casters],
+    bodies: dict[str, list[np.ndarray]] = {}
+    for caster in scene.casters:
+        bodies.setdefault(caster.body_name, []).append(caster.mesh.vertices)
+    return ([Sphere.around(np.concatenate(vertices)) for vertices in bodies.values()],
             Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo))))
 
 

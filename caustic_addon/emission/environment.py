@@ -23,6 +23,7 @@ import math
 import numpy as np
 
 from ..scene import World
+from ..util.image_lookup import lookup
 from ..util.vectors import DIVISION_FLOOR
 
 
@@ -89,21 +90,12 @@ class Environment:
 
     def radiance(self, dirs: np.ndarray) -> np.ndarray:
         """(n,3) W/(m^2 sr) the eye sees toward `dirs (n,3)`: the image
-        looked up bilinearly (Cycles' Linear interpolation), times the
-        world's colour."""
+        looked up bilinearly (Cycles' Linear interpolation), wrapping
+        around u and clamped at the poles, times the world's colour."""
         image = self.world.environment
         if image is None:
             return np.broadcast_to(self.world.color, (len(dirs), 3)).copy()
-        h, w = image.shape[:2]
-        uv = directions_to_uv(dirs)
-        x, y = uv[:, 0] * w - 0.5, uv[:, 1] * h - 0.5
-        x0, y0 = np.floor(x).astype(np.int64), np.floor(y).astype(np.int64)
-        fx, fy = (x - x0)[:, None], (y - y0)[:, None]
-        c0, c1 = x0 % w, (x0 + 1) % w
-        r0, r1 = np.clip(y0, 0, h - 1), np.clip(y0 + 1, 0, h - 1)
-        value = ((1 - fy) * ((1 - fx) * image[r0, c0] + fx * image[r0, c1])
-                 + fy * ((1 - fx) * image[r1, c0] + fx * image[r1, c1]))
-        return value * self.world.color
+        return lookup(image, directions_to_uv(dirs), "Linear", ("REPEAT", "EXTEND")) * self.world.color
 
     def sample(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(dirs (n,3), density (n,) per steradian) at `uv (n,2)` in the unit

@@ -16,10 +16,12 @@ from ..scene import RenderSettings, Scene
 
 # RenderSettings fields that change nothing in the maps.
 _EYE_ONLY = {"spp", "edge_samples", "lamp_samples", "world_samples", "threads", "chunk_size"}
+# Material fields only the eye pass reads: a receiver's map holds irradiance.
+_SHADING_ONLY = {"albedo", "specular", "emission", "texture"}
 
 
 def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
-    """SHA-1 of the objects in order (name, geometry, material), the lamps,
+    """SHA-1 of the objects in order (name, body, geometry, material), the lamps,
     the world and the lamp pass's settings: equal keys give equal maps. The band count
     counts only if a material disperses."""
     digest = hashlib.sha1()
@@ -32,10 +34,12 @@ def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
             digest.update(repr(value).encode())
 
     for obj in scene.objects:
-        add((obj.name, type(obj.material).__name__))
+        add((obj.name, obj.body, type(obj.material).__name__))
         for array in (obj.mesh.vertices, obj.mesh.triangles, obj.mesh.corner_normals, obj.mesh.corner_uvs):
             add(array)
         for name, value in vars(obj.material).items():
+            if name in _SHADING_ONLY:
+                continue
             add(name)
             add(value if isinstance(value, np.ndarray) else np.asarray(value))
     for light in [*scene.lights, scene.world]:

@@ -17,8 +17,9 @@ import numpy as np
 from ..optics.media import beer_lambert
 from ..optics.specular import fresnel_dielectric, reflect, refract
 from ..scene.material_table import Materials
-from ..tracing.accelerator import Accelerator
+from ..tracing.accelerator import REFLECTED, REFRACTED, Accelerator
 from ..tracing.hits import MISS, Hits
+from ..util.rows import take_rows
 from ..util.vectors import dot, max_channel, normalize
 from .paths import Paths
 
@@ -45,6 +46,10 @@ class Interface:
     eta: np.ndarray
     fresnel: np.ndarray
 
+    def select(self, mask: np.ndarray) -> "Interface":
+        return Interface(*take_rows(mask, self.points, self.facing, self.shading, self.entering, self.eta,
+                                    self.fresnel))
+
 
 def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, materials: Materials, medium: np.ndarray,
            band=None) -> Interface:
@@ -54,16 +59,17 @@ def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, materials: Material
     when it is None.
 
     Entering or leaving: for a closed mesh, the ray's own state `medium (n,)`
-    (the object it is inside, or MISS) decides, since a hit at an edge or a
-    grazing hit can land on a face whose normal says otherwise; for an open
-    mesh, the outward geometric normal does (dot(d, n) < 0 means entering).
+    (the object it is inside, or MISS; any object of the same body counts)
+    decides, since a hit at an edge or a grazing hit can land on a face
+    whose normal says otherwise; for an open mesh, the outward geometric
+    normal does (dot(d, n) < 0 means entering).
     The geometric normal is turned against the ray, and the shading normal
     put on its side; where interpolation tips it past the ray
     (dot(d, n_s) >= 0), the geometric normal is used instead.
     """
     face = np.take(accel.face_normal, hits.prim, axis=0)
     toward = dot(dirs, face) < 0.0
-    entering = np.where(accel.closed[hits.obj], medium != hits.obj, toward)
+    entering = np.where(accel.closed[hits.obj], ~accel.inside(medium, hits.obj), toward)
     facing = np.where(toward[:, None], face, -face)
     shading = accel.shading_normal(hits.prim, hits.u, hits.v)
     shading = np.where((dot(shading, facing) < 0.0)[:, None], -shading, shading)
@@ -115,19 +121,21 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
         dirs, crossed = scatter(surface, paths.dirs, np.full(len(paths), mirror))
         share = surface.fresnel if mirror else np.where(crossed, 1.0 - surface.fresnel, 0.0)
         weight = paths.weight * tint * share[:, None]
-        family = None if paths.family is None else _next_family(paths.family, hits.obj, event)
+        family = None if paths.family is None else _next_family(paths.family, accel.surface[hits.obj], event)
+        kind = None if paths.kind is None else np.where(crossed, REFRACTED, REFLECTED).astype(np.int8)
         branch = Paths(accel.offset(surface.points, surface.facing, dirs), dirs, weight,
                        crossed_medium(surface, crossed, hits.obj, paths.medium), paths.ids, paths.floor,
-                       np.ones(len(paths), dtype=bool), paths.band, family)
+                       np.ones(len(paths), dtype=bool), paths.band, family, kind)
         exists = mirror | materials.dielectric[hits.obj]
         branches.append(branch.select(exists & (max_channel(weight) >= paths.floor)))
     return Paths.concat(branches)
 
 
-def _next_family(family: np.ndarray, obj: np.ndarray, event: int) -> np.ndarray:
-    """(n,) uint64 signatures of paths that add (object, event) to `family`."""
+def _next_family(family: np.ndarray, surface: np.ndarray, event: int) -> np.ndarray:
+    """(n,) uint64 signatures of paths that add (surface, event) to
+    `family`: the parts of one body with one material are one surface."""
     with np.errstate(over="ignore"):
-        return (family * _FAMILY_PRIME) ^ (obj.astype(np.uint64) * np.uint64(4) + np.uint64(event + 1))
+        return (family * _FAMILY_PRIME) ^ (surface.astype(np.uint64) * np.uint64(4) + np.uint64(event + 1))
 
 
 class Tracer(Protocol):
@@ -149,7 +157,7 @@ def trace(accel: Accelerator, materials: Materials, paths: Paths, max_depth: int
     for depth in range(max_depth + 1):
         if len(paths) == 0:
             return
-        hits = accel.intersect(paths.origins, paths.dirs, paths.medium)
+        hits = accel.intersect(paths.origins, paths.dirs, paths.medium, paths.kind)
         tracer.escaped(paths.select(~hits.hit))
         paths, hits = paths.select(hits.hit), hits.select(hits.hit)
         inside = paths.medium != MISS

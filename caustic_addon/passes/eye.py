@@ -7,10 +7,14 @@ caustic's folds are singular, and point samples of them alias.
 
 At an opaque surface: ambient * albedo, plus direct light from each lamp and
 from the world (direct_light.py), plus caustic irradiance E_c * albedo / pi
-read from the receiver's map. At a dielectric: both the reflected ray
-(weight F) and the refracted ray (weight 1 - F) carry on, each tinted by the
-glass colour and by Beer-Lambert absorption inside, up to `max_depth`
-bounces. At a reflector the reflected ray carries on, times the reflectance
+read from the receiver's map. Under a Principled BSDF's specular layer the
+albedo is the base colour times the share the layer leaves it toward the
+eye (optics/principled.py); the lobe itself reflects the lamps and the
+world, but not the caustic, whose directions the map does not keep.
+
+At a dielectric: both the reflected ray (weight F) and the refracted ray
+(weight 1 - F) carry on, each tinted by the glass colour and by
+Beer-Lambert absorption inside, up to `max_depth` bounces. At a reflector the reflected ray carries on, times the reflectance
 colour. A ray that leaves the scene sees the world. Eye rays refract with a dispersive glass's
 IOR at 587.6 nm: the caustics it throws are spectral (photon pass), the view
 through it is not.
@@ -28,41 +32,46 @@ from ..maps.charts import PlaneChart
 from ..maps.illumination_map import IlluminationMap
 from ..scene import RenderSettings, Scene
 from ..scene.material_table import Materials
-from ..tracing.accelerator import Accelerator
+from ..tracing.accelerator import CAMERA, Accelerator
 from ..tracing.hits import MISS, Hits
 from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.rows import take_rows
 from ..util.vectors import dot
 from .bounce import Interface, split, trace
 from .camera_rays import eye_rays, pixel_offsets, ray_differentials
-from .direct_light import direct_radiance, world_irradiance
+from .direct_light import direct_radiance, world_light
 from .paths import Paths, relative_floor
 
 PASSES = ("direct", "caustic", "ambient")
-# Neighbours whose direct light differs by more than this share of the
-# brighter one sit across a shadow's edge.
+# The buffer of each pixel's share cut out by holdouts (its alpha is 1 minus it).
+HOLDOUT = "holdout"
+# Neighbours whose light differs by more than this share of the brighter
+# one sit across an edge (a shadow's, or one seen through glass).
 EDGE_CONTRAST = 0.2
 
 
 class EyeTracer:
     """The eye pass's choices in the bounce (bounce.trace), for the eye rays
     of the flat pixels `pixels (m,)`: the world where a ray escapes, shading
-    where it meets an opaque surface, both branches at a specular one. A
-    path's id is its eye sample, `spp` to a pixel: local pixel * spp +
-    stratum. Pass buffers are each (m, 3); `first (m spp,)` is the object
-    each camera ray meets first (MISS where it leaves the scene). A camera
-    ray (one with no specular event yet) stands for a square stratum of its
-    pixel, of side 1 / sqrt(spp) pixels."""
+    where it meets an opaque surface, both branches at a specular one, where
+    camera rays meeting a holdout stop. A path's id is its eye sample, `spp`
+    to a pixel: local pixel * spp + stratum. Pass buffers, the holdout's
+    among them, are each (m, 3); `first (m spp,)` is the object each camera
+    ray meets first (MISS where it leaves the scene). A camera ray (one
+    with no specular event yet) stands for a square stratum of its pixel, of
+    side 1 / sqrt(spp) pixels. `holdout (objects,)` bool per object."""
 
     def __init__(self, accel: Accelerator, scene: Scene, materials: Materials, maps: dict[int, IlluminationMap],
-                 environment: Environment, settings: RenderSettings, pixels: np.ndarray, spp: int):
+                 environment: Environment, settings: RenderSettings, pixels: np.ndarray, spp: int,
+                 holdout: np.ndarray):
         self.accel, self.scene, self.materials, self.maps = accel, scene, materials, maps
+        self.holdout = holdout
         self.environment, self.settings = environment, settings
         self.energy, self.spp = settings.energy, spp
         self.stratum = 1.0 / math.sqrt(spp)
         self.pixels = pixels
         self.far = 4.0 * scene.extent() + float(np.abs(scene.camera.position).max())
-        self.buffers = {name: np.zeros((len(pixels), 3)) for name in PASSES}
+        self.buffers = {name: np.zeros((len(pixels), 3)) for name in (*PASSES, HOLDOUT)}
         self.first = np.full(len(pixels) * spp, MISS)
 
     def _add(self, name: str, local: np.ndarray, radiance: np.ndarray) -> None:
@@ -76,30 +85,44 @@ class EyeTracer:
     def escaped(self, rays: Paths) -> None:
         self._add("ambient", rays.ids // self.spp, rays.weight * self.environment.radiance(rays.dirs))
 
+    def _cut_out(self, rays: Paths, hits: Hits) -> np.ndarray:
+        """(n,) bool: the camera rays that met a holdout, their weight added
+        to the holdout buffer."""
+        cut = np.take(self.holdout, hits.obj) & (rays.kind == CAMERA)
+        if cut.any():
+            here = rays.select(cut)
+            self._add(HOLDOUT, here.ids // self.spp, here.weight)
+        return cut
+
     def arrived(self, rays: Paths, hits: Hits) -> None:
+        self._met(rays, hits)
+        cut = self._cut_out(rays, hits)
+        if cut.any():
+            rays, hits = rays.select(~cut), hits.select(~cut)
         if len(rays) == 0:
             return
-        self._met(rays, hits)
         m, accel = self.materials, self.accel
         view = -rays.dirs
         facing = np.take(accel.face_normal, hits.prim, axis=0)
         facing = np.where((dot(facing, view) < 0.0)[:, None], -facing, facing)
         shading = accel.shading_normal(hits.prim, hits.u, hits.v)
         shading = np.where((dot(shading, view) < 0.0)[:, None], -shading, shading)
-        albedo = np.take(m.albedo, hits.obj, axis=0)
+        triangle = hits.prim - np.take(accel.prim_offset, hits.obj)
+        albedo = m.albedo_at(hits.obj, triangle, hits.u, hits.v, hits.points)
+        lobe, share = m.lobe_at(hits.obj, dot(shading, view))
+        diffuse = albedo * share[:, None]
 
         points, settings = hits.points, self.settings
         local, stratum = rays.ids // self.spp, rays.ids % self.spp
         pixel = np.take(self.pixels, local)
-        direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view,
-                                 albedo, np.take(m.specular, hits.obj, axis=0), m.exponent[hits.obj], self.far,
-                                 pixel, stratum, settings.lamp_samples, settings.seed)
+        direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view, diffuse,
+                                 lobe, self.far, pixel, stratum, settings.lamp_samples, settings.seed)
         self._add("direct", local, rays.weight * (direct + np.take(m.emission, hits.obj, axis=0)))
-        ambient = self.scene.ambient * albedo
+        ambient = self.scene.ambient * diffuse
         if not self.scene.world.is_black:
-            world = world_irradiance(accel, self.environment, points, shading, facing, self.far, pixel, stratum,
-                                     settings.world_samples, settings.seed)
-            ambient = ambient + world * albedo / math.pi
+            world, glossy = world_light(accel, self.environment, points, shading, facing, view, lobe, self.far,
+                                        pixel, stratum, settings.world_samples, settings.seed)
+            ambient = ambient + world * diffuse / math.pi + glossy
         self._add("ambient", local, rays.weight * ambient)
 
         for index, imap in self.maps.items():
@@ -118,11 +141,14 @@ class EyeTracer:
                 spread[primary[ok]] = True
                 irradiance[spread] = imap.mean_over(lo[ok], hi[ok])
             irradiance[~spread] = imap.irradiance_at(xy[~spread])
-            radiance = irradiance * take_rows(on_map, albedo)[0] / math.pi
+            radiance = irradiance * take_rows(on_map, diffuse)[0] / math.pi
             self._add("caustic", here.ids // self.spp, here.weight * radiance)
 
     def scattered(self, rays: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
         self._met(rays, hits)
+        cut = self._cut_out(rays, hits)
+        if cut.any():
+            rays, hits, surface = rays.select(~cut), hits.select(~cut), surface.select(~cut)
         return split(self.accel, self.materials, rays, hits, surface)
 
 
@@ -157,12 +183,14 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     """Trace `spp` eye rays through every pixel, chunk by chunk, reporting
     progress from `start` to 1; then, with `edge_samples`, trace that many
     again through each pixel whose samples disagree (`edge_pixels`: a
-    silhouette or a shadow's edge), which replace its first ones. Returns
-    the pass buffers, each (pixels, 3)."""
+    silhouette, a shadow's edge, an edge seen through glass), which replace
+    its first ones. Returns the pass buffers and the holdout's, each
+    (pixels, 3)."""
     cam = scene.camera
     pixels = cam.pixx * cam.pixy
     camera_medium = int(accel.medium_at(cam.position[None])[0])
     environment = Environment(scene.world)
+    holdout = np.array([o.visibility.holdout for o in scene.objects], dtype=bool)
     edges = settings.edge_samples > settings.spp
     main_share = (1.0 - start) * (0.8 if edges else 1.0)
 
@@ -172,24 +200,25 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
         offsets = pixel_offsets(spp, settings.seed)
         per_job = max(1, chunk_size(len(pixel_list) * spp, settings.chunk_size, settings.threads) // spp)
 
-        def job(first: int) -> EyeTracer:
+        def job(first: int):
             local = np.arange(first, min(first + per_job, len(pixel_list)))
             sample = (local[:, None] * spp + np.arange(spp)).ravel()
             pixel = np.take(pixel_list, sample // spp)
             origins, dirs = eye_rays(cam, pixel, offsets[sample % spp])
             weight = np.full((len(sample), 3), 1.0 / spp)
-            tracer = EyeTracer(accel, scene, materials, maps, environment, settings, pixel_list[local], spp)
+            tracer = EyeTracer(accel, scene, materials, maps, environment, settings, pixel_list[local], spp,
+                               holdout)
             trace(accel, materials, Paths.start(origins, dirs, weight, sample - first * spp, camera_medium,
-                                                relative_floor(weight)), settings.max_depth, tracer)
+                                                relative_floor(weight), camera=True), settings.max_depth, tracer)
             return first, tracer
 
-        buffers = {name: np.zeros((len(pixel_list), 3)) for name in PASSES}
+        buffers = {name: np.zeros((len(pixel_list), 3)) for name in (*PASSES, HOLDOUT)}
         first_objects = np.full(len(pixel_list) * spp, MISS)
 
         def add(done) -> None:
             first, tracer = done
             end = first + len(tracer.pixels)
-            for name in PASSES:
+            for name in buffers:
                 buffers[name][first:end] += tracer.buffers[name]
             first_objects[first * spp:end * spp] = tracer.first
 
@@ -208,6 +237,6 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
         if len(refine):
             extra, _ = trace_pixels(refine, settings.edge_samples, start + main_share, 1.0 - start - main_share,
                                     "eye pass, edges")
-            for name in PASSES:
+            for name in buffers:
                 buffers[name][refine] = extra[name]
     return buffers

@@ -8,6 +8,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..tracing.accelerator import CAMERA
 from ..util.rows import take_rows
 from ..util.vectors import max_channel
 
@@ -32,6 +33,9 @@ class Paths:
     band      (n,) int64 wavelength band, or None: refract at 587.6 nm
     family    (n,) uint64 the sequence of (surface, event) so far, or None
               where no one asks (beam mode asks)
+    kind      (n,) int8 the kind of ray for the objects' ray visibility
+              (tracing.accelerator CAMERA, REFLECTED, REFRACTED), or None:
+              the ray sees every object (the pass from the lamps)
     """
 
     origins: np.ndarray
@@ -43,18 +47,21 @@ class Paths:
     specular: np.ndarray
     band: Optional[np.ndarray] = None
     family: Optional[np.ndarray] = None
+    kind: Optional[np.ndarray] = None
 
     def __len__(self) -> int:
         return len(self.ids)
 
     @staticmethod
     def start(origins: np.ndarray, dirs: np.ndarray, weight: np.ndarray, ids: np.ndarray, medium: int,
-              floor: np.ndarray, band: Optional[np.ndarray] = None, family: bool = False) -> "Paths":
-        """Paths leaving a lamp or the camera from inside object `medium`
-        (MISS: in air), with no specular event yet."""
+              floor: np.ndarray, band: Optional[np.ndarray] = None, family: bool = False,
+              camera: bool = False) -> "Paths":
+        """Paths leaving a lamp or, as CAMERA rays if `camera`, the camera,
+        from inside object `medium` (MISS: in air), with no specular event yet."""
         n = len(ids)
         return Paths(origins, dirs, weight, np.full(n, medium, dtype=np.int64), ids, floor,
-                     np.zeros(n, dtype=bool), band, np.zeros(n, dtype=np.uint64) if family else None)
+                     np.zeros(n, dtype=bool), band, np.zeros(n, dtype=np.uint64) if family else None,
+                     np.full(n, CAMERA, dtype=np.int8) if camera else None)
 
     def _columns(self) -> list[str]:
         return [f.name for f in fields(self) if getattr(self, f.name) is not None]

@@ -1,13 +1,14 @@
 """The scene model: plain data in world space, what the engine renders.
 Units follow Blender: metres, radians, watts; colours are linear Rec.709."""
 
-from . import paper, shapes
+from . import paper, shapes, textures
 from .camera import Camera
 from .geometry import Mesh
 from .lights import AreaLight, Light, PointLight, SpotLight, SunLight, World
-from .materials import Dielectric, Diffuse, Material, Reflector
-from .scene import Object, Scene
+from .materials import Dielectric, Diffuse, Material, Reflector, Specular
+from .scene import Object, Scene, Visibility
 from .settings import RenderSettings
 
 __all__ = ["AreaLight", "Camera", "Dielectric", "Diffuse", "Light", "Material", "Mesh", "Object", "PointLight",
-           "Reflector", "RenderSettings", "Scene", "SpotLight", "SunLight", "World", "paper", "shapes"]
+           "Reflector", "RenderSettings", "Scene", "Specular", "SpotLight", "SunLight", "Visibility", "World", "paper",
+           "shapes", "textures"]

@@ -38,6 +38,14 @@ class Mesh:
         """(nt,3,3) world positions of each triangle's corners."""
         return np.take(self.vertices, self.triangles, axis=0)
 
+    def subset(self, rows: np.ndarray) -> "Mesh":
+        """The triangles `rows (k,)` of this mesh, with only the vertices they use."""
+        triangles = np.take(self.triangles, rows, axis=0)
+        used, local = np.unique(triangles, return_inverse=True)
+        return Mesh(np.take(self.vertices, used, axis=0), local.reshape(-1, 3),
+                    None if self.corner_normals is None else np.take(self.corner_normals, rows, axis=0),
+                    None if self.corner_uvs is None else np.take(self.corner_uvs, rows, axis=0))
+
     def transformed(self, matrix: np.ndarray) -> "Mesh":
         """This mesh under a (4,4) affine matrix. Normals go by its cofactor
         matrix, det(M) M^-T, signed as det(M) (the inverse transpose, up to

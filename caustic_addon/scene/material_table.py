@@ -3,13 +3,16 @@ index in one numpy gather instead of a Python loop per hit."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..optics.dispersion import cauchy_ior
+from ..optics.principled import Layer, Lobe
 from ..optics.spectrum import bands
+from .materials import Diffuse
 from .scene import Object
+from .textures import Node, SurfacePoints, as_color
 
 
 @dataclass
@@ -20,10 +23,12 @@ class Materials:
     specular_surface (m,) bool  dielectric or reflector: rays scatter there
     ior (m,)                    color (m,3): glass tint or reflectance
     absorption (m,3) per metre
-    albedo (m,3)                specular (m,3), exponent (m,)
+    albedo (m,3)
     emission (m,3) radiance a surface gives off
     ior_bands (m,K)             IOR in each of the K wavelength bands
     band_weights (K,3)          each band's RGB share (spectrum.Bands)
+    layers                      object index -> its specular layer (principled.Layer)
+    textures                    object index -> the nodes of its albedo
 
     K is 1, with ior_bands = ior, unless a dielectric disperses.
     """
@@ -35,11 +40,11 @@ class Materials:
     color: np.ndarray
     absorption: np.ndarray
     albedo: np.ndarray
-    specular: np.ndarray
-    exponent: np.ndarray
     emission: np.ndarray
     ior_bands: np.ndarray
     band_weights: np.ndarray
+    layers: dict[int, Layer] = field(default_factory=dict)
+    textures: dict[int, Node] = field(default_factory=dict)
 
     @property
     def band_count(self) -> int:
@@ -65,13 +70,59 @@ class Materials:
             color=rgb_column("color", 1.0),
             absorption=rgb_column("absorption", 0.0),
             albedo=rgb_column("albedo", 0.0),
-            specular=rgb_column("specular", 0.0),
             emission=rgb_column("emission", 0.0),
-            exponent=column("exponent", 1.0),
             ior_bands=cauchy_ior(ior[:, None], abbe[:, None], spectral.wavelengths[None, :]),
             band_weights=spectral.weights,
+            textures={index: o.material.texture for index, o in enumerate(objects)
+                      if getattr(o.material, "texture", None) is not None},
+            layers=_layers(objects),
         )
+
+    def albedo_at(self, obj: np.ndarray, triangle: np.ndarray, u: np.ndarray, v: np.ndarray,
+                  points: np.ndarray) -> np.ndarray:
+        """(n,3) albedo at surface points of objects `obj (n,)`: a textured
+        object's nodes at its `triangle (n,)` (index in its own mesh),
+        barycentrics `u, v (n,)` and world `points (n,3)`; else its colour."""
+        albedo = np.take(self.albedo, obj, axis=0)
+        for index, texture in self.textures.items():
+            rows = np.flatnonzero(obj == index)
+            if len(rows):
+                at = SurfacePoints(np.take(points, rows, axis=0), np.take(triangle, rows), np.take(u, rows),
+                                   np.take(v, rows))
+                albedo[rows] = as_color(texture.evaluate(at))
+        return albedo
+
+    def lobe_at(self, obj: np.ndarray, cos_v: np.ndarray) -> tuple[Lobe | None, np.ndarray]:
+        """(lobe, diffuse (n,)) at points of objects `obj (n,)` seen at
+        cosines `cos_v (n,)` from their normals: the specular layers there
+        (None if no point has one), and the share of its diffuse base each
+        point keeps under its layer (1 without one)."""
+        n = len(obj)
+        diffuse = np.ones(n)
+        if not self.layers or not np.isin(obj, list(self.layers)).any():
+            return None, diffuse
+        lobe = Lobe(np.zeros(n, dtype=bool), np.zeros((n, 3)), np.full(n, 1.5), np.ones(n), np.zeros((n, 3)))
+        for index, layer in self.layers.items():
+            rows = np.flatnonzero(obj == index)
+            if len(rows) == 0:
+                continue
+            gain, share = layer.toward(cos_v[rows])
+            lobe.active[rows], lobe.f0[rows], lobe.eta[rows], lobe.alpha[rows] = True, layer.f0, layer.eta, layer.alpha
+            lobe.gain[rows], diffuse[rows] = gain, share
+        return lobe, diffuse
 
     @property
     def specular_surface(self) -> np.ndarray:
         return self.dielectric | self.reflector
+
+
+def _layers(objects: list[Object]) -> dict[int, Layer]:
+    """Object index -> the specular layer of each diffuse object that has one that reflects."""
+    layers = {}
+    for index, o in enumerate(objects):
+        spec = o.material.specular if isinstance(o.material, Diffuse) else None
+        if spec is not None:
+            layer = spec.layer()
+            if layer is not None:
+                layers[index] = layer
+    return layers

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Optional
 
 import numpy as np
 
@@ -13,11 +14,41 @@ from .lights import Light, World
 from .materials import Dielectric, Diffuse, Material, Reflector
 
 
+@dataclass(frozen=True)
+class Visibility:
+    """Which rays see an object, as Blender's Object > Visibility > Ray
+    Visibility and Holdout, read the way Cycles reads them (its PATH_RAY_*
+    flags, kernel/types.h; path_state_ray_visibility, after a refraction
+    only the transmission flag counts): `camera` eye rays before any
+    specular event, `glossy` eye rays after a reflection, `transmission` eye
+    rays after a refraction, `shadow` the shadow rays toward lamps and the
+    world. Where a camera ray meets a `holdout` object its pixel is cut out,
+    colour and alpha 0; every other ray sees the object as usual. The pass
+    from the lamps sees every object, as light does in Cycles."""
+
+    camera: bool = True
+    glossy: bool = True
+    transmission: bool = True
+    shadow: bool = True
+    holdout: bool = False
+
+
 @dataclass
 class Object:
+    """A mesh with one material. `body` names the closed surface the mesh is
+    part of when one surface has several materials: objects with the same
+    body are one mesh for inside and outside (whether it is closed, which way
+    it faces, which glass a ray is in); None, the object is its own body."""
+
     name: str
     mesh: Mesh
     material: Material
+    visibility: Visibility = field(default_factory=Visibility)
+    body: Optional[str] = None
+
+    @property
+    def body_name(self) -> str:
+        return self.body if self.body is not None else self.name
 
     @property
     def is_transparent(self) -> bool:

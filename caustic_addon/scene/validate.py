@@ -70,6 +70,8 @@ def validate_scene(scene: Scene) -> list[str]:
             if np.any(cauchy_ior(material.ior, material.abbe, VISIBLE_NM) <= 0):
                 raise SceneError(f"{obj.name}: an Abbe number of {material.abbe} with IOR {material.ior} gives "
                                  f"an IOR <= 0 in the visible spectrum")
+        if isinstance(material, Diffuse) and material.specular is not None:
+            _check_specular(obj.name, material.specular)
         if isinstance(material, Reflector):
             _finite(obj.name, "its reflectance colour", material.color)
             if np.any((material.color < 0) | (material.color > 1)):
@@ -85,6 +87,17 @@ def validate_scene(scene: Scene) -> list[str]:
     if scene.casters and not scene.receivers:
         warnings.append("no object receives caustics: the photon pass is skipped")
     return warnings
+
+
+def _check_specular(name: str, spec) -> None:
+    """Raise SceneError for a specular layer outside what a Principled BSDF takes."""
+    _finite(name, "its specular layer", [spec.roughness, spec.ior, spec.level, *spec.tint])
+    if not 0.0 <= spec.roughness <= 1.0:
+        raise SceneError(f"{name}: specular roughness must be in 0..1 (got {spec.roughness})")
+    if not spec.ior > 0.0:
+        raise SceneError(f"{name}: specular IOR must be positive (got {spec.ior})")
+    if spec.level < 0.0 or np.any(spec.tint < 0.0):
+        raise SceneError(f"{name}: specular level and tint must not be negative")
 
 
 def _check_lamp(light, extent: float) -> list[str]:

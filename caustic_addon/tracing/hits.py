@@ -30,6 +30,13 @@ class Hits:
     v: np.ndarray
     points: np.ndarray
 
+    @staticmethod
+    def misses(origins: np.ndarray) -> "Hits":
+        """n rays from `origins (n,3)` that hit nothing."""
+        n = len(origins)
+        return Hits(np.full(n, np.inf), np.full(n, MISS, dtype=np.int64), np.full(n, MISS, dtype=np.int64),
+                    np.zeros(n), np.zeros(n), np.array(origins, dtype=np.float64).reshape(n, 3))
+
     @property
     def hit(self) -> np.ndarray:
         return self.obj != MISS

@@ -1,5 +1,7 @@
 """Test scenes built with bpy: a diffuse plane, a smooth glass sphere, lamps and a camera."""
 
+import os
+
 import bpy
 import numpy as np
 from mathutils import Vector
@@ -24,6 +26,15 @@ def _shader(material, kind):
 def diffuse_material(name="Floor", color=(0.8, 0.8, 0.8)):
     material = _material(name)
     _shader(material, 'ShaderNodeBsdfDiffuse').inputs['Color'].default_value = (*color, 1.0)
+    return material
+
+
+def principled_material(name="Floor", color=(0.8, 0.8, 0.8), roughness=0.3, level=0.5):
+    material = _material(name)
+    shader = _shader(material, 'ShaderNodeBsdfPrincipled')
+    shader.inputs['Base Color'].default_value = (*color, 1.0)
+    shader.inputs['Roughness'].default_value = roughness
+    shader.inputs['Specular IOR Level'].default_value = level
     return material
 
 
@@ -128,3 +139,28 @@ def pixels_of(name):
     pixels = np.empty(w * h * 4, dtype=np.float32)
     image.pixels.foreach_get(pixels)
     return pixels.reshape(h, w, 4)[::-1]
+
+
+def cycles_render(folder, samples=512, specular_bounces=0) -> np.ndarray:
+    """(h, w, 4) float64 RGBA, row 0 at the top: the scene rendered by Cycles
+    on the CPU with no diffuse bounces (direct light only, what a Whitted eye
+    pass computes) and up to `specular_bounces` glossy and transmission
+    bounces, box-filtered over each pixel, neither denoised nor adaptive."""
+    scene = bpy.context.scene
+    scene.render.engine = 'CYCLES'
+    cycles = scene.cycles
+    cycles.device, cycles.samples, cycles.use_denoising = 'CPU', samples, False
+    cycles.max_bounces, cycles.diffuse_bounces = specular_bounces, 0
+    cycles.glossy_bounces = cycles.transmission_bounces = specular_bounces
+    cycles.pixel_filter_type, cycles.filter_width = 'BOX', 1.0
+    if hasattr(cycles, "use_adaptive_sampling"):
+        cycles.use_adaptive_sampling = False
+    scene.render.image_settings.file_format, scene.render.image_settings.color_depth = 'OPEN_EXR', '32'
+    scene.render.filepath, scene.render.use_file_extension = os.path.join(folder, "cycles.exr"), False
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(scene.render.filepath)
+    w, h = image.size
+    pixels = np.empty(w * h * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    bpy.data.images.remove(image)
+    return pixels.reshape(h, w, 4)[::-1].astype(np.float64)

@@ -7,7 +7,7 @@ import bpy
 
 # Runtime state, not data: it changes without anyone editing the file.
 VOLATILE = {"rna_type", "session_uid", "is_evaluated", "original", "bindcode", "storage_type", "depsgraph",
-            "tool_settings"}
+            "tool_settings", "is_visible"}
 MAX_DEPTH = 6
 
 

@@ -95,8 +95,11 @@ def test_open_glass_mesh_renders_with_a_warning(reports):
     reports()
     assert bpy.ops.caustic.render() == {'FINISHED'}
     assert "'Ball' is not a closed mesh" in reports() and "light may leak" in reports.last
-    after = snapshot_file()
-    # Only the asked-for output changed: the new image and the result fields.
+    assert_only_the_render_changed(before, snapshot_file())
+
+
+def assert_only_the_render_changed(before, after):
+    """Only the asked-for output changed: the new image and the result fields."""
     assert set(after["images"]) - set(before["images"]) == {"Caustic Render"}
     for kind in after:
         if kind not in ("images", "scenes"):
@@ -107,6 +110,49 @@ def test_open_glass_mesh_renders_with_a_warning(reports):
     assert caustic_after == caustic_before
     before["scenes"]["Scene"].pop("caustic"), after["scenes"]["Scene"].pop("caustic")
     assert after["scenes"] == before["scenes"]
+
+
+def an_empty_slot(parts):
+    mesh = parts["ball"].data
+    mesh.materials.append(None)
+    for polygon in mesh.polygons:
+        polygon.material_index = int(polygon.center.z < 0.0)
+
+
+def no_output_node(parts):
+    tree = bpy.data.materials["Floor"].node_tree
+    tree.nodes.remove(tree.nodes["Material Output"])
+
+
+def nothing_connected_to_the_output(parts):
+    tree = bpy.data.materials["Floor"].node_tree
+    for link in list(tree.links):
+        tree.links.remove(link)
+
+
+BROKEN = [
+    (an_empty_slot, "'Ball': material slot 2 is empty; "),
+    (no_output_node, "'Floor': material 'Floor' (slot 1) has no Material Output node; Cycles renders its faces "
+                     "black, and so does the caustic render"),
+    (nothing_connected_to_the_output, "'Floor': material 'Floor' (slot 1) has no shader connected to its Material "
+                                      "Output's Surface; Cycles renders its faces black"),
+]
+
+
+@pytest.mark.parametrize("spoil, message", BROKEN, ids=[case[0].__name__ for case in BROKEN])
+def test_broken_materials_render_as_cycles_does_with_a_warning_that_names_them(spoil, message, reports, addon):
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=2000, segments=16, rings=8)
+    spoil(parts)
+    bpy.context.view_layer.update()
+    before = snapshot_file()
+    reports()
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    if spoil is an_empty_slot:
+        message += addon.export.meshes.EMPTY_SLOT
+    assert message in reports()
+    assert_only_the_render_changed(before, snapshot_file())
+    floor = scenes.pixels_of("Caustic Render")[-4:, :, :3]
+    assert (floor.max() == 0.0) == (spoil is not an_empty_slot)
 
 
 def a_lamp_of_power_0(parts):

@@ -27,13 +27,20 @@ def lamp_scene():
     return floor, lamp
 
 
-def test_modifiers_are_applied(addon):
+def test_modifiers_are_read_at_their_render_settings(addon):
     lamp_scene()
     ball = scenes.add_sphere(1.0, (0.0, 0.0, 1.0), scenes.glass_material(), segments=16, rings=8)
-    ball.modifiers.new("Subdivide", 'SUBSURF').levels = 1
+    subdivide = ball.modifiers.new("Subdivide", 'SUBSURF')
+    subdivide.levels, subdivide.render_levels = 1, 3
+    twice = ball.modifiers.new("Twice", 'ARRAY')
+    twice.count, twice.show_viewport, twice.relative_offset_displace = 2, False, (3.0, 0.0, 0.0)
     quads, fans = 16 * (8 - 2), 2 * 16
-    # One subdivision makes 4 quads of a quad and 3 of a triangle; each quad is 2 triangles.
-    assert len(engine_object(read(addon), "Ball").mesh.triangles) == 2 * (4 * quads + 3 * fans)
+    # Level L makes 4^L quads of a quad and 3 x 4^(L-1) of a triangle; each quad is 2 triangles.
+    render_level = 2 * (4 ** 3 * quads + 3 * 4 ** 2 * fans)
+    assert len(engine_object(read(addon), "Ball").mesh.triangles) == 2 * render_level
+    assert (subdivide.levels, subdivide.render_levels, twice.show_viewport) == (1, 3, False)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    assert len(ball.evaluated_get(depsgraph).data.loop_triangles) == 2 * (4 * quads + 3 * fans)
 
 
 def test_world_space_with_normals_by_the_inverse_transpose(addon):
@@ -55,7 +62,7 @@ def test_world_space_with_normals_by_the_inverse_transpose(addon):
     assert (np.einsum("ti,ti->t", outward, mesh.corner_normals[:, 0]) > 0).all()
 
 
-def test_hidden_objects_are_left_out(addon, reports):
+def test_objects_disabled_for_render_are_left_out_and_those_hidden_in_the_viewport_read(addon, reports):
     lamp_scene()
     glass = scenes.glass_material()
     hidden = scenes.add_sphere(0.3, (1.0, 0.0, 0.5), glass, name="NotRendered", segments=8, rings=4)
@@ -68,9 +75,19 @@ def test_hidden_objects_are_left_out(addon, reports):
     collection.hide_render = True
     viewport_hidden = scenes.add_sphere(0.3, (0.0, 1.0, 0.5), glass, name="ViewportHidden", segments=8, rings=4)
     viewport_hidden.hide_viewport = True
+    eye_hidden = scenes.add_sphere(0.3, (0.0, -1.0, 0.5), glass, name="EyeHidden", segments=8, rings=4)
+    eye_hidden.hide_set(True)
+    in_viewport_hidden_collection = scenes.add_sphere(0.3, (1.0, 1.0, 0.5), glass, name="InViewportHidden",
+                                                      segments=8, rings=4)
+    shown_in_render = bpy.data.collections.new("Shown")
+    bpy.context.scene.collection.children.link(shown_in_render)
+    shown_in_render.objects.link(in_viewport_hidden_collection)
+    bpy.context.scene.collection.objects.unlink(in_viewport_hidden_collection)
+    shown_in_render.hide_viewport = True
     result = read(addon)
-    assert {o.name for o in result.scene.objects} == {"Floor"}
-    assert any("'ViewportHidden' is hidden in the viewport" in w for w in result.warnings)
+    assert {o.name for o in result.scene.objects} == {"Floor", "ViewportHidden", "EyeHidden", "InViewportHidden"}
+    assert not any("hidden" in w for w in result.warnings)
+    assert viewport_hidden.hide_viewport and eye_hidden.hide_get() and shown_in_render.hide_viewport
 
 
 def test_collection_instances_are_read_in_world_space(addon):
@@ -124,6 +141,25 @@ def test_roles_from_materials_and_overrides(addon):
     assert result.materials["Water"] == "Water"
 
 
+def test_a_principled_receiver_keeps_its_specular_layer(addon):
+    """Roughness, IOR, Specular IOR Level, Specular Tint and the distribution
+    reach the engine; inputs it does not render are named; a Diffuse BSDF
+    has no layer."""
+    floor, _ = lamp_scene()
+    floor.data.materials[0] = principled("Varnish", **{
+        "Roughness": 0.3, "IOR": 1.45, "Specular IOR Level": 0.8, "Specular Tint": (1.0, 0.5, 0.25, 1.0),
+        "Coat Weight": 0.5, "Sheen Weight": 0.2})
+    floor.data.materials[0].node_tree.nodes["Principled BSDF"].distribution = 'GGX'
+    scenes.add_sphere(0.3, (1.0, 0.0, 0.5), scenes.diffuse_material("Chalk"), name="Chalk", segments=8, rings=4)
+    result = read(addon)
+    layer = engine_object(result, "Floor").material.specular
+    assert (layer.roughness, layer.ior, layer.level) == pytest.approx((0.3, 1.45, 0.8))
+    assert layer.tint == pytest.approx([1.0, 0.5, 0.25]) and not layer.multiscatter
+    assert engine_object(result, "Chalk").material.specular is None
+    named = [w for w in result.warnings if "material 'Varnish'" in w]
+    assert len(named) == 1 and "Coat Weight, Sheen Weight are not rendered" in named[0]
+
+
 def test_mirrors_and_metals_read_as_reflectors(addon):
     floor, _ = lamp_scene()
     shapes = {}
@@ -168,7 +204,8 @@ def test_approximations_are_named_in_warnings(addon):
     neon.active_material.node_tree.links.new(emission.outputs[0], nodes['Material Output'].inputs['Surface'])
     result = read(addon)
     warnings = "\n".join(result.warnings)
-    assert "material 'Floor': its Color comes from other nodes" in warnings
+    assert ("material 'Floor': its Color comes from 'Checker Texture', a Checker Texture node, which the caustic "
+            "render does not read; the unconnected value is used") in warnings
     assert "material 'Frosted': rough glass is rendered as smooth glass" in warnings
     assert f"'{curve}': curve objects are not supported" in warnings
     assert "'Neon': its material 'Neon' emits light" in warnings
@@ -328,3 +365,47 @@ def test_volume_absorption_abbe_and_colour_at_distance(addon, reports):
     np.testing.assert_allclose(np.exp(-names["Gem"].absorption * 0.05), (0.9, 0.6, 0.3), rtol=1e-6)
     np.testing.assert_allclose(names["Smoky"].absorption, 0.0)
     assert any("material 'Smoky': a 'Principled Volume' volume is not understood" in w for w in result.warnings)
+
+
+def test_ray_visibility_and_holdouts_are_read_as_cycles_reads_them(addon):
+    lamp_scene()
+    glass = scenes.glass_material()
+
+    def ball(name, x, collection=None):
+        ob = scenes.add_sphere(0.2, (x, 0.0, 0.5), glass, name=name, segments=8, rings=4)
+        if collection is not None:
+            collection.objects.link(ob)
+            bpy.context.scene.collection.objects.unlink(ob)
+        return ob
+
+    def collection(name):
+        made = bpy.data.collections.new(name)
+        bpy.context.scene.collection.children.link(made)
+        return made, bpy.context.view_layer.layer_collection.children[name]
+
+    shy = ball("Shy", -1.5)
+    shy.visible_camera = shy.visible_shadow = shy.visible_diffuse = False
+    ball("Held", -1.0).is_holdout = True
+    cutouts, cutouts_layer = collection("Cutouts")
+    ball("InHoldout", -0.5, cutouts)
+    cutouts_layer.holdout = True
+    sideline, sideline_layer = collection("Sideline")
+    ball("Aside", 0.0, sideline)
+    sideline_layer.indirect_only = True
+    source, source_layer = collection("Source")
+    ball("Piece", 0.5, source)
+    source_layer.exclude = True
+    instancer = bpy.data.objects.new("Instancer", None)
+    instancer.instance_type, instancer.instance_collection = 'COLLECTION', source
+    instancer.visible_glossy = False
+    bpy.context.scene.collection.objects.link(instancer)
+    result = read(addon)
+    seen = {result.sources[o.name] if o.name in result.instanced else o.name: o.visibility
+            for o in result.scene.objects}
+    Visibility = addon.caustic_addon.Visibility
+    assert seen == {"Floor": Visibility(), "Shy": Visibility(camera=False, shadow=False),
+                    "Held": Visibility(holdout=True), "InHoldout": Visibility(holdout=True),
+                    "Aside": Visibility(camera=False), "Piece": Visibility(glossy=False)}
+    assert ("'Shy': its Diffuse ray visibility is off, which hides it from Cycles' diffuse bounces and the caustics "
+            "they find through it; the caustic render's light goes from the lamps, so it still casts its caustic"
+            ) in result.warnings

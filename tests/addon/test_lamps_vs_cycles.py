@@ -5,7 +5,6 @@ the mean irradiance within 2% of Cycles, and the pole's shadow and penumbra
 within 8% of the unshadowed light (RMS), at the add-on's default samples."""
 
 import math
-import os
 
 import bpy
 import numpy as np
@@ -70,26 +69,6 @@ def ours() -> np.ndarray:
     return scenes.pixels_of("Caustic Render")[..., :3].astype(np.float64)
 
 
-def cycles(tmp_path, samples=512) -> np.ndarray:
-    scene = bpy.context.scene
-    scene.render.engine = 'CYCLES'
-    cycles = scene.cycles
-    cycles.device, cycles.samples, cycles.use_denoising = 'CPU', samples, False
-    cycles.max_bounces = 0
-    cycles.pixel_filter_type, cycles.filter_width = 'BOX', 1.0
-    if hasattr(cycles, "use_adaptive_sampling"):
-        cycles.use_adaptive_sampling = False
-    scene.render.image_settings.file_format, scene.render.image_settings.color_depth = 'OPEN_EXR', '32'
-    scene.render.filepath, scene.render.use_file_extension = os.path.join(tmp_path, "cycles.exr"), False
-    bpy.ops.render.render(write_still=True)
-    image = bpy.data.images.load(scene.render.filepath)
-    w, h = image.size
-    pixels = np.empty(w * h * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    bpy.data.images.remove(image)
-    return pixels.reshape(h, w, 4)[::-1, :, :3].astype(np.float64)
-
-
 def compare(tmp_path, build):
     """(mean ratio ours / Cycles, RMS difference over the shadow and
     penumbra / the unshadowed light there) of the scene `build` makes."""
@@ -98,7 +77,7 @@ def compare(tmp_path, build):
     open_floor = ours()
     pole_scene()
     build()
-    mine, theirs = ours(), cycles(str(tmp_path))
+    mine, theirs = ours(), scenes.cycles_render(str(tmp_path))[..., :3]
     shadow = (open_floor - mine)[..., 0] > 0.02 * open_floor[..., 0]
     assert shadow.sum() > 20
     rms = np.sqrt(np.mean((mine - theirs)[shadow] ** 2)) / open_floor[shadow].mean()
