@@ -236,7 +236,9 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
                                             shown.max(axis=1).reshape(cam.pixy, cam.pixx)))
         if len(refine):
             extra, _ = trace_pixels(refine, settings.edge_samples, start + main_share, 1.0 - start - main_share,
-                                    "eye pass, edges")
+                                    "eye pass")
             for name in buffers:
                 buffers[name][refine] = extra[name]
+        else:
+            monitor.step(1.0, "eye pass")
     return buffers

@@ -24,8 +24,7 @@ def _material_finite(name: str, material) -> None:
     if isinstance(material, Dielectric):
         parts = [("its colour", material.color), ("its absorption", material.absorption)]
     elif isinstance(material, Diffuse):
-        parts = [("its colour", material.albedo), ("its specular colour", material.specular),
-                 ("its specular exponent", material.exponent), ("its emission", material.emission)]
+        parts = [("its colour", material.albedo), ("its emission", material.emission)]
     else:
         parts = []
     for what, value in parts:
