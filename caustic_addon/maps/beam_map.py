@@ -164,8 +164,12 @@ class BeamMap(IlluminationMap):
         small = fine > 0.0
         if small.any():
             centre = corners[small].mean(axis=1)
-            flux = fine[small] * irradiance[small].sum(axis=1) * np.abs(signed_areas(corners[small]))
-            bounds = np.array([_weighted_quantiles(centre[:, a], flux, (5e-4, 1 - 5e-4)) for a in (0, 1)])
+            # by flux times irradiance: where the light is concentrated, not
+            # the dim light (a reflection off the glass) that many lamp rays
+            # also cut into small beams all over the receiver
+            brightness = irradiance[small].sum(axis=1)
+            weight = fine[small] * brightness ** 2 * np.abs(signed_areas(corners[small]))
+            bounds = np.array([_weighted_quantiles(centre[:, a], weight, (5e-4, 1 - 5e-4)) for a in (0, 1)])
             # the map's cell over FINE, widened in steps of 2^(1/4) to fit
             # FINE_LIMIT cells: grids laid out from different beams over
             # about the same box share a lattice
