@@ -12,6 +12,7 @@ illumination maps), renderer (all of it, in one call); beneath them util,
 sampling and optics; beside them cli, the command line.
 """
 
+from .cli.image_io import write_exr_channels
 from .errors import Cancelled, SceneError
 from .maps.cache import MapCache
 from .maps.charts import ImageFrame
@@ -25,5 +26,5 @@ __all__ = [
     "AreaLight", "Camera", "Cancelled", "Dielectric", "Diffuse", "IlluminationMap", "ImageFrame", "MapCache", "Mesh", "Object", "PointLight", "Reflector",
     "RenderResult", "RenderSettings", "Scene", "SceneError", "Specular", "SpotLight", "SunLight", "Visibility", "World",
     "absorption_from_color",
-    "paper", "render", "shapes", "textures", "volume_absorption",
+    "paper", "render", "shapes", "textures", "volume_absorption", "write_exr_channels",
 ]

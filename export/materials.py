@@ -27,6 +27,8 @@ from ..caustic_addon import textures as nodes
 from .textures import Recipe, color_recipe
 
 DEFAULT_ALBEDO = 0.8
+# Custom property marking the node groups a bake made (writeback/bake_group.py).
+BAKE_TAG = "caustic_bake"
 GLASS_NODES = {'ShaderNodeBsdfGlass', 'ShaderNodeBsdfRefraction'}
 # Blender 4.0 merged Anisotropic BSDF into Glossy BSDF; both names still make the node.
 GLOSSY_NODES = {'ShaderNodeBsdfGlossy', 'ShaderNodeBsdfAnisotropic'}
@@ -94,16 +96,21 @@ def albedo_socket(material):
 
 def _shader(material, output_socket: str):
     """The shader node feeding the material's Cycles output's `output_socket`
-    ('Surface' or 'Volume'), past reroutes; None if nothing is connected."""
+    ('Surface' or 'Volume'), past reroutes and a bake's node group (which
+    adds the baked caustic to the shader it takes); None if nothing is
+    connected."""
     output = material.node_tree.get_output_node('CYCLES')
     if output is None:
         return None
     socket = output.inputs[output_socket]
     while socket.is_linked:
         node = socket.links[0].from_node
-        if node.bl_idname != 'NodeReroute':
+        if node.bl_idname == 'ShaderNodeGroup' and node.node_tree is not None and BAKE_TAG in node.node_tree:
+            socket = node.inputs['Shader']
+        elif node.bl_idname == 'NodeReroute':
+            socket = node.inputs[0]
+        else:
             return node
-        socket = node.inputs[0]
     return None
 
 

@@ -42,15 +42,19 @@ class SceneRead:
     instanced: set[str] = field(default_factory=set)
 
 
-def read_scene(context, with_camera: bool = True) -> SceneRead:
-    """The engine scene of the context's view layer, as a render sees it.
-    Raises InputError if it has no camera (when `with_camera`), no light
-    (neither a lamp nor a world) or no receiver. A scene without a camera,
-    or a view layer disabled for rendering, which Blender does not render,
-    is read as the viewport shows it, and a warning names what a render
-    would see otherwise."""
+def read_scene(context, with_camera: bool = True, depsgraph=None) -> SceneRead:
+    """The engine scene of the context's view layer, as a render sees it,
+    or of `depsgraph` when given (one a render is evaluating: its handlers
+    read it). Raises InputError if it has no camera (when `with_camera`), no
+    light (neither a lamp nor a world) or no receiver. A scene without a
+    camera, or a view layer disabled for rendering, which Blender does not
+    render, is read as the viewport shows it, and a warning names what a
+    render would see otherwise."""
     scene, view_layer = context.scene, context.view_layer
-    if scene.camera is not None and view_layer.use:
+    if depsgraph is not None:
+        scene = depsgraph.scene
+        read = _read_objects(scene, depsgraph, with_camera)
+    elif scene.camera is not None and view_layer.use:
         read = read_as_render(scene, view_layer, lambda depsgraph: _read_objects(scene, depsgraph, with_camera))
         adaptive = sorted({read.sources[name] for name in read.materials
                            if adaptive_subdivision(scene, bpy.data.objects[read.sources[name]])})

@@ -1,5 +1,6 @@
-"""The engine run off Blender's main thread, with the map cache kept between runs; no bpy."""
+"""The engine run off Blender's main thread, one job or a run of them, with the map cache kept between runs; no bpy."""
 
 from .job import MAP_CACHE, RenderJob
+from .runner import JobRunner, StepError
 
-__all__ = ["MAP_CACHE", "RenderJob"]
+__all__ = ["MAP_CACHE", "JobRunner", "RenderJob", "StepError"]

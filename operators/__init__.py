@@ -2,17 +2,33 @@
 
 import bpy
 
+from .animation import CAUSTIC_OT_render_animation
 from .bake import CAUSTIC_OT_bake, CAUSTIC_OT_unbake
+from .bake_animation import CAUSTIC_OT_bake_animation
 from .compare import CAUSTIC_OT_compare_cycles
 from .paper_scene import CAUSTIC_OT_add_paper_scene
 from .presets import CAUSTIC_OT_apply_preset
 from .render import CAUSTIC_OT_render
 
-register, unregister = bpy.utils.register_classes_factory((
+from . import bake_on_render
+
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory((
     CAUSTIC_OT_render,
+    CAUSTIC_OT_render_animation,
     CAUSTIC_OT_bake,
+    CAUSTIC_OT_bake_animation,
     CAUSTIC_OT_unbake,
     CAUSTIC_OT_compare_cycles,
     CAUSTIC_OT_apply_preset,
     CAUSTIC_OT_add_paper_scene,
 ))
+
+
+def register() -> None:
+    _register_classes()
+    bake_on_render.register()
+
+
+def unregister() -> None:
+    bake_on_render.unregister()
+    _unregister_classes()

@@ -1,23 +1,26 @@
 """CAUSTIC_OT_bake and CAUSTIC_OT_unbake: each receiver's illumination map
 as a packed float image, shown by its material through one node group (see
-writeback.bake_group); unbake takes all of it out again."""
+writeback.bake_group); unbake takes all of it out again. In the UI the bake
+runs like Render, with progress and Esc."""
+
+import os
 
 import bpy
 import numpy as np
 
 from ..export import InputError, SceneRead, read_scene, render_settings
 from ..export.materials import albedo_socket
-from ..jobs import RenderJob
-from ..writeback.bake_group import baked_nodes, make_group, material_output, unwire, wire
+from ..jobs import JobRunner, RenderJob, StepError
+from ..writeback.bake_group import baked_nodes, files_on_disk, make_group, material_output, unwire, wire
 from ..writeback.images import write_image
 from ..writeback.results import record_run
-from .render import no_render_running
+from .engine_run import EngineOperator
 
 IMAGE_PREFIX = "Caustic Map "
 GROUP_PREFIX = "Caustic Bake "
 
 
-def _bakeable(read: SceneRead, names) -> tuple[dict, list[str]]:
+def bakeable(read: SceneRead, names) -> tuple[dict, list[str]]:
     """{receiver name: material} for the receivers whose material can show a
     bake, and a warning for each one that cannot."""
     plan, warnings, owners = {}, [], {}
@@ -39,61 +42,83 @@ def _bakeable(read: SceneRead, names) -> tuple[dict, list[str]]:
     return plan, warnings
 
 
-class CAUSTIC_OT_bake(bpy.types.Operator):
+def read_for_bake(context, depsgraph=None) -> SceneRead:
+    """The scene to bake (as `depsgraph` evaluates it, if given); InputError if nothing in it casts caustics."""
+    read = read_scene(context, with_camera=False, depsgraph=depsgraph)
+    if not read.scene.casters:
+        raise InputError("Nothing to bake: no object is transparent or a reflector")
+    return read
+
+
+def map_rgba(imap) -> np.ndarray:
+    """(h,w,4) float32 of a map's irradiance, top row first (map row 0 is the chart's lowest y)."""
+    rgba = np.ones(imap.shape + (4,), dtype=np.float32)
+    rgba[..., :3] = imap.irradiance()
+    return rgba[::-1]
+
+
+def bake_maps(read: SceneRead, maps) -> tuple[list[str], list[str]]:
+    """Each bakeable receiver's map of `maps` into a packed image its
+    material shows, replacing an earlier bake: (receivers baked, warnings)."""
+    plan, warnings = bakeable(read, maps)
+    for name, material in plan.items():
+        unwire(material)
+        wire_bake(read, name, material, write_image(IMAGE_PREFIX + name, map_rgba(maps[name])), maps[name])
+    return list(plan), warnings
+
+
+def wire_bake(read: SceneRead, name: str, material, image, imap):
+    """`image` of receiver `name`'s map `imap` shown by its `material` through a new node group; returns the group."""
+    source = bpy.data.objects[read.sources[name]].data
+    uv_layer = source.uv_layers.active.name if source.uv_layers.active is not None else ""
+    receiver = next(o.material for o in read.scene.objects if o.name == name)
+    share = receiver.specular.diffuse_share if receiver.specular is not None else None
+    group = make_group(GROUP_PREFIX + name, image, imap, receiver.albedo, uv_layer, share)
+    wire(material, group, albedo_socket(material))
+    return group
+
+
+class CAUSTIC_OT_bake(EngineOperator, bpy.types.Operator):
     bl_idname = "caustic.bake"
     bl_label = "Bake Caustics"
     bl_description = ("Trace the lamp rays and store each receiver's caustic in an image its material shows "
                       "(EEVEE and the viewport then display it)")
     bl_options = {'REGISTER', 'UNDO'}
 
-    @classmethod
-    def poll(cls, context):
-        return no_render_running(cls)
-
-    def execute(self, context):
-        props = context.scene.caustic
+    def _runner(self, context) -> JobRunner | None:
         try:
-            read = read_scene(context, with_camera=False)
-            settings = render_settings(props, spp=1)
-            if not read.scene.casters:
-                raise InputError("Nothing to bake: no object is transparent or a reflector")
+            read = read_for_bake(context)
+            job = RenderJob(read.scene, render_settings(context.scene.caustic, spp=1))
         except InputError as exc:
             self.report({'ERROR'}, str(exc))
-            return {'CANCELLED'}
-        job = RenderJob(read.scene, settings)
-        job.run()
-        if job.error is not None:
-            self.report({'ERROR'}, job.error)
-            return {'CANCELLED'}
-        maps = job.result.maps
-        plan, warnings = _bakeable(read, maps)
-        for warning in read.warnings + job.result.warnings + warnings:
+            return None
+        self._read = read
+        return JobRunner([context.scene.frame_current], lambda frame: job, self._write)
+
+    def _write(self, frame: int, job: RenderJob) -> None:
+        self._baked, warnings = bake_maps(self._read, job.result.maps)
+        for warning in self._read.warnings + job.result.warnings + warnings:
             self.report({'WARNING'}, warning)
-        if not plan:
-            self.report({'ERROR'}, "No receiver's material can take a baked caustic")
+        if not self._baked:
+            raise StepError("No receiver's material can take a baked caustic")
+        record_run(bpy.context.scene.caustic, job)
+
+    def _done(self, context, runner: JobRunner) -> set:
+        if runner.cancelled:
+            self.report({'WARNING'}, "Caustic bake cancelled")
             return {'CANCELLED'}
-        for name, material in plan.items():
-            unwire(material)
-            imap = maps[name]
-            rgba = np.ones(imap.shape + (4,), dtype=np.float32)
-            rgba[..., :3] = imap.irradiance()
-            # Map row 0 is the chart's lowest y, the image's bottom row.
-            image = write_image(IMAGE_PREFIX + name, rgba[::-1])
-            source = bpy.data.objects[read.sources[name]].data
-            uv_layer = source.uv_layers.active.name if source.uv_layers.active is not None else ""
-            receiver = next(o.material for o in read.scene.objects if o.name == name)
-            share = receiver.specular.diffuse_share if receiver.specular is not None else None
-            wire(material, make_group(GROUP_PREFIX + name, image, imap, receiver.albedo, uv_layer, share),
-                 albedo_socket(material))
-        record_run(props, job)
-        self.report({'INFO'}, f"Baked caustics onto {', '.join(plan)} in {job.seconds:.1f} s")
+        if runner.error is not None:
+            self.report({'ERROR'}, runner.error)
+            return {'CANCELLED'}
+        self.report({'INFO'}, f"Baked caustics onto {', '.join(self._baked)} in {runner.last.seconds:.1f} s")
         return {'FINISHED'}
 
 
 class CAUSTIC_OT_unbake(bpy.types.Operator):
     bl_idname = "caustic.unbake"
     bl_label = "Remove Baked Caustics"
-    bl_description = "Take every baked caustic out of the materials, with its node groups and images"
+    bl_description = ("Take every baked caustic out of the materials, with its node groups and images; the files "
+                      "of an animated bake stay on disk")
     bl_options = {'REGISTER', 'UNDO'}
 
     @classmethod
@@ -101,6 +126,12 @@ class CAUSTIC_OT_unbake(bpy.types.Operator):
         return any(baked_nodes(material) for material in bpy.data.materials)
 
     def execute(self, context):
+        files = sorted({path for material in bpy.data.materials for path in files_on_disk(material)})
         removed = sum(unwire(material) for material in bpy.data.materials)
         self.report({'INFO'}, f"Removed {removed} baked caustic{'s' if removed != 1 else ''}")
+        for folder in sorted({os.path.dirname(path) for path in files}):
+            names = [os.path.basename(path) for path in files if os.path.dirname(path) == folder]
+            self.report({'INFO'}, f"The baked frames stay on disk: {len(names)} file{'s' if len(names) != 1 else ''} "
+                                  f"in '{folder}' ({names[0]}{f' to {names[-1]}' if len(names) > 1 else ''}); "
+                                  "delete them by hand if they are no longer needed")
         return {'FINISHED'}

@@ -6,7 +6,7 @@ import bpy
 
 from ..operators.paper_scene import CAUSTIC_OT_add_paper_scene
 from ..operators.presets import CAUSTIC_OT_apply_preset
-from ..operators.render import CAUSTIC_OT_render
+from ..operators.engine_run import EngineOperator
 
 
 class CAUSTIC_MT_presets(bpy.types.Menu):
@@ -34,7 +34,8 @@ class CAUSTIC_PT_render(_CausticPanel, bpy.types.Panel):
         row = layout.row(align=True)
         row.scale_y = 1.4
         row.operator("caustic.render", icon='RENDER_STILL')
-        if CAUSTIC_OT_render.running:
+        row.operator("caustic.render_animation", text="Animation", icon='RENDER_ANIMATION')
+        if EngineOperator.running:
             layout.progress(factor=props.progress, type='BAR', text=f"{props.progress:.0%}  (Esc cancels)")
         col = layout.column(align=True)
         col.label(text=f"Last render: {props.last_seconds:.1f} s")
@@ -43,7 +44,9 @@ class CAUSTIC_PT_render(_CausticPanel, bpy.types.Panel):
             col.label(text=f"  of which refinement added {props.last_refined:,}")
         row = layout.row(align=True)
         row.operator("caustic.bake", icon='TEXTURE')
+        row.operator("caustic.bake_animation", text="Animation", icon='RENDER_ANIMATION')
         row.operator("caustic.unbake", text="", icon='X')
+        layout.prop(props, "use_bake_on_render")
 
 
 class CAUSTIC_PT_photons(_CausticPanel, bpy.types.Panel):

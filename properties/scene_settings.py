@@ -85,6 +85,13 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
         description="Uniform ambient radiance (W/m^2/sr) a surface reflects times its colour",
         subtype='COLOR', size=3, default=(0.0, 0.0, 0.0), min=0.0, soft_max=1.0)
 
+    use_bake_on_render: BoolProperty(
+        name="Bake While Rendering",
+        description="Bake each frame's caustics into the receivers' materials just before Blender renders it, "
+                    "so EEVEE and Cycles renders (F12, animations) show the current frame's caustic. Works in "
+                    "command-line renders (blender -b); a render started from the interface uses the last bake",
+        default=False)
+
     cycles_samples: IntProperty(
         name="Cycles Samples",
         description="Samples per pixel of the Cycles reference render",

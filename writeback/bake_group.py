@@ -11,29 +11,34 @@ takes out exactly what `wire` put in."""
 from __future__ import annotations
 
 import math
+import re
 
 import bpy
 import numpy as np
 from mathutils import Matrix
 
 from ..caustic_addon import ImageFrame
+from ..export.materials import BAKE_TAG as TAG
+from .box_chart_nodes import box_chart_vector
 
 NODE_NAME = "Caustic Bake"
-# Custom property marking the node groups a bake made.
-TAG = "caustic_bake"
 # A Color Ramp's most elements.
 SHARE_STOPS = 32
 
 
 def _chart_coordinates(nodes, links, frame: ImageFrame, uv_layer: str):
     """A Mapping node that turns the shading point into the [0,1]^2
-    coordinates of the image that `frame` places: from the world position
-    or from the UV map `uv_layer`, as the frame says."""
+    coordinates of the image that `frame` places: from the world position,
+    from the UV map `uv_layer`, or from the box chart the engine made for a
+    curved receiver without one, as the frame says."""
     mapping = nodes.new('ShaderNodeMapping')
     mapping.vector_type = 'TEXTURE'
     if frame.coordinates == 'POSITION':
         source = nodes.new('ShaderNodeNewGeometry')
         links.new(source.outputs['Position'], mapping.inputs['Vector'])
+    elif frame.coordinates == 'BOX':
+        source, chart = box_chart_vector(nodes, links, frame)
+        links.new(chart, mapping.inputs['Vector'])
     else:
         source = nodes.new('ShaderNodeUVMap')
         source.uv_map = uv_layer
@@ -108,9 +113,39 @@ def make_group(name: str, image, imap, albedo: np.ndarray, uv_layer: str, share=
     return group
 
 
+def _texture_node(group):
+    """The Image Texture node of a bake's node group."""
+    return next(node for node in group.nodes if node.bl_idname == 'ShaderNodeTexImage')
+
+
 def _group_image(group):
     """The map image a bake's node group shows."""
-    return next(node.image for node in group.nodes if node.bl_idname == 'ShaderNodeTexImage')
+    return _texture_node(group).image
+
+
+def follow_frames(group, first: int, count: int) -> None:
+    """Make the group's image, a sequence of `count` files numbered by
+    frame from `first`, show the file of the current frame: Blender reads
+    file number (frame - frame_start + 1 + frame_offset), held at the ends."""
+    user = _texture_node(group).image_user
+    user.frame_start, user.frame_offset, user.frame_duration = first, first - 1, count
+    user.use_cyclic, user.use_auto_refresh = False, True
+
+
+def files_on_disk(material) -> list[str]:
+    """The files (absolute) of the image sequences that the material's baked
+    nodes show: the first file's number, the last digits of its name, counted
+    on by the sequence's length with the same padding."""
+    files = []
+    for node in baked_nodes(material):
+        texture = _texture_node(node.node_tree)
+        if texture.image is None or texture.image.source != 'SEQUENCE':
+            continue
+        head, digits, tail = re.match(r"(.*?)(\d+)(\D*)$", bpy.path.abspath(texture.image.filepath)).groups()
+        user = texture.image_user
+        files += [f"{head}{number:0{len(digits)}d}{tail}"
+                  for number in range(int(digits), int(digits) + user.frame_duration)]
+    return files
 
 
 def material_output(material):

@@ -7,6 +7,8 @@ import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
+# RenderResult.passes by the names Blender shows: images "<render> <pass>" and multilayer EXR passes
+PASS_NAMES = {"direct": "Direct", "caustic": "Caustic", "ambient": "Ambient"}
 # ID property: which write an image's packed EXR holds
 SERIAL = "caustic_pixels"
 # image name -> the write whose pixels are in that image's buffer
@@ -41,6 +43,14 @@ def write_image(name: str, rgba: np.ndarray):
     image.pack()
     image[SERIAL] = _in_memory[image.name] = uuid.uuid4().hex
     return image
+
+
+def write_passes(prefix: str, passes: dict[str, np.ndarray]) -> None:
+    """Each of `passes` (name -> (h,w,3) linear RGB) into the image "`prefix` <pass>", alpha 1."""
+    for name, rgb in passes.items():
+        rgba = np.ones(rgb.shape[:2] + (4,), dtype=np.float32)
+        rgba[..., :3] = rgb
+        write_image(f"{prefix} {PASS_NAMES[name]}", rgba)
 
 
 @persistent

@@ -11,7 +11,8 @@ IEC 61966-2-1, clipped to [0, 1]; alpha is stored linearly.
 
 OpenEXR: "The OpenEXR File Layout" (openexr.com): a single-part scanline
 file, uncompressed, one scanline per block, FLOAT channels stored in
-alphabetical order (A, B, G, R).
+alphabetical order (A, B, G, R); any named channels, for Blender's
+multilayer files.
 """
 
 from __future__ import annotations
@@ -26,7 +27,6 @@ _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _EXR_MAGIC = 20000630
 _EXR_FLOAT = 2
 _EXR_DTYPES = {1: "<f2", 2: "<f4"}  # pixel type HALF, FLOAT
-_EXR_CHANNELS = "ABGR"  # alphabetical, as the layout requires
 
 
 class ImageFormatError(ValueError):
@@ -87,12 +87,20 @@ def read_png(path) -> np.ndarray:
 
 def write_exr(path, rgba: np.ndarray) -> None:
     """Uncompressed float32 RGBA OpenEXR of linear `rgba (h,w,4)`."""
-    h, w = rgba.shape[:2]
-    channels = b"".join(name.encode() + b"\0" + struct.pack("<iB3xii", _EXR_FLOAT, 0, 1, 1)
-                        for name in _EXR_CHANNELS) + b"\0"
+    write_exr_channels(path, {name: rgba[..., "RGBA".index(name)] for name in "RGBA"})
+
+
+def write_exr_channels(path, channels: dict[str, np.ndarray]) -> None:
+    """Uncompressed float32 OpenEXR of named `channels`, each (h,w) with row
+    0 at the top. Names with dots are Blender's multilayer convention,
+    "<layer>.<pass>.<channel>" (e.g. "ViewLayer.Combined.R")."""
+    names = sorted(channels)  # the layout stores channels in alphabetical order
+    h, w = np.shape(channels[names[0]])
+    chlist = b"".join(name.encode() + b"\0" + struct.pack("<iB3xii", _EXR_FLOAT, 0, 1, 1)
+                      for name in names) + b"\0"
     window = struct.pack("<iiii", 0, 0, w - 1, h - 1)
     header = b"".join([
-        _exr_attribute("channels", "chlist", channels),
+        _exr_attribute("channels", "chlist", chlist),
         _exr_attribute("compression", "compression", b"\0"),
         _exr_attribute("dataWindow", "box2i", window),
         _exr_attribute("displayWindow", "box2i", window),
@@ -102,12 +110,11 @@ def write_exr(path, rgba: np.ndarray) -> None:
         _exr_attribute("screenWindowWidth", "float", struct.pack("<f", 1.0)),
     ]) + b"\0"
     # one block per scanline: y, byte count, then each channel's w values
-    block = np.dtype([("y", "<i4"), ("size", "<i4"), ("pixels", "<f4", (4, w))])
+    block = np.dtype([("y", "<i4"), ("size", "<i4"), ("pixels", "<f4", (len(names), w))])
     blocks = np.zeros(h, dtype=block)
     blocks["y"] = np.arange(h)
-    blocks["size"] = 4 * 4 * w
-    order = ["RGBA".index(name) for name in _EXR_CHANNELS]
-    blocks["pixels"] = np.asarray(rgba, dtype=np.float32)[..., order].transpose(0, 2, 1)
+    blocks["size"] = 4 * len(names) * w
+    blocks["pixels"] = np.stack([np.asarray(channels[name], dtype=np.float32) for name in names], axis=1)
     start = 8 + len(header) + 8 * h
     offsets = start + block.itemsize * np.arange(h, dtype="<u8")
     with open(path, "wb") as out:

@@ -69,6 +69,10 @@ class MapCache:
                 return self._entries[key]
             return None
 
+    def clear(self) -> None:
+        with self._lock:
+            self._entries.clear()
+
     def put(self, key: str, value) -> None:
         with self._lock:
             self._entries[key] = value

@@ -1,4 +1,5 @@
-"""A receiver's 2D parameterisation in metres: its plane when it is flat, else its UV map."""
+"""A receiver's 2D parameterisation in metres: its plane when it is flat,
+else its UV map, else a box projection (box_chart.py)."""
 
 from __future__ import annotations
 
@@ -9,9 +10,11 @@ from typing import Literal, Optional
 import numpy as np
 
 from ..sampling.warps import orthonormal_basis
-from ..scene import Object
-from ..tracing.topology import triangle_normals
+from ..scene import Mesh
+from ..tracing.topology import mesh_pieces
+from ..util.rows import row_ids
 from ..util.vectors import DIVISION_FLOOR
+from .raster import rasterise_triangles
 
 
 @dataclass
@@ -21,17 +24,21 @@ class ImageFrame:
     R^T (p - location) / scale is the image's [0,1]^2 coordinate:
 
     coordinates  'POSITION': p is the world position (a flat receiver);
-                 'UV': p is the receiver's UV coordinate (z = 0)
+                 'UV': p is the receiver's UV coordinate (z = 0);
+                 'BOX': p is the box chart's coordinate (z = 0), which
+                 `islands` give from the world position and true normal
     location     (3,) p at the image's first corner (its first row's start)
     rotation     (3,3) world axes of the image's x and y and of the
                  receiver's normal, as columns; the identity for 'UV'
     scale        (3,) the image's width and height in p's units, and 1
+    islands      the box chart's islands (box_chart.BoxIsland), else empty
     """
 
-    coordinates: Literal["POSITION", "UV"]
+    coordinates: Literal["POSITION", "UV", "BOX"]
     location: np.ndarray
     rotation: np.ndarray
     scale: np.ndarray
+    islands: tuple = ()
 
 
 class Chart:
@@ -55,6 +62,26 @@ class Chart:
 
     def area_scale(self, prim: np.ndarray) -> np.ndarray:
         """(n,) chart area per world area at triangle `prim`."""
+        raise NotImplementedError
+
+    def coverage(self, origin: np.ndarray, cell: float, shape: tuple[int, int]) -> Optional[np.ndarray]:
+        """(h,w) the share of each cell of a grid of `shape`, edge `cell`
+        m, first corner at chart `origin (2,)`, that the receiver covers
+        (None: all of it); a density estimate divides by the area covered."""
+        return None
+
+    def islands_of(self, prim: np.ndarray) -> np.ndarray:
+        """(n,) the island of the chart that triangle `prim` lies in: a
+        beam whose corners land on different islands has no shape in it,
+        unless the chart can `project` it into each."""
+        return np.zeros(len(prim), dtype=np.int64)
+
+    # Whether `project` places any world point in any island's coordinates.
+    projects = False
+
+    def project(self, island: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """(n,k,2) chart metres of world `points (n,k,3)` in the coordinates
+        of island `island (n,)` (only where `projects`)."""
         raise NotImplementedError
 
 
@@ -119,10 +146,11 @@ class PlaneChart(Chart):
 
 class UVChart(Chart):
     """A curved receiver, through its UV map scaled to metres: one UV unit is
-    `metres_per_uv` metres, chosen so that chart and world areas agree in total."""
+    `metres_per_uv` metres, chosen so that chart and world areas agree in
+    total. Its islands are the pieces the UV map keeps joined."""
 
-    def __init__(self, corner_uvs: np.ndarray, world_areas: np.ndarray):
-        self.corner_uvs = corner_uvs
+    def __init__(self, mesh: Mesh, world_areas: np.ndarray):
+        corner_uvs = self.corner_uvs = mesh.corner_uvs
         e1, e2 = corner_uvs[:, 1] - corner_uvs[:, 0], corner_uvs[:, 2] - corner_uvs[:, 0]
         uv_areas = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
         self.metres_per_uv = math.sqrt(world_areas.sum() / max(uv_areas.sum(), DIVISION_FLOOR))
@@ -131,6 +159,9 @@ class UVChart(Chart):
         self._area_scale = np.where(np.isfinite(scale), scale, 0.0)
         flat = corner_uvs.reshape(-1, 2) * self.metres_per_uv
         self.origin, self.size = flat.min(axis=0), np.ptp(flat, axis=0)
+        weld = row_ids(np.round(mesh.vertices, 9))[mesh.triangles].reshape(-1, 1)
+        keys = row_ids(np.concatenate([weld, np.round(corner_uvs.reshape(-1, 2) * (1 << 20))], axis=1))
+        self._islands = mesh_pieces(mesh.triangles, keys.reshape(-1, 3), np.zeros(len(weld) // 3, dtype=np.int64))
 
     def coords(self, prim, u, v, points):
         c = self.corner_uvs[prim]
@@ -140,25 +171,19 @@ class UVChart(Chart):
     def area_scale(self, prim):
         return self._area_scale[prim]
 
+    def islands_of(self, prim):
+        return self._islands[prim]
+
+    def coverage(self, origin, cell, shape):
+        return covered_share(self.corner_uvs * self.metres_per_uv, origin, cell, shape)
+
     def image_frame(self, corner, extent):
         return ImageFrame("UV", np.array([corner[0], corner[1], 0.0]) / self.metres_per_uv, np.eye(3),
                           np.array([extent[0] / self.metres_per_uv, extent[1] / self.metres_per_uv, 1.0]))
 
 
-def make_chart(obj: Object, planarity_tolerance: float = 1e-6) -> Optional[Chart]:
-    """The chart of a receiver: its plane if it is flat, else its UV map; None
-    if it is curved and has no UVs."""
-    mesh = obj.mesh
-    normals, areas = triangle_normals(mesh.corners)
-    if areas.sum() <= 0:
-        return None
-    normal = (normals * areas[:, None]).sum(axis=0)
-    if np.linalg.norm(normal) > 0:
-        normal /= np.linalg.norm(normal)
-        center = mesh.vertices.mean(axis=0)
-        size = np.ptp(mesh.vertices, axis=0).max()
-        if np.abs((mesh.vertices - center) @ normal).max() <= planarity_tolerance * max(size, DIVISION_FLOOR):
-            return PlaneChart(center, normal, mesh.vertices)
-    if mesh.corner_uvs is not None:
-        return UVChart(mesh.corner_uvs, areas)
-    return None
+def covered_share(triangles: np.ndarray, origin: np.ndarray, cell: float, shape: tuple[int, int]) -> np.ndarray:
+    """(h,w) the share of each cell (edge `cell`, from `origin (2,)`) that
+    chart triangles `triangles (n,3,2)` cover, exact, at most 1."""
+    covered = rasterise_triangles(shape, (triangles - origin) / cell, np.ones((len(triangles), 1)))[0]
+    return np.clip(covered, 0.0, 1.0)

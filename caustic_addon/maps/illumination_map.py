@@ -13,7 +13,10 @@ The adaptive estimate needs no map scale: at each look-up it grows a square
 window of cells until it holds k photons, up to 16 cells from the centre, and
 divides their flux by the window's area (k-nearest-neighbour density
 estimation with a bounded radius, Silverman 1986 and Jensen 2001, on the
-map's grid). Window sums come from summed-area tables, four reads per window.
+map's grid), the area the receiver covers in it where a chart has gaps (a
+UV map's or a box chart's islands: a window half over a gap would halve the
+light at the island's edge). Window sums come from summed-area tables, four
+reads per window.
 """
 
 from __future__ import annotations
@@ -67,6 +70,10 @@ class IlluminationMap:
         self._pending: list[tuple[np.ndarray, np.ndarray]] = []
         self._pending_count = 0
         self._tables = None
+        # summed-area table of the share of each cell the receiver covers,
+        # made at the first adaptive read; None: every cell is covered
+        self._covered = None
+        self._covered_ready = False
         self._lock = threading.Lock()
 
     def _cell_coords(self, xy: np.ndarray) -> np.ndarray:
@@ -104,10 +111,14 @@ class IlluminationMap:
         adaptive estimate."""
         with self._lock:
             self._flush()
+            adaptive = self.estimate.k_nearest is not None
             if self._tables is None:
-                adaptive = self.estimate.k_nearest is not None
                 self._tables = (summed_area_table(self._cells[0])[None] if adaptive else None,
                                 channel_tables(self._cells[1:]))
+            if adaptive and not self._covered_ready:
+                share = self.chart.coverage(self.chart.origin, self.cell, self.shape)
+                self._covered = None if share is None else summed_area_table(share)[None]
+                self._covered_ready = True
 
     def _flush(self) -> None:
         """Splat the pending photons (the paper's figure 2)."""
@@ -178,9 +189,13 @@ class IlluminationMap:
             active = lo < hi
         radius = np.maximum(_WINDOW_RADII[lo], min_radius)
         flux = box_sums(flux_table, i, j, radius)
-        rows = np.minimum(i + radius + 1, h) - np.maximum(i - radius, 0)
-        cols = np.minimum(j + radius + 1, w) - np.maximum(j - radius, 0)
-        return as_rgb(flux) / (rows * cols * self.cell ** 2)[:, None]
+        if self._covered is None:
+            cells = (np.minimum(i + radius + 1, h) - np.maximum(i - radius, 0)) * (
+                np.minimum(j + radius + 1, w) - np.maximum(j - radius, 0))
+        else:
+            cells = box_sums(self._covered, i, j, radius)[:, 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(cells[:, None] > 0, as_rgb(flux) / (cells * self.cell ** 2)[:, None], 0.0)
 
 
 def auto_cell_size(chart: Chart, limit: int) -> float:

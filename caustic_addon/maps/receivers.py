@@ -3,31 +3,81 @@ from the map scale or from the receiver."""
 
 from __future__ import annotations
 
-from ..scene import RenderSettings, Scene
+from typing import Optional
+
+import numpy as np
+
+from ..scene import Object, RenderSettings, Scene
+from ..tracing.topology import triangle_normals
+from ..util.vectors import DIVISION_FLOOR
 from .beam_map import BeamMap
-from .charts import make_chart
+from .box_chart import BoxChart
+from .charts import Chart, PlaneChart, UVChart
 from .illumination_map import IlluminationMap, MapEstimate, auto_cell_size
+
+
+# Cells between a box chart's islands: beyond the adaptive estimate's
+# widest window (16 cells) and a bilinear cell, so that no estimate borrows
+# light from another part of the receiver, and room for the beams across a
+# seam that the beam pass copies into both islands (passes/beam.py): the
+# longer ones, glancing, fall back to photons, which show the seam.
+GUTTER_CELLS = 40
 
 
 def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str]) -> dict[int, IlluminationMap]:
     """Receiver object index -> its empty map; a warning for each receiver
-    that gets none, or a coarser cell than the map scale asks for."""
+    that gets none, a coarser cell than the map scale asks for, or an
+    automatic chart whose parts overlap."""
     estimate = MapEstimate(settings.k_nearest if settings.density in ("adaptive", "beam") else None)
-    limit = settings.map_resolution_limit
     maps = {}
     for index, obj in enumerate(scene.objects):
         if not obj.is_receiver:
             continue
         chart = make_chart(obj)
         if chart is None:
-            warnings.append(f"'{obj.name}' is curved and has no UV map: it receives no caustics")
+            warnings.append(f"'{obj.name}' has no area: it receives no caustics")
             continue
-        cell = auto_cell_size(chart, limit) if settings.map_scale is None else settings.map_scale / 1000.0
-        if chart.size.max() / cell > limit:
-            coarser = auto_cell_size(chart, limit)
-            warnings.append(f"'{obj.name}': a map scale of {cell * 1000:.4g} mm needs more than {limit} cells "
-                            f"across; using {coarser * 1000:.4g} mm")
-            cell = coarser
+        if isinstance(chart, BoxChart):
+            if chart.overlaps:
+                warnings.append(f"'{obj.name}' has no UV map, and in its automatic chart parts facing "
+                                f"{', '.join(chart.overlaps)} overlap: their caustics mix there; a UV map "
+                                "would keep them apart")
+            # the gutter grows the chart, and with it an automatic cell
+            for _ in range(3):
+                chart.lay_out(GUTTER_CELLS * _cell_size(obj.name, chart, settings, []))
+        cell = _cell_size(obj.name, chart, settings, warnings)
         maps[index] = (BeamMap(obj.name, chart, cell, estimate, threads=settings.threads)
                        if settings.density == "beam" else IlluminationMap(obj.name, chart, cell, estimate))
     return maps
+
+
+def _cell_size(name: str, chart: Chart, settings: RenderSettings, warnings: list[str]) -> float:
+    """The map cell (m): the map scale, or automatic, and no finer than the
+    resolution limit allows, with a warning if that coarsens the map scale."""
+    limit = settings.map_resolution_limit
+    cell = auto_cell_size(chart, limit) if settings.map_scale is None else settings.map_scale / 1000.0
+    if chart.size.max() / cell > limit:
+        coarser = auto_cell_size(chart, limit)
+        warnings.append(f"'{name}': a map scale of {cell * 1000:.4g} mm needs more than {limit} cells "
+                        f"across; using {coarser * 1000:.4g} mm")
+        cell = coarser
+    return cell
+
+
+def make_chart(obj: Object, planarity_tolerance: float = 1e-6) -> Optional[Chart]:
+    """The chart of a receiver: its plane if it is flat, else its UV map,
+    else its box projection; None if it has no area."""
+    mesh = obj.mesh
+    normals, areas = triangle_normals(mesh.corners)
+    if areas.sum() <= 0:
+        return None
+    normal = (normals * areas[:, None]).sum(axis=0)
+    if np.linalg.norm(normal) > 0:
+        normal /= np.linalg.norm(normal)
+        center = mesh.vertices.mean(axis=0)
+        size = np.ptp(mesh.vertices, axis=0).max()
+        if np.abs((mesh.vertices - center) @ normal).max() <= planarity_tolerance * max(size, DIVISION_FLOOR):
+            return PlaneChart(center, normal, mesh.vertices)
+    if mesh.corner_uvs is not None:
+        return UVChart(mesh, areas)
+    return BoxChart(mesh)

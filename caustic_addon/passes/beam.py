@@ -39,6 +39,7 @@ from ..emission.photons import make_emitters
 from ..emission.world_sun import extract_sun
 from ..maps.deposits import Deposits
 from ..maps.illumination_map import IlluminationMap
+from ..maps.receivers import GUTTER_CELLS
 from ..maps.raster import signed_areas
 from ..scene import RenderSettings, Scene
 from ..scene.material_table import Materials
@@ -46,7 +47,7 @@ from ..tracing.accelerator import Accelerator
 from ..tracing.hits import MISS, Hits
 from ..util.parallel import Monitor, run_chunks
 from ..util.rows import row_ids, take_rows
-from ..util.vectors import DIVISION_FLOOR, max_channel
+from ..util.vectors import DIVISION_FLOOR, cross_rows, length, max_channel
 from .bounce import Interface, on_maps, split, trace
 from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
 from .paths import MIN_BRANCH_WEIGHT, Paths, relative_floor
@@ -60,6 +61,15 @@ REFINE_RATIO = 8.0
 REFINE_THROUGHPUT = 0.2
 # Beams smaller than this fraction of the chart's area squared fall back to photons.
 _MIN_AREA_FRACTION = 1e-16
+# A beam whose corners span a world triangle more than this many times the
+# area its chart triangle stands for crosses a gap in its chart island (a
+# bowl's bottom to its rim, over the wall, which lies in other islands): it
+# falls back to photons.
+_MAX_STRETCH = 1.5
+# A beam across a box chart's seam is copied into each island when it is
+# shorter than the gutter between islands less this many cells (a bilinear
+# look-up's reach, and rounding).
+SEAM_MARGIN_CELLS = 2
 
 
 @dataclass
@@ -67,14 +77,17 @@ class Landings:
     """Where a band's vertex paths landed on receivers.
 
     vertex (n,) the path's grid key, family (n,) uint64 signature,
-    obj (n,) receiver object index, xy (n,2) chart metres, scale (n,) chart
-    area per world area, weight (n,3) the path's starting weight times its
-    Fresnel, tint and absorption factors, throughput (n,) that product of
-    factors (max channel)."""
+    obj (n,) receiver object index, island (n,) of its chart, points (n,3)
+    world, xy (n,2) chart metres, scale (n,) chart area per world area,
+    weight (n,3) the path's starting weight times its Fresnel, tint and
+    absorption factors, throughput (n,) that product of factors (max
+    channel)."""
 
     vertex: np.ndarray
     family: np.ndarray
     obj: np.ndarray
+    island: np.ndarray
+    points: np.ndarray
     xy: np.ndarray
     scale: np.ndarray
     weight: np.ndarray
@@ -85,9 +98,11 @@ class Landings:
         if not parts:
             empty = np.zeros(0)
             return Landings(empty.astype(np.int64), empty.astype(np.uint64), empty.astype(np.int64),
-                            np.zeros((0, 2)), empty, np.zeros((0, 3)), empty)
+                            empty.astype(np.int64), np.zeros((0, 3)), np.zeros((0, 2)), empty, np.zeros((0, 3)),
+                            empty)
         return Landings(*(np.concatenate([getattr(p, f) for p in parts])
-                          for f in ("vertex", "family", "obj", "xy", "scale", "weight", "throughput")))
+                          for f in ("vertex", "family", "obj", "island", "points", "xy", "scale", "weight",
+                                    "throughput")))
 
 
 class BeamTracer:
@@ -103,12 +118,13 @@ class BeamTracer:
         pass
 
     def arrived(self, paths: Paths, hits: Hits) -> None:
-        for obj, rows, xy, scale in on_maps(self.accel, self.maps, paths, hits):
+        for obj, rows, xy, scale, island in on_maps(self.accel, self.maps, paths, hits):
             weight, floor = np.take(paths.weight, rows, axis=0), np.take(paths.floor, rows)
             with np.errstate(divide="ignore", invalid="ignore"):
                 throughput = np.where(floor > 0, max_channel(weight) * MIN_BRANCH_WEIGHT / floor, 0.0)
             self.landed.append(Landings(np.take(paths.ids, rows), np.take(paths.family, rows),
-                                        np.full(len(rows), obj), xy, scale, weight, throughput))
+                                        np.full(len(rows), obj), island, np.take(hits.points, rows, axis=0), xy,
+                                        scale, weight, throughput))
 
     def scattered(self, paths: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
         return split(self.accel, self.materials, paths, hits, surface)
@@ -133,12 +149,18 @@ class _Lookup:
     """Landings indexed by grid vertex and by family group.
 
     Vertices are keys on a grid 2^levels times finer than the source's,
-    key = row * width + col; a group is one (family, receiver), and a pair
-    (element, group) is numbered element * stride + group."""
+    key = row * width + col; a group is one (family, receiver, island of
+    its chart, unless the chart `projects` beams into any island), and a
+    pair (element, group) is numbered element * stride + group."""
 
-    def __init__(self, landings: Landings, keys: int):
+    def __init__(self, landings: Landings, keys: int, maps: dict[int, IlluminationMap]):
         self.landings, self.keys = landings, keys
-        self.group = row_ids(np.stack([landings.family, landings.obj.astype(np.uint64)], axis=1))
+        projects = np.zeros(max(maps, default=-1) + 1, dtype=bool)
+        for index, imap in maps.items():
+            projects[index] = imap.chart.projects
+        piece = np.where(projects[landings.obj], 0, landings.island)
+        self.group = row_ids(np.stack([landings.family, landings.obj.astype(np.uint64),
+                                       piece.astype(np.uint64)], axis=1))
         self.stride = max(int(self.group.max(initial=-1)) + 1, 1)
         combo = self.group * keys + landings.vertex
         self._combo_order = np.argsort(combo)
@@ -235,7 +257,10 @@ def _diverging(lookup: _Lookup, cells: _Cells, width: int) -> np.ndarray:
     a, b = (signed_areas(np.stack([lookup.landings.xy[lookup.find(group, tri[:, k])] for k in range(3)], axis=1))
             for tri in (first, second))
     small, large = np.minimum(np.abs(a), np.abs(b)), np.maximum(np.abs(a), np.abs(b))
-    split[cell[(a * b <= 0.0) | (large > REFINE_RATIO * small)]] = True
+    # across a box chart's seam chart areas do not compare
+    island = np.stack([lookup.landings.island[lookup.find(group, corners[cell, k])] for k in range(4)], axis=1)
+    seam = (island != island[:, :1]).any(axis=1)
+    split[cell[~seam & ((a * b <= 0.0) | (large > REFINE_RATIO * small))]] = True
     return split
 
 
@@ -273,7 +298,7 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
     owned = on_grid - (grid * len(sources) if end_row < grid else 0)
     landings = trace_vertices(traced)
     for _ in range(levels):
-        diverge = _diverging(_Lookup(landings, keys * len(sources)), cells, width) & (cells.size > 1)
+        diverge = _diverging(_Lookup(landings, keys * len(sources), maps), cells, width) & (cells.size > 1)
         if not diverge.any():
             break
         cells = cells.split(diverge)
@@ -286,7 +311,7 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
     landings = Landings.concat([landings, trace_vertices(centres)])
     cell_measure = np.array([source.cell_measure for source in sources])
     measure = cell_measure[triangles[:, 0] // keys] * area / scale ** 2
-    deposits, beams, flux_landed = _beams_and_photons(_Lookup(landings, keys * len(sources)), triangles, measure,
+    deposits, beams, flux_landed = _beams_and_photons(_Lookup(landings, keys * len(sources), maps), triangles, measure,
                                                       maps)
     refined = len(traced) + len(centres) - on_grid
     return JobResult(deposits, LampPassStats(owned + refined, refined, beams, flux_landed))
@@ -354,15 +379,22 @@ def _beams_and_photons(lookup: _Lookup, triangles: np.ndarray, measure: np.ndarr
     chart_area = np.zeros(max(maps, default=-1) + 1)
     for index, imap in maps.items():
         chart_area[index] = np.prod(np.maximum(imap.chart.size, DIVISION_FLOOR))
-    good = area > _MIN_AREA_FRACTION * chart_area[obj]
+    scale = land.scale[idx]
+    mean_scale = (scale[:, 0] + scale[:, 1] + scale[:, 2]) / 3.0
+    world = np.take(land.points, idx, axis=0)
+    world_area = 0.5 * length(cross_rows(world[:, 1] - world[:, 0], world[:, 2] - world[:, 0]))
+    good = (area > _MIN_AREA_FRACTION * chart_area[obj]) & (world_area * mean_scale <= _MAX_STRETCH * area)
     with np.errstate(divide="ignore", invalid="ignore"):
-        scale = land.scale[idx]
-        irradiance = flux * ((scale[:, 0] + scale[:, 1] + scale[:, 2]) / (3.0 * area))[:, None]
+        irradiance = flux * (mean_scale / area)[:, None]
+    island = land.island[idx]
+    copies = _seam_copies(island, world, world_area, obj, maps)
+    copied = copies[:, 0]
+    good &= (island[:, 0] == island[:, 1]) & (island[:, 0] == island[:, 2])
 
     # fallback: each landed corner of an incoherent or degenerate triangle
     # carries a third of that triangle's flux
     pair = element * lookup.stride + group
-    degenerate = tri[~good] * lookup.stride + tri_group[~good]
+    degenerate = tri[~good & ~copied] * lookup.stride + tri_group[~good & ~copied]
     loose = (count < 3) | np.isin(pair, degenerate)
     share = np.bincount(landing[loose], weights=measure[element[loose]] / 3.0, minlength=len(land.vertex))
     holders = np.flatnonzero(share > 0)
@@ -371,12 +403,43 @@ def _beams_and_photons(lookup: _Lookup, triangles: np.ndarray, measure: np.ndarr
     deposits = Deposits()
     for o in np.unique(obj[good]):
         deposits.add_beams(int(o), *take_rows(good & (obj == o), xy, irradiance))
+    for k in range(3):
+        rows = np.flatnonzero(copies[:, k])
+        for o in np.unique(obj[rows]):
+            mine = rows[obj[rows] == o]
+            corners = maps[int(o)].chart.project(island[mine, k], np.take(world, mine, axis=0))
+            deposits.add_beams(int(o), corners, np.take(flux, mine, axis=0) / world_area[mine, None])
+    good |= copied
     for o in np.unique(land.obj[holders]):
         sel = np.flatnonzero(land.obj[holders] == o)
         at = np.take(holders, sel)
         deposits.add_photons(int(o), np.take(land.xy, at, axis=0), np.take(photon_flux, sel, axis=0),
                              np.take(land.scale, at))
     return deposits, int(good.sum()), flux[good].sum(axis=0) + photon_flux.sum(axis=0)
+
+
+def _seam_copies(island: np.ndarray, world: np.ndarray, world_area: np.ndarray, obj: np.ndarray,
+                 maps: dict[int, IlluminationMap]) -> np.ndarray:
+    """(m,3) bool: for beams whose corners landed on different islands of
+    a chart that `projects` (`island (m,3)`, world corners `world
+    (m,3,3)`), the corners whose island gets a copy of the whole beam, one
+    per island, projected into it, of irradiance flux / world area: the
+    beam's light reaches across the seam on both sides (the part past an
+    island's edge falls in its gutter, unseen), where photons would leave a
+    line. Only beams shorter than the gutter, less SEAM_MARGIN_CELLS, so no
+    copy reaches another island, and of positive area. Over a crease (a
+    rim's edge) both sides get the beam's mean irradiance, a strip one beam
+    wide: still closer than photons (measured on a bowl's rim)."""
+    reach = np.zeros(len(obj))
+    for index, imap in maps.items():
+        reach[obj == index] = (GUTTER_CELLS - SEAM_MARGIN_CELLS) * imap.cell if imap.chart.projects else 0.0
+    edges = np.maximum(np.maximum(length(world[:, 1] - world[:, 0]), length(world[:, 2] - world[:, 1])),
+                       length(world[:, 0] - world[:, 2]))
+    mixed = (island[:, 0] != island[:, 1]) | (island[:, 0] != island[:, 2])
+    mixed &= (edges < reach) & (world_area > 0.0)
+    first = np.stack([np.ones(len(obj), dtype=bool), island[:, 1] != island[:, 0],
+                      (island[:, 2] != island[:, 0]) & (island[:, 2] != island[:, 1])], axis=1)
+    return first & mixed[:, None]
 
 
 def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials, maps: dict,

@@ -125,7 +125,7 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
         kind = None if paths.kind is None else np.where(crossed, REFRACTED, REFLECTED).astype(np.int8)
         branch = Paths(accel.offset(surface.points, surface.facing, dirs), dirs, weight,
                        crossed_medium(surface, crossed, hits.obj, paths.medium), paths.ids, paths.floor,
-                       np.ones(len(paths), dtype=bool), paths.band, family, kind)
+                       np.ones(len(paths), dtype=bool), paths.band, family, kind, hits.prim)
         exists = mirror | materials.dielectric[hits.obj]
         branches.append(branch.select(exists & (max_channel(weight) >= paths.floor)))
     return Paths.concat(branches)
@@ -157,7 +157,7 @@ def trace(accel: Accelerator, materials: Materials, paths: Paths, max_depth: int
     for depth in range(max_depth + 1):
         if len(paths) == 0:
             return
-        hits = accel.intersect(paths.origins, paths.dirs, paths.medium, paths.kind)
+        hits = accel.intersect(paths.origins, paths.dirs, paths.medium, paths.kind, paths.surface)
         tracer.escaped(paths.select(~hits.hit))
         paths, hits = paths.select(hits.hit), hits.select(hits.hit)
         inside = paths.medium != MISS
@@ -177,11 +177,11 @@ def on_maps(accel: Accelerator, maps: dict, paths: Paths, hits: Hits):
     """Where the paths that have met a specular surface land on a
     receiver's map (`maps`: object index -> IlluminationMap), one receiver
     at a time: (object index, rows (k,) of `paths`, xy (k,2) chart metres,
-    scale (k,) chart area per world area)."""
+    scale (k,) chart area per world area, island (k,) of the chart)."""
     land = np.flatnonzero(paths.specular & np.isin(hits.obj, list(maps)))
     for index in np.unique(hits.obj[land]):
         rows = land[hits.obj[land] == index]
         local = np.take(hits.prim, rows) - accel.prim_offset[index]
         chart = maps[index].chart
         xy = chart.coords(local, np.take(hits.u, rows), np.take(hits.v, rows), np.take(hits.points, rows, axis=0))
-        yield int(index), rows, xy, chart.area_scale(local)
+        yield int(index), rows, xy, chart.area_scale(local), chart.islands_of(local)

@@ -9,6 +9,7 @@ from typing import Optional
 import numpy as np
 
 from ..tracing.accelerator import CAMERA
+from ..tracing.hits import MISS
 from ..util.rows import take_rows
 from ..util.vectors import max_channel
 
@@ -36,6 +37,9 @@ class Paths:
     kind      (n,) int8 the kind of ray for the objects' ray visibility
               (tracing.accelerator CAMERA, REFLECTED, REFRACTED), or None:
               the ray sees every object (the pass from the lamps)
+    surface   (n,) int64 the triangle the path last scattered at, MISS
+              until it first does (where surfaces touch, the next one it
+              meets may lie at that very point: tracing/contact.py)
     """
 
     origins: np.ndarray
@@ -48,6 +52,7 @@ class Paths:
     band: Optional[np.ndarray] = None
     family: Optional[np.ndarray] = None
     kind: Optional[np.ndarray] = None
+    surface: Optional[np.ndarray] = None
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -61,7 +66,7 @@ class Paths:
         n = len(ids)
         return Paths(origins, dirs, weight, np.full(n, medium, dtype=np.int64), ids, floor,
                      np.zeros(n, dtype=bool), band, np.zeros(n, dtype=np.uint64) if family else None,
-                     np.full(n, CAMERA, dtype=np.int8) if camera else None)
+                     np.full(n, CAMERA, dtype=np.int8) if camera else None, np.full(n, MISS, dtype=np.int64))
 
     def _columns(self) -> list[str]:
         return [f.name for f in fields(self) if getattr(self, f.name) is not None]

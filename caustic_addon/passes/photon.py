@@ -59,7 +59,7 @@ class PhotonTracer:
         pass
 
     def arrived(self, paths: Paths, hits: Hits) -> None:
-        for obj, rows, xy, scale in on_maps(self.accel, self.maps, paths, hits):
+        for obj, rows, xy, scale, _ in on_maps(self.accel, self.maps, paths, hits):
             self.deposits.add_photons(obj, xy, np.take(paths.weight, rows, axis=0), scale)
             self.landed += len(rows)
 
@@ -69,7 +69,7 @@ class PhotonTracer:
         weight, alive = roulette(weight, paths.floor, hash_uniform(paths.ids, 2 * depth + 1, self.seed))
         paths = Paths(self.accel.offset(surface.points, surface.facing, dirs), dirs, weight,
                       crossed_medium(surface, crossed, hits.obj, paths.medium), paths.ids, paths.floor,
-                      np.ones(len(paths), dtype=bool), paths.band)
+                      np.ones(len(paths), dtype=bool), paths.band, surface=hits.prim)
         return paths.select(alive)
 
 

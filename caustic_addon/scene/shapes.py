@@ -1,8 +1,8 @@
 """Procedural meshes for tests, benchmarks, the gallery and the paper's
 experiments: a sphere, a cylinder, a cone (point down), a plane, an open
-tube (a mirror ring), a slab of water with a wavy top and an open wavy
-sheet (a subdivided plane under a Wave modifier). All but the tube and the
-sheet are closed; all are wound counter-clockwise seen from outside, with smooth
+tube (a mirror ring), a bowl, a slab of water with a wavy top and an open
+wavy sheet (a subdivided plane under a Wave modifier). All but the tube and
+the sheet are closed; all are wound counter-clockwise seen from outside, with smooth
 corner normals (flat on caps, walls and the plane)."""
 
 from __future__ import annotations
@@ -23,8 +23,11 @@ def plane(size: float = 10.0, center=(0.0, 0.0, 0.0)) -> Mesh:
     return Mesh(verts, tris, np.tile([0.0, 0.0, 1.0], (2, 3, 1)), uv[tris])
 
 
-def uv_sphere(radius: float = 1.0, center=(0.0, 0.0, 0.0), segments: int = 64, rings: int = 32) -> Mesh:
-    """A UV sphere with smooth normals: segments around, rings pole to pole."""
+def uv_sphere(radius: float = 1.0, center=(0.0, 0.0, 0.0), segments: int = 64, rings: int = 32,
+              uvs: bool = False) -> Mesh:
+    """A UV sphere with smooth normals: segments around, rings pole to pole;
+    with `uvs`, Blender's UV map of it (u around from +x, v up from the
+    bottom pole, a seam at u = 0 and 1)."""
     theta = np.linspace(0.0, math.pi, rings + 1)[1:-1]
     phi = np.linspace(0.0, 2.0 * math.pi, segments, endpoint=False)
     t, p = np.meshgrid(theta, phi, indexing="ij")
@@ -32,17 +35,23 @@ def uv_sphere(radius: float = 1.0, center=(0.0, 0.0, 0.0), segments: int = 64, r
     unit = np.concatenate([[[0.0, 0.0, 1.0]], ring, [[0.0, 0.0, -1.0]]])
     top, bottom = 0, len(unit) - 1
 
-    def at(r, s):
-        return 1 + r * segments + s % segments
-
     s = np.arange(segments)
-    tris = [np.stack([np.full(segments, top), at(0, s), at(0, s + 1)], axis=1)]
-    for r in range(rings - 2):
-        a, b, c, d = at(r, s), at(r + 1, s), at(r + 1, s + 1), at(r, s + 1)
-        tris += [np.stack([a, b, c], axis=1), np.stack([a, c, d], axis=1)]
-    tris.append(np.stack([np.full(segments, bottom), at(rings - 2, s + 1), at(rings - 2, s)], axis=1))
-    tris = np.concatenate(tris)
-    return Mesh(unit * radius + np.asarray(center, dtype=np.float64), tris, unit[tris])
+    # each corner as (ring line 0..rings from the top pole, segment 0..segments, unwrapped)
+    grid = [np.stack([np.stack([np.zeros(segments), s + 0.5], -1), np.stack([np.ones(segments), s], -1),
+                      np.stack([np.ones(segments), s + 1], -1)], axis=1)]
+    for r in range(1, rings - 1):
+        a, b = np.stack([np.full(segments, r), s], -1), np.stack([np.full(segments, r + 1), s], -1)
+        c, d = np.stack([np.full(segments, r + 1), s + 1], -1), np.stack([np.full(segments, r), s + 1], -1)
+        grid += [np.stack([a, b, c], axis=1), np.stack([a, c, d], axis=1)]
+    grid.append(np.stack([np.stack([np.full(segments, rings), s + 0.5], -1),
+                          np.stack([np.full(segments, rings - 1), s + 1], -1),
+                          np.stack([np.full(segments, rings - 1), s], -1)], axis=1))
+    grid = np.concatenate(grid)
+    line, seg = grid[..., 0].astype(np.int64), grid[..., 1]
+    tris = np.where(line == 0, top, np.where(line == rings, bottom,
+                                             1 + (line - 1) * segments + np.floor(seg).astype(np.int64) % segments))
+    corner_uvs = np.stack([seg / segments, 1.0 - line / rings], axis=-1) if uvs else None
+    return Mesh(unit * radius + np.asarray(center, dtype=np.float64), tris, unit[tris], corner_uvs)
 
 
 def sphere_for_triangles(triangles: int, radius: float = 1.0, center=(0.0, 0.0, 0.0)) -> Mesh:
@@ -90,6 +99,23 @@ def cone(radius: float = 1.0, height: float = 1.5, center=(0.0, 0.0, 0.0), segme
     profile = np.array([[0.0, height], [radius, height], [0.0, 0.0]])
     slant = np.array([height, -radius]) / math.hypot(height, radius)
     normals = np.array([[0.0, 1.0], slant])
+    return _revolve(profile, normals, segments, center)
+
+
+def bowl(radius: float = 1.0, thickness: float = 0.1, center=(0.0, 0.0, 0.0), segments: int = 128,
+         steps: int = 32) -> Mesh:
+    """A hemispherical bowl, open at the top: a shell between spheres of
+    `radius` and radius - thickness about center + (0, 0, radius), from its
+    outer bottom at `center` to a flat rim at center_z + radius; each wall
+    in `steps` bands, smooth around, flat along them."""
+    inner = radius - thickness
+    a = np.linspace(0.0, 0.5 * math.pi, steps + 1)
+    inside = np.stack([inner * np.sin(a), radius - inner * np.cos(a)], axis=1)
+    outside = np.stack([radius * np.sin(a), radius - radius * np.cos(a)], axis=1)[::-1]
+    profile = np.concatenate([inside, outside])
+    mid = 0.5 * (a[1:] + a[:-1])
+    normals = np.concatenate([np.stack([-np.sin(mid), np.cos(mid)], axis=1), [[0.0, 1.0]],
+                              np.stack([np.sin(mid), -np.cos(mid)], axis=1)[::-1]])
     return _revolve(profile, normals, segments, center)
 
 

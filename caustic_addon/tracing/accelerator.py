@@ -18,6 +18,7 @@ from embreex.mesh_construction import TriangleMesh
 
 from ..scene import Object
 from ..util.vectors import length, normalize
+from .contact import Contacts
 from .hits import MISS, Hits
 from .topology import open_edge_count, signed_volume, triangle_normals
 
@@ -131,13 +132,14 @@ class Accelerator:
         self.corner_normal = np.concatenate(corner_normals) if corner_normals else np.zeros((0, 3, 3))
         self.owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
         self.prim_offset = np.asarray(offsets, dtype=np.int64)
-        self._all = self._view(np.arange(len(objects)))
+        self._all = self.view_of(np.arange(len(objects)))
         self._views = self._ray_views()
         for body in np.unique(self.body[self.closed]):
             self._warn_if_thin(int(body))
+        self.contacts = Contacts(self)
         self.rays_cast = 0  # counts the passes' rays, not the probes'
 
-    def _view(self, indices: np.ndarray) -> _View:
+    def view_of(self, indices: np.ndarray) -> _View:
         """The objects `indices (k,)` in an Embree scene."""
         if len(indices) == 0:
             return _View(None, indices)
@@ -157,7 +159,7 @@ class Accelerator:
                 views.append(self._all)
             else:
                 if tuple(seen) not in built:
-                    built[tuple(seen)] = self._view(seen)
+                    built[tuple(seen)] = self.view_of(seen)
                 views.append(built[tuple(seen)])
         return views
 
@@ -210,11 +212,14 @@ class Accelerator:
         if self._pool is not None:
             self._pool.shutdown()
 
+    def count_rays(self, n: int) -> None:
+        with self._count_lock:
+            self.rays_cast += n
+
     def _run(self, embree, origins: np.ndarray, dirs: np.ndarray, **kwargs) -> list[dict]:
         """Embree scene `embree` over the batch, split across threads; one result dict per part."""
         n = len(origins)
-        with self._count_lock:
-            self.rays_cast += n
+        self.count_rays(n)
         o32 = np.ascontiguousarray(origins, dtype=np.float32)
         d32 = np.ascontiguousarray(dirs, dtype=np.float32)
         dists = kwargs.pop("dists", None)
@@ -228,7 +233,7 @@ class Accelerator:
         return [f.result() for f in futures]
 
     def intersect(self, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray | None = None,
-                  kind: np.ndarray | None = None) -> Hits:
+                  kind: np.ndarray | None = None, leaving: np.ndarray | None = None) -> Hits:
         """Closest hits of rays `origins (n,3)`, `dirs (n,3)` (unit), world space.
 
         With `kind (n,)`, CAMERA, REFLECTED or REFRACTED per ray, each ray
@@ -242,7 +247,9 @@ class Accelerator:
         crossed, met again at t ~ 0 past a shared edge; a face turned away
         from a ray that only touches a vertex; the far side of a crack in
         Embree's non-watertight triangle test. Passing them keeps a ray's
-        medium true to the side of the surface it is on."""
+        medium true to the side of the surface it is on. Where objects
+        touch, coincident surfaces are met in the order contact.py gives,
+        `leaving (n,)` being the face each ray scattered at (MISS if none)."""
         hits = self._closest_by_kind(origins, dirs, kind)
         if medium is None:
             return hits
@@ -255,6 +262,8 @@ class Accelerator:
             again = self._closest_by_kind(start, dirs[skip], None if kind is None else kind[skip])
             again.t += hits.t[skip] + length(start - hits.points[skip])
             hits.replace(skip, again)
+        if self.contacts.boxes:
+            self.contacts.resolve(hits, origins, dirs, medium, leaving)
         return hits
 
     def inside(self, medium: np.ndarray, obj: np.ndarray) -> np.ndarray:
@@ -319,17 +328,24 @@ class Accelerator:
         """Closest hits among the objects of `view` (None: all of them)."""
         view = self._all if view is None else view
         if len(origins) == 0 or view.embree is None:
-            return Hits.misses(origins)
+            return self.as_hits({}, origins, view.objects)
         parts = self._run(view.embree, origins, dirs, output=1)
-        geom = np.concatenate([p["geomID"] for p in parts]).astype(np.int64)
-        prim = np.concatenate([p["primID"] for p in parts]).astype(np.int64)
-        t = np.concatenate([p["tfar"] for p in parts]).astype(np.float64)
-        u = np.concatenate([p["u"] for p in parts]).astype(np.float64)
-        v = np.concatenate([p["v"] for p in parts]).astype(np.float64)
+        raw = {key: np.concatenate([p[key] for p in parts]) for key in ("geomID", "primID", "tfar", "u", "v")}
+        return self.as_hits(raw, origins, view.objects)
+
+    def as_hits(self, raw: dict, origins: np.ndarray, members: np.ndarray) -> Hits:
+        """Hits from embreex's output `raw` for rays from `origins (n,3)`,
+        cast in an Embree scene whose geomIDs are the objects `members`;
+        every ray a miss where `raw` is empty."""
+        if not raw:
+            return Hits.misses(origins)
+        geom = raw["geomID"].astype(np.int64)
         miss = geom < 0
-        t[miss] = np.inf
-        obj = np.where(miss, MISS, np.take(view.objects, np.maximum(geom, 0)))
-        prim = np.where(miss, MISS, prim + np.take(self.prim_offset, np.maximum(obj, 0)))
+        # a miss takes the MISS appended to `members`, which may be empty
+        obj = np.take(np.append(np.asarray(members, dtype=np.int64), MISS), np.where(miss, len(members), geom))
+        t = np.where(miss, np.inf, raw["tfar"].astype(np.float64))
+        u, v = raw["u"].astype(np.float64), raw["v"].astype(np.float64)
+        prim = np.where(miss, MISS, raw["primID"].astype(np.int64) + self.prim_offset[np.maximum(obj, 0)])
         points = origins.astype(np.float64, copy=True)
         hit = np.flatnonzero(~miss)
         points[hit] = self.surface_points(prim[hit], u[hit], v[hit])

@@ -41,3 +41,38 @@ def open_edge_count(triangles: np.ndarray, vertices: np.ndarray) -> int:
     # with a <= b <= c each edge is already (low, high)
     _, counts = np.unique(np.concatenate([a * n + b, b * n + c, a * n + c]), return_counts=True)
     return int(np.count_nonzero(counts != 2))
+
+
+def mesh_pieces(triangles: np.ndarray, corner_keys: np.ndarray, group: np.ndarray) -> np.ndarray:
+    """(nt,) labels 0..k-1 of the pieces of a mesh: triangles of one
+    `group (nt,)` joined through shared edges, an edge being two corners of
+    equal keys (`corner_keys (nt,3)` int64: welded positions, or positions
+    and UVs for UV islands). Connected components by hooking and pointer
+    jumping (Shiloach and Vishkin 1982): each round hooks the larger root
+    of every edge whose ends differ onto the smaller, then points every
+    triangle at its root; a few rounds, each a numpy pass over the edges
+    still between pieces."""
+    nt = len(triangles)
+    if nt == 0:
+        return np.zeros(0, dtype=np.int64)
+    a, b = corner_keys, np.roll(corner_keys, -1, axis=1)
+    edges = np.stack([np.minimum(a, b).ravel(), np.maximum(a, b).ravel(), np.repeat(group, 3)], axis=1)
+    owner = np.repeat(np.arange(nt), 3)
+    key = row_ids(edges)
+    order = np.argsort(key, kind="stable")
+    same = key[order][1:] == key[order][:-1]
+    left, right = owner[order][:-1][same], owner[order][1:][same]
+    root = np.arange(nt)
+    while True:
+        low, high = np.minimum(root[left], root[right]), np.maximum(root[left], root[right])
+        apart = np.flatnonzero(low != high)
+        if len(apart) == 0:
+            break
+        left, right = left[apart], right[apart]
+        np.minimum.at(root, high[apart], low[apart])
+        while True:
+            up = root[root]
+            if np.array_equal(up, root):
+                break
+            root = up
+    return np.unique(root, return_inverse=True)[1].reshape(-1)

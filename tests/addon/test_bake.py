@@ -10,8 +10,9 @@ import pytest
 import blender_scenes as scenes
 from snapshot import material_state, snapshot_file
 from test_render import cycles_render
+from test_textures_vs_cycles import random_image
 
-RESULT_FIELDS = {"last_seconds", "last_lamp_rays", "last_refined"}
+RESULT_FIELDS = {"last_seconds", "last_lamp_rays", "last_refined", "progress"}
 
 
 def test_bake_adds_one_node_group_and_unbake_restores_the_material():
@@ -143,3 +144,76 @@ def test_map_scale_is_a_length_that_follows_the_unit_scale():
     assert in_metres == (300, 300)
     assert baked_map_size(0.01, "20 mm") == in_metres
     assert baked_map_size(0.01, "2 cm") == in_metres
+
+
+@pytest.mark.parametrize("floor_kind", ["diffuse", "principled", "textured"])
+def test_a_baked_receiver_reads_as_before_the_bake(addon, floor_kind):
+    """The bake's node group sits between the receiver's shader and its
+    output: a Render or a second Bake after it still reads the shader's
+    colour, texture and specular layer (it read a default grey before)."""
+    material = (scenes.principled_material(level=1.0) if floor_kind == "principled"
+                else scenes.diffuse_material("Floor", (0.7, 0.3, 0.2)))
+    if floor_kind == "textured":
+        tree = material.node_tree
+        texture = tree.nodes.new('ShaderNodeTexImage')
+        texture.image = random_image()
+        tree.links.new(texture.outputs['Color'], tree.nodes["Diffuse BSDF"].inputs['Color'])
+    scenes.add_plane(6.0, material)
+    scenes.add_sphere(0.5, (0.0, 0.0, 0.75), scenes.glass_material(), segments=16, rings=8)
+    scenes.add_point_light((-1.5, 0.6, 3.0), 1000.0)
+    scenes.add_camera((3.5, -2.5, 2.5), target=(0.5, -0.2, 0.0))
+    scenes.set_resolution(16, 12)
+    bpy.context.scene.caustic.lamp_rays = 2000
+
+    def floor():
+        read = addon.export.read_scene(bpy.context)
+        return next(o for o in read.scene.objects if o.name == "Floor").material, read.warnings
+
+    before, _ = floor()
+    assert bpy.ops.caustic.bake() == {'FINISHED'}
+    after, warnings = floor()
+    assert np.allclose(after.albedo, before.albedo)
+    assert (after.texture is None) == (before.texture is None) == (floor_kind != "textured")
+    assert (after.specular is None) == (before.specular is None) == (floor_kind != "principled")
+    assert not any("Floor" in w for w in warnings)
+    assert bpy.ops.caustic.bake() == {'FINISHED'}
+    assert len([n for n in material.node_tree.nodes if n.bl_idname == 'ShaderNodeGroup']) == 1
+
+
+def test_a_sphere_without_uvs_bakes_through_its_box_chart(addon, tmp_path):
+    """A ball with no UV map, lit by a sun through a glass slab: the bake
+    looks its box chart up from the position and true normal, and Cycles
+    shows the baked caustic (slab and sun hidden) as the caustic pass has
+    it, pixel by pixel, seams included; the mesh gets no UV map."""
+    ball = scenes.add_sphere(0.5, (0.0, 0.0, 0.0), scenes.diffuse_material(), segments=96, rings=48)
+    while ball.data.uv_layers:
+        ball.data.uv_layers.remove(ball.data.uv_layers[0])
+    bpy.ops.mesh.primitive_cylinder_add(vertices=64, radius=0.9, depth=0.1, location=(4.0 * math.tan(0.5), 0, 4.0))
+    slab = bpy.context.object
+    slab.data.materials.append(scenes.glass_material())
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))
+    sun.data.energy, sun.data.angle = 10.0, 0.0
+    sun.rotation_euler = (0.0, 0.5, 0.0)  # travelling along (-sin 0.5, 0, -cos 0.5)
+    bpy.context.scene.collection.objects.link(sun)
+    scenes.add_camera((0.6, -2.6, 1.6), target=(0.0, 0.0, 0.1), lens=85.0)
+    scenes.set_resolution(64, 64)
+    bpy.context.scene.caustic.lamp_rays = 100_000
+    assert bpy.ops.caustic.bake() == {'FINISHED'}
+    kinds = {node.bl_idname for node in bpy.data.node_groups[0].nodes}
+    assert 'ShaderNodeNewGeometry' in kinds and 'ShaderNodeUVMap' not in kinds
+    assert len(ball.data.uv_layers) == 0
+    read = addon.export.read_scene(bpy.context)
+    caustic = addon.caustic_addon.render(read.scene, addon.export.render_settings(bpy.context.scene.caustic,
+                                                                                   spp=16)).passes["caustic"]
+    slab.hide_render = sun.hide_render = True
+    baked = cycles_render(str(tmp_path), samples=64)[..., :3]
+    luminance = caustic[..., 1]
+    pad = np.pad(luminance, 1)
+    lowest = np.min([pad[i:i + 64, j:j + 64] for i in range(3) for j in range(3)], axis=0)
+    lit = lowest > 0.3 * luminance.max()
+    difference = (baked[..., 1] - luminance)[lit] / luminance[lit]
+    print(f"baked in Cycles against the caustic pass over {lit.sum()} lit pixels: mean {difference.mean():+.4f}, "
+          f"mean |difference| {np.abs(difference).mean():.4f}, 99th percentile {np.percentile(np.abs(difference), 99):.4f}")
+    assert lit.sum() > 500
+    assert abs(difference.mean()) < 0.02
+    assert np.percentile(np.abs(difference), 99) < 0.1

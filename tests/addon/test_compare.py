@@ -46,7 +46,8 @@ def test_compare_restores_every_setting_and_stores_the_images():
 
     after = render_state()
     images = set(after.pop("images")) - set(before.pop("images"))
-    assert images == {"Caustic Render", "Cycles Reference", "Difference"}
+    assert images == {"Caustic Render", "Caustic Render Direct", "Caustic Render Caustic", "Caustic Render Ambient",
+                      "Cycles Reference", "Difference"}
     assert after == before
     ours = np.array(bpy.data.images["Caustic Render"].pixels[:]).reshape(48, 64, 4)
     reference = np.array(bpy.data.images["Cycles Reference"].pixels[:]).reshape(48, 64, 4)

@@ -168,3 +168,15 @@ def test_dispersion_colours_the_caustic_rim():
                    for name, where in (("rim", rim), ("centre", centre))}
     print("red / blue:", red_to_blue)
     assert red_to_blue["centre"] < 0.8 and red_to_blue["rim"] > 1.5
+
+
+def test_the_passes_are_images_of_their_own_that_sum_to_the_render():
+    scenes.ball_lens_scene(32, 24, lamp_rays=5_000, segments=16, rings=8)
+    bpy.context.scene.caustic.ambient = (0.05, 0.05, 0.05)
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    passes = {name: scenes.pixels_of(f"Caustic Render {name}") for name in ("Direct", "Caustic", "Ambient")}
+    for name, pixels in passes.items():
+        assert pixels[..., :3].max() > 0.0, name
+        assert bpy.data.images[f"Caustic Render {name}"].packed_file is not None
+    total = passes["Direct"] + passes["Caustic"] + passes["Ambient"]
+    np.testing.assert_allclose(total[..., :3], scenes.pixels_of("Caustic Render")[..., :3], rtol=1e-5, atol=1e-7)

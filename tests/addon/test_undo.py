@@ -62,7 +62,7 @@ def test_cycles_reference_survives_undo_with_its_pixels():
 
 def test_bake_and_compare_wait_while_a_render_runs(addon):
     scenes.ball_lens_scene(24, 18, lamp_rays=10_000, segments=32, rings=16)
-    render = addon.operators.render.CAUSTIC_OT_render
+    render = addon.operators.engine_run.EngineOperator
     render.running = True
     try:
         for operator in (bpy.ops.caustic.bake, bpy.ops.caustic.compare_cycles, bpy.ops.caustic.render):

@@ -21,7 +21,7 @@ from caustic_addon import (Dielectric, Diffuse, Mesh, Object, PointLight, Render
                            SunLight, render, shapes)
 from caustic_addon.emission.aims import Sphere
 from caustic_addon.emission.photons import Photons
-from caustic_addon.maps.charts import make_chart
+from caustic_addon.maps.receivers import make_chart
 from caustic_addon.maps.illumination_map import IlluminationMap, MapEstimate
 from caustic_addon.optics.specular import fresnel_dielectric, refract
 from caustic_addon.passes.bounce import orient, scatter

@@ -1,0 +1,155 @@
+"""Animated caustics in Blender (issue 19): the speed of Render Caustic
+Animation on an animated pool, and what each way of getting caustics into
+an EEVEE or Cycles render costs a frame.
+
+    .venv/bin/python benchmarks/animation.py [--frames 24] [--cycles-frames 3]
+
+The pool: an 8 m floor (albedo 0.8) under a 6 m x 6 m body of water
+(IOR 1.33, a 128 x 128 grid with an animated Wave modifier and Solidify
+down to the floor, so the mesh is closed), lit by a sun 20 degrees off the
+vertical, seen at 1280 x 720 with the add-on's default settings.
+
+1. Render Caustic Animation over `frames` frames: seconds per frame (each
+   frame's waves differ, so every frame traces its maps), and the total.
+2. Caustics in Cycles, per frame, at 25% resolution and 16 samples: Cycles
+   alone (no caustics of ours); Bake Caustic Animation then Cycles
+   (a bake step, then the render); Bake While Rendering (the render
+   handlers bake each frame, no step). Both bakes trace the same maps.
+
+Writes benchmarks/results/animation.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import math
+import sys
+import tempfile
+import time
+from datetime import date
+from pathlib import Path
+
+import bpy
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from speed import machine  # noqa: E402
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def register_addon() -> None:
+    spec = importlib.util.spec_from_file_location("caustics", REPO / "__init__.py",
+                                                  submodule_search_locations=[str(REPO)])
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["caustics"] = module
+    spec.loader.exec_module(module)
+    module.register()
+
+
+def node_material(name: str, kind: str, **inputs):
+    material = bpy.data.materials.new(name)
+    if material.node_tree is None:
+        material.use_nodes = True
+    nodes = material.node_tree.nodes
+    nodes.clear()
+    shader, output = nodes.new(kind), nodes.new('ShaderNodeOutputMaterial')
+    for socket, value in inputs.items():
+        shader.inputs[socket].default_value = value
+    material.node_tree.links.new(shader.outputs[0], output.inputs['Surface'])
+    return material
+
+
+def pool(folder: Path) -> None:
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    bpy.ops.mesh.primitive_plane_add(size=8.0)
+    bpy.context.object.data.materials.append(node_material("Pool", 'ShaderNodeBsdfDiffuse',
+                                                           Color=(0.8, 0.8, 0.8, 1.0)))
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=128, y_subdivisions=128, size=6.0, location=(0, 0, 1.0))
+    water = bpy.context.object
+    water.name = "Water"
+    water.data.shade_smooth()
+    wave = water.modifiers.new("Waves", 'WAVE')
+    wave.height, wave.width, wave.speed, wave.narrowness = 0.03, 0.8, 0.04, 1.5
+    solid = water.modifiers.new("Depth", 'SOLIDIFY')
+    solid.thickness, solid.offset = 0.95, -1.0
+    water.data.materials.append(node_material("Water", 'ShaderNodeBsdfGlass', IOR=1.33, Roughness=0.0))
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))
+    sun.data.energy, sun.data.angle = 3.0, math.radians(0.5)
+    sun.rotation_euler = (math.radians(20.0), 0.0, math.radians(30.0))
+    scene.collection.objects.link(sun)
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    camera.location = (0.0, -5.5, 4.0)
+    camera.rotation_euler = (math.radians(52.0), 0.0, 0.0)
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 1280, 720, 100
+    scene.render.image_settings.file_format, scene.render.image_settings.color_depth = 'OPEN_EXR', '16'
+    bpy.ops.wm.save_as_mainfile(filepath=str(folder / "pool.blend"))
+
+
+def caustic_animation(frames: int) -> dict:
+    seconds = []
+    for frame in range(1, frames + 1):
+        clock = time.perf_counter()
+        assert bpy.ops.caustic.render_animation(filepath="//frames/pool_####", frame_start=frame,
+                                                frame_end=frame) == {'FINISHED'}
+        seconds.append(time.perf_counter() - clock)
+        print(f"frame {frame}: {seconds[-1]:.2f} s (engine {bpy.context.scene.caustic.last_seconds:.2f} s)",
+              flush=True)
+    return dict(frames=frames, seconds_per_frame=seconds, mean=sum(seconds) / frames, max=max(seconds),
+                total=sum(seconds), resolution=[1280, 720])
+
+
+def cycles_animation(folder: Path, name: str, frames: int) -> float:
+    scene = bpy.context.scene
+    scene.render.filepath = str(folder / name / "f_####")
+    scene.frame_start, scene.frame_end = 1, frames
+    clock = time.perf_counter()
+    bpy.ops.render.render(animation=True)
+    return (time.perf_counter() - clock) / frames
+
+
+def final_frame_options(folder: Path, frames: int) -> dict:
+    scene = bpy.context.scene
+    scene.render.engine = 'CYCLES'
+    scene.cycles.device, scene.cycles.samples, scene.cycles.use_denoising = 'CPU', 16, False
+    scene.render.resolution_percentage = 25
+    plain = cycles_animation(folder, "plain", frames)
+    clock = time.perf_counter()
+    assert bpy.ops.caustic.bake_animation(frame_start=1, frame_end=frames) == {'FINISHED'}
+    bake = (time.perf_counter() - clock) / frames
+    baked = cycles_animation(folder, "baked", frames)
+    bpy.ops.caustic.unbake()
+    scene.caustic.use_bake_on_render = True
+    live = cycles_animation(folder, "live", frames)
+    return dict(frames=frames, resolution_percentage=25, cycles_samples=16, seconds_per_frame={
+        "Cycles alone": plain, "Bake Caustic Animation (the step)": bake,
+        "Cycles of the baked sequence": baked, "Bake While Rendering (bake and Cycles)": live})
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--frames", type=int, default=24, help="frames of part 1 (0 skips it)")
+    parser.add_argument("--cycles-frames", type=int, default=3)
+    args = parser.parse_args()
+    register_addon()
+    with tempfile.TemporaryDirectory(prefix="caustic-animation-") as folder:
+        pool(Path(folder))
+        speed = caustic_animation(args.frames) if args.frames else None
+        options = final_frame_options(Path(folder), args.cycles_frames)
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "animation.json").write_text(json.dumps(
+        dict(date=date.today().isoformat(), machine=machine(), pool=speed, final_frame=options), indent=2) + "\n")
+    if speed is not None:
+        print(f"pool 1280x720: {speed['mean']:.2f} s a frame on average, at most {speed['max']:.2f} s, "
+              f"{speed['total']:.1f} s for {speed['frames']} frames")
+    for name, seconds in options["seconds_per_frame"].items():
+        print(f"{name}: {seconds:.2f} s a frame")
+
+
+if __name__ == "__main__":
+    main()

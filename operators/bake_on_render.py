@@ -1,0 +1,92 @@
+"""Caustics in F12 and animation renders with no bake step: with
+Scene.caustic.use_bake_on_render, the render handlers bake each frame's
+caustics into the receivers' materials just before the frame renders, so
+EEVEE and Cycles show the current frame's caustic.
+
+When a render starts (render_init) the current frame is baked and wired
+in, before Blender builds the render's depsgraph, so the materials it
+renders hold the bake's nodes. Then, for each frame (frame_change_post,
+with the render's depsgraph evaluated at that frame: render visibility,
+render modifier levels), the maps are traced again and written into the
+same images. Blender runs these handlers on its main thread in command-line
+renders (`blender -b ... -f`, `-a`), where changing data is safe; a render
+started from the UI runs them on its render thread, where the add-on must
+not touch Blender's data, so there it leaves the materials as they are
+(bake with Bake Caustic Animation before rendering). The last frame's bake
+stays in the materials after the render, as Bake Caustics leaves it."""
+
+import threading
+
+import bpy
+from bpy.app.handlers import persistent
+
+from ..export import InputError, render_settings
+from ..export.render_view import ENGINE as READER_ENGINE
+from ..jobs import RenderJob
+from ..writeback.images import write_image
+from .bake import IMAGE_PREFIX, bake_maps, map_rgba, read_for_bake
+
+
+def _wanted(scene) -> bool:
+    # the add-on's own scene read is a render too: it must not bake
+    if not scene.caustic.use_bake_on_render or scene.render.engine == READER_ENGINE:
+        return False
+    if threading.current_thread() is not threading.main_thread():
+        print("Caustics: Bake While Rendering works in command-line renders only; this render uses the "
+              "caustics baked before it")
+        return False
+    return True
+
+
+def _trace(scene, depsgraph):
+    """(SceneRead, RenderResult) of the frame, or None after printing why not."""
+    try:
+        read = read_for_bake(None, depsgraph=depsgraph)
+        job = RenderJob(read.scene, render_settings(scene.caustic, spp=1))
+    except InputError as exc:
+        print(f"Caustics: frame {scene.frame_current} renders without caustics: {exc}")
+        return None
+    job.run()
+    if job.error is not None:
+        print(f"Caustics: frame {scene.frame_current} renders without caustics: {job.error}")
+        return None
+    return read, job.result
+
+
+@persistent
+def bake_at_render_start(scene, *_) -> None:
+    if not _wanted(scene):
+        return
+    traced = _trace(scene, bpy.context.evaluated_depsgraph_get())
+    if traced is not None:
+        read, result = traced
+        for warning in bake_maps(read, result.maps)[1]:
+            print(f"Caustics: {warning}")
+
+
+@persistent
+def bake_rendered_frame(scene, depsgraph=None) -> None:
+    if depsgraph is None or depsgraph.mode != 'RENDER' or not _wanted(scene):
+        return
+    traced = _trace(scene, depsgraph)
+    if traced is None:
+        return
+    for name, imap in traced[1].maps.items():
+        image = bpy.data.images.get(IMAGE_PREFIX + name)
+        if image is None or image.source == 'SEQUENCE':
+            continue
+        if tuple(image.size) != imap.shape[::-1]:
+            print(f"Caustics: frame {scene.frame_current}: the map of '{name}' changed size since the render "
+                  "started (the receiver moved or changed shape); it keeps the earlier frame's caustic")
+            continue
+        write_image(image.name, map_rgba(imap))
+
+
+def register() -> None:
+    bpy.app.handlers.render_init.append(bake_at_render_start)
+    bpy.app.handlers.frame_change_post.append(bake_rendered_frame)
+
+
+def unregister() -> None:
+    bpy.app.handlers.frame_change_post.remove(bake_rendered_frame)
+    bpy.app.handlers.render_init.remove(bake_at_render_start)
