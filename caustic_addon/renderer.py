@@ -10,9 +10,11 @@ from typing import Optional
 
 import numpy as np
 
+from .errors import SceneError
 from .maps.cache import MapCache, lamp_pass_key
 from .maps.illumination_map import IlluminationMap
 from .maps.receivers import build_maps
+from .memory import refusal
 from .passes.beam import beam_pass
 from .passes.eye import HOLDOUT, PASSES, eye_pass
 from .passes.lamp_pass import LampPassStats, lamps_in_glass
@@ -55,6 +57,9 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
     settings = settings or RenderSettings()
     settings.validate()
     warnings = validate_scene(scene) + rough_caster_warnings(scene, settings.density)
+    too_large = refusal(scene, settings)
+    if too_large is not None:
+        raise SceneError(too_large)
     monitor = Monitor(progress, cancel)
     seconds = {}
 

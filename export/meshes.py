@@ -11,7 +11,8 @@ from typing import Optional
 import bpy
 import numpy as np
 
-from ..caustic_addon import Mesh, Object, Visibility
+from ..caustic_addon import Dielectric, Mesh, Object, Reflector, Visibility
+from ..caustic_addon.scene.geometry import with_area
 from .materials import engine_material, read_surface
 from .textures import ObjectFrame, bind
 
@@ -83,6 +84,36 @@ def _material_parts(ob_eval, material_index: np.ndarray, name: str, warnings: li
     return list(parts.values())
 
 
+def flattened(matrix: np.ndarray, vertices: np.ndarray) -> bool:
+    """True if the object matrix `matrix (4,4)` scales the mesh of object
+    space `vertices (n,3)` to 0 along an axis it has depth along (a plane
+    scaled to 0 across itself is not flattened)."""
+    _, scales, axes = np.linalg.svd(matrix[:3, :3])
+    extent = float(np.ptp(vertices, axis=0).max(initial=0.0)) if len(vertices) else 0.0
+    null = axes[scales <= 1e-12 * max(float(scales.max()), 1e-300)]
+    return bool(len(null)) and float(np.ptp(vertices @ null.T, axis=0).max()) > 1e-9 * extent
+
+
+def _surface(material, surfaces: dict, warnings: list[str]):
+    """The reading of `material` (or None), read and warned about once."""
+    key = material.original.name if material is not None else None
+    if key not in surfaces:
+        surfaces[key] = read_surface(material)
+        warnings += surfaces[key].warnings
+    return surfaces[key]
+
+
+def _warn_faceless(ob, name: str, surfaces: dict, warnings: list[str]) -> None:
+    """A warning for a mesh with no faces that would be a glass, a mirror
+    or a receiver it was made to be, by its first slot's material."""
+    material = next((slot.material for slot in ob.material_slots), None)
+    engine = engine_material(_surface(material, surfaces, warnings), ob.original.caustic)
+    if isinstance(engine, (Dielectric, Reflector)):
+        warnings.append(f"'{name}' has no faces, so it casts no caustics: it was left out")
+    elif ob.original.caustic.role == 'RECEIVER':
+        warnings.append(f"'{name}' has no faces, so it receives no caustics: it was left out")
+
+
 def object_visibility(instance, view_layer) -> Visibility:
     """The rays that see a depsgraph object instance, as Cycles reads them
     (intern/cycles/blender/object.cpp): the object's ray visibility, and its
@@ -108,11 +139,33 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
     one and "name [material]" if there are several, which are then parts of
     one body; none if the mesh has no faces. `surfaces` holds each
     material's reading, so that a material shared by several objects is
-    read, and warned about, once."""
+    read, and warned about, once. A glass or mirror with no faces, glass
+    scaled to 0 along an axis, and an object scaled to nothing are left out
+    with a warning that names them; faces an object's scale flattens to no
+    area are dropped."""
     with evaluated_mesh(ob) as mesh:
         local, material_index, uv_maps = _local_mesh(mesh)
-        parts = _material_parts(ob, material_index, name, warnings) if local is not None else []
-    world = local.transformed(matrix) if local is not None else None
+        if local is None:
+            _warn_faceless(ob, name, surfaces, warnings)
+            return []
+        world = local.transformed(matrix)
+        if np.linalg.det(matrix[:3, :3]) == 0.0:
+            # Mesh.transformed drops them too; the triangles' materials and UVs must follow
+            kept = np.flatnonzero(with_area(world.vertices, local.triangles))
+            if len(kept) == 0:
+                warnings.append(f"'{name}' is scaled to 0, so none of its faces has any area: it was left out")
+                return []
+            local, material_index = local.subset(kept), material_index[kept]
+            uv_maps = {layer: corners[kept] for layer, corners in uv_maps.items()}
+            world = local.transformed(matrix)
+        parts = _material_parts(ob, material_index, name, warnings)
+    if flattened(matrix, local.vertices):
+        if any(isinstance(engine_material(_surface(m, surfaces, warnings), ob.original.caustic), Dielectric)
+               for m, _, _ in parts):
+            warnings.append(f"'{name}' is scaled to 0 along an axis: glass with no thickness bends no light, "
+                            "so it was left out")
+            return []
+        warnings.append(f"'{name}' is scaled to 0 along an axis: it is rendered flat")
     if np.linalg.det(matrix[:3, :3]) < 0:
         # a mirroring matrix turns the engine's triangles around (Mesh.transformed)
         uv_maps = {layer: corners[:, ::-1] for layer, corners in uv_maps.items()}
@@ -120,9 +173,7 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
     objects = []
     for material, rows, slots in parts:
         key = material.original.name if material is not None else None
-        if key not in surfaces:
-            surfaces[key] = read_surface(material)
-            warnings += surfaces[key].warnings
+        _surface(material, surfaces, warnings)
         if surfaces[key].black is not None:
             warnings.append(f"'{name}': material '{key}' (slot {', '.join(map(str, slots))}) {surfaces[key].black}; "
                             "Cycles renders its faces black, and so does the caustic render")
@@ -134,7 +185,7 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
         if surfaces[key].texture is not None:
             data = ob.original.data
             frame = ObjectFrame({layer: np.take(corners, rows, axis=0) for layer, corners in uv_maps.items()},
-                                np.linalg.inv(matrix), np.array(data.texspace_location[:], dtype=np.float64),
+                                np.linalg.pinv(matrix), np.array(data.texspace_location[:], dtype=np.float64),
                                 np.array(data.texspace_size[:], dtype=np.float64))
             texture = bind(surfaces[key].texture, frame, f"'{part}'", warnings)
         objects.append((Object(part, world.subset(rows) if several else world,

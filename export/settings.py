@@ -22,6 +22,7 @@ def render_settings(props, spp: int | None = None) -> RenderSettings:
         max_depth=props.max_depth,
         bands=props.bands,
         spp=props.spp if spp is None else spp,
+        edge_samples=props.edge_samples,
         lamp_samples=props.lamp_samples,
         world_samples=props.world_samples,
         threads=max(1, os.cpu_count() or 1),

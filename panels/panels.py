@@ -81,6 +81,7 @@ class CAUSTIC_PT_eye(_CausticPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         layout.prop(scene.caustic, "spp")
+        layout.prop(scene.caustic, "edge_samples")
         layout.prop(scene.caustic, "lamp_samples")
         layout.prop(scene.caustic, "world_samples")
         layout.prop(scene.caustic, "ambient")

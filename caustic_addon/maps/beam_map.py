@@ -5,13 +5,18 @@ from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
 from ..util.rows import take_rows
 from .grid import bilinear_sample, channel_tables, rect_means
 from .illumination_map import IlluminationMap
-from .raster import rasterise_triangles, signed_areas
+from .raster import Coverage, signed_areas
+
+
+# Cells a bake reads at a time.
+_BAKE_CELLS = 1 << 16
 
 
 @dataclass
@@ -27,15 +32,9 @@ class _Layer:
     tables: np.ndarray
 
     @staticmethod
-    def of_beams(lo: np.ndarray, hi: np.ndarray, cell: float, corners: np.ndarray,
-                 irradiance: np.ndarray) -> "_Layer":
-        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2,
-        rasterised over the chart box [lo, hi]; parts outside it are dropped."""
-        shape = tuple(np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)[::-1])
-        if (irradiance == irradiance[:, :1]).all():
-            irradiance = irradiance[:, :1]
-        values = np.ascontiguousarray(rasterise_triangles(shape, (corners - lo) / cell, irradiance))
-        return _Layer(lo, cell, values, channel_tables(values))
+    def of_coverage(grid: "_LayerGrid") -> "_Layer":
+        values = np.ascontiguousarray(grid.coverage.planes())
+        return _Layer(grid.lo, grid.cell, values, channel_tables(values))
 
     def _rc(self, xy: np.ndarray) -> np.ndarray:
         """(n,2) continuous (row, col), cell centres at integers."""
@@ -52,8 +51,13 @@ class _Layer:
         return out
 
     def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-        """(n,c) mean W/m^2 over chart rectangles [lo, hi] ((n,2) each); only
-        those that meet the layer are looked up."""
+        """(n,c) mean W/m^2 over chart rectangles [lo, hi] ((n,2) each),
+        each widened to at least one cell: the mean over a cell-sized box
+        about a point is the bilinear look-up there, so a footprint smaller
+        than a cell reads the layer smoothly, not as cell-sized blocks. Only
+        rectangles that meet the layer are looked up."""
+        centre, half = 0.5 * (lo + hi), np.maximum(0.5 * (hi - lo), 0.5 * self.cell)
+        lo, hi = centre - half, centre + half
         end = self.origin + self.cell * np.array(self.values.shape[:0:-1])
         meets = ((hi[:, 0] > self.origin[0]) & (hi[:, 1] > self.origin[1])
                  & (lo[:, 0] < end[0]) & (lo[:, 1] < end[1]))
@@ -62,10 +66,43 @@ class _Layer:
         return out
 
 
+class _LayerGrid:
+    """A layer being rasterised: cells of edge `cell` m over the chart box
+    [lo (2,), hi (2,)], on the lattice of such cells from chart point
+    `anchor (2,)` (so that layers of one cell laid over different boxes
+    share their cells), and the coverage of the beams added so far (one
+    channel while they are all white)."""
+
+    def __init__(self, lo: np.ndarray, hi: np.ndarray, cell: float, anchor: np.ndarray):
+        lo = anchor + np.floor((lo - anchor) / cell) * cell
+        self.lo, self.cell = lo, cell
+        self.coverage = Coverage(tuple(np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)[::-1]), 1)
+
+    def add(self, corners: np.ndarray, irradiance: np.ndarray) -> None:
+        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2;
+        parts outside the box are dropped."""
+        if not (irradiance == irradiance[:, :1]).all():
+            self.coverage.widen(3)
+        self.coverage.add((corners - self.lo) / self.cell, irradiance[:, :len(self.coverage.acc)])
+
+
 def _weighted_quantiles(values: np.ndarray, weights: np.ndarray, q) -> np.ndarray:
     order = np.argsort(values)
     cdf = np.cumsum(weights[order])
     return values[order][np.searchsorted(cdf, np.asarray(q) * cdf[-1]).clip(0, len(values) - 1)]
+
+
+def layer_shares(size: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(fine (m,), coarse (m,)) shares of beams `size (m,)` map cells across
+    that go to the fine layer and to the coarse one; the rest goes to the
+    map's own grid. Each share ramps linearly with the beam's size, over
+    [BeamMap.FINE_RAMP] for the fine layer and [BeamMap.COARSE_RAMP] for the
+    coarse one: a hard cut would give neighbouring beams of about the same
+    size to layers of different cells, and the edge between the two sets
+    would show as stair-steps wherever a layer is read finer than its
+    cells."""
+    (f0, f1), (c0, c1) = BeamMap.FINE_RAMP, BeamMap.COARSE_RAMP
+    return np.clip((f1 - size) / (f1 - f0), 0.0, 1.0), np.clip((size - c0) / (c1 - c0), 0.0, 1.0)
 
 
 class BeamMap(IlluminationMap):
@@ -74,71 +111,149 @@ class BeamMap(IlluminationMap):
 
     Beams are rasterised with exact area coverage (`raster.py`), so flux is
     conserved exactly and a beam squeezed to nothing at a fold cannot spike.
-    Beams under 2 map cells across (the sharp part of a caustic) go to a grid
-    FINE times finer, laid over where 99.9% of their flux lands (at most
-    FINE_LIMIT cells a side); beams COARSE cells across or more (dim, wide
-    light) to a grid COARSE_CELL times coarser; the others to the map's own
-    grid. Each layer spans only its beams' bounding box.
+    Beams under 2 to 4 map cells across (the sharp part of a caustic) go
+    to a grid FINE times finer (coarser by steps of 2^(1/4) where that would
+    take more than FINE_LIMIT cells a side), laid over where 99.9% of their
+    flux lands; beams about 24 cells across or more (dim, wide light) to a
+    grid COARSE_CELL times coarser; the others to the map's own grid, each
+    beam's light shared between two layers where its size is in between
+    (`layer_shares`). Each layer spans only its beams' bounding box.
     """
 
     FINE = 8
     FINE_LIMIT = 2048
-    COARSE = 16
+    FINE_RAMP = (2.0, 4.0)
+    COARSE_RAMP = (16.0, 32.0)
     COARSE_CELL = 4
+    # Beams held back before they are rasterised: bounds their memory (about
+    # 100 B a beam) whatever the number of lamp rays.
+    FLUSH_BEAMS = 1 << 20
+    # The fine grid laid out from the first FLUSH_BEAMS beams spans their
+    # flux's box widened by this share of it on each side.
+    FINE_PAD = 0.1
 
     def __init__(self, *args, threads: int = 1, **kwargs):
         super().__init__(*args, **kwargs)
         self.threads = threads
         self._beam_parts: list[tuple[np.ndarray, np.ndarray]] = []
+        self._pending_beams = 0
+        self._grids: Optional[list[Optional[_LayerGrid]]] = None
         self._layers: list[_Layer] = []
         self.beams = 0
 
     def add_beams(self, corners: np.ndarray, irradiance: np.ndarray) -> None:
-        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2."""
+        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2.
+        Past FLUSH_BEAMS pending, they are rasterised into layers laid out
+        over the whole chart (but the fine one, laid over the first ones'
+        flux), so that later beams find a layer wherever they land."""
         with self._lock:
             self._beam_parts.append((corners, irradiance))
+            self._pending_beams += len(corners)
             self.beams += len(corners)
+            if self._pending_beams >= self.FLUSH_BEAMS:
+                self._rasterise_pending(whole_chart=True)
 
-    def _take_layer_specs(self) -> list[tuple]:
-        """Takes the pending beams and sorts them into layers: returns the
-        `_Layer.of_beams` arguments of each."""
-        corners = np.concatenate([c for c, _ in self._beam_parts])
-        irradiance = np.concatenate([e for _, e in self._beam_parts])
-        self._beam_parts = []
+    def _layout(self, corners: np.ndarray, irradiance: np.ndarray, fine: np.ndarray, coarse: np.ndarray,
+                whole_chart: bool) -> list[Optional[_LayerGrid]]:
+        """The (fine, own, coarse) layer grids for beams with `fine, coarse
+        (m,)` shares of the fine and coarse layers: the fine one over where 99.9% of its flux
+        lands, the others over the chart, or over their beams' bounding box
+        unless `whole_chart`; None for a layer no beam has a share of."""
         lo, hi = self.chart.origin, self.chart.origin + self.chart.size
-        size = np.ptp(corners, axis=1).max(axis=1) / self.cell
-        small = size < 2.0
-        specs = []
+        grids: list[Optional[_LayerGrid]] = [None, None, None]
+        small = fine > 0.0
         if small.any():
             centre = corners[small].mean(axis=1)
-            flux = irradiance[small].sum(axis=1) * np.abs(signed_areas(corners[small]))
-            bounds = np.array([_weighted_quantiles(centre[:, a], flux, (5e-4, 1 - 5e-4)) for a in (0, 1)])
-            small[small] = ((centre >= bounds[:, 0]) & (centre <= bounds[:, 1])).all(axis=1)
-            # a small beam reaches at most 2 map cells from its centre
-            fine_lo, fine_hi = bounds[:, 0] - 2.0 * self.cell, bounds[:, 1] + 2.0 * self.cell
-            cell = max(self.cell / self.FINE, float((fine_hi - fine_lo).max()) / self.FINE_LIMIT)
-            specs.append((fine_lo, fine_hi, cell, corners[small], irradiance[small]))
-        large = size >= self.COARSE
-        for chosen, cell in ((~small & ~large, self.cell), (large, self.COARSE_CELL * self.cell)):
-            if chosen.any():
-                # over the chosen beams' bounding box only
+            # by flux times irradiance: where the light is concentrated, not
+            # the dim light (a reflection off the glass) that many lamp rays
+            # also cut into small beams all over the receiver
+            brightness = irradiance[small].sum(axis=1)
+            weight = fine[small] * brightness ** 2 * np.abs(signed_areas(corners[small]))
+            bounds = np.array([_weighted_quantiles(centre[:, a], weight, (5e-4, 1 - 5e-4)) for a in (0, 1)])
+            # the map's cell over FINE, widened in steps of 2^(1/4) to fit
+            # FINE_LIMIT cells: grids laid out from different beams over
+            # about the same box share a lattice
+            cell = self.cell / self.FINE
+            while float((bounds[:, 1] - bounds[:, 0]).max()) / cell > self.FINE_LIMIT and cell < self.cell:
+                cell *= 2.0 ** 0.25
+            if whole_chart:
+                # the first beams stand for all of them: leave room for those that land further out
+                bounds += np.outer(bounds[:, 1] - bounds[:, 0], [-self.FINE_PAD, self.FINE_PAD])
+            # a beam with a fine share reaches at most 4 map cells from its centre
+            fine_lo, fine_hi = bounds[:, 0] - 4.0 * self.cell, bounds[:, 1] + 4.0 * self.cell
+            grids[0] = _LayerGrid(fine_lo, fine_hi, cell, lo)
+        # the own grid also takes the fine share of beams outside the fine grid
+        for k, chosen, cell in ((1, coarse < 1.0, self.cell), (2, coarse > 0.0, self.COARSE_CELL * self.cell)):
+            if whole_chart:
+                grids[k] = _LayerGrid(lo, hi, cell, lo)
+            elif chosen.any():
                 points = corners[chosen].reshape(-1, 2)
                 box_lo, box_hi = np.maximum(lo, points.min(axis=0)), np.minimum(hi, points.max(axis=0))
-                specs.append((box_lo, box_hi + cell, cell, corners[chosen], irradiance[chosen]))
-        return specs
+                grids[k] = _LayerGrid(box_lo, box_hi, cell, lo)
+        return grids
+
+    def _rasterise_pending(self, whole_chart: bool) -> None:
+        """Share the pending beams among the layers by their size
+        (`layer_shares`) and add them to the layers' grids, laying those out
+        first if there are none; a beam whose centre is outside the fine
+        grid's box gives its fine share to the map's own grid. Each layer
+        is rasterised on a thread of its own (of `threads`)."""
+        corners = np.concatenate([c for c, _ in self._beam_parts])
+        irradiance = np.concatenate([e for _, e in self._beam_parts])
+        self._beam_parts, self._pending_beams = [], 0
+        fine, coarse = layer_shares(np.ptp(corners, axis=1).max(axis=1) / self.cell)
+        if self._grids is None:
+            self._grids = self._layout(corners, irradiance, fine, coarse, whole_chart)
+        grid = self._grids[0]
+        if grid is not None:
+            centre = corners.mean(axis=1)
+            end = grid.lo + grid.cell * np.array(grid.coverage.shape[::-1])
+            fine = np.where(((centre >= grid.lo + 4.0 * self.cell) & (centre <= end - 4.0 * self.cell)).all(axis=1),
+                            fine, 0.0)
+        else:
+            fine = np.zeros(len(corners))
+        shares = (fine, (1.0 - fine) * (1.0 - coarse), coarse)
+        work = [(g, share > 0.0, share) for g, share in zip(self._grids, shares) if g is not None and (share > 0).any()]
+
+        def rasterise(job) -> None:
+            g, chosen, share = job
+            g.add(corners[chosen], irradiance[chosen] * share[chosen, None])
+
+        with ThreadPoolExecutor(max(1, min(self.threads, len(work)))) as pool:
+            list(pool.map(rasterise, work))
 
     def prepare(self) -> None:
-        """Rasterise the pending beams, a layer per thread (of `threads`),
-        and prepare the fallback photons' map."""
+        """Rasterise the pending beams and turn the layers' grids into
+        look-up tables, and prepare the fallback photons' map."""
         super().prepare()
         with self._lock:
             if self._beam_parts:
-                specs = self._take_layer_specs()
-                with ThreadPoolExecutor(max(1, min(self.threads, len(specs)))) as pool:
-                    self._layers += pool.map(lambda spec: _Layer.of_beams(*spec), specs)
+                self._rasterise_pending(whole_chart=False)
+            if self._grids is not None:
+                self._layers += [_Layer.of_coverage(g) for g in self._grids if g is not None]
+                self._grids = None
 
     def irradiance_at(self, xy: np.ndarray) -> np.ndarray:
         return super().irradiance_at(xy) + sum(layer.at(xy) for layer in self._layers)
+
+    def irradiance(self) -> np.ndarray:
+        """(h,w,3) W/m^2 in every cell: the fallback photons' estimate at its
+        centre plus the beams' exact mean over it, so that a bake keeps each
+        beam's flux in the cells it covers (a point sample of the finer
+        layers would alias the caustic's sharp lines)."""
+        h, w = self.shape
+        self.prepare()
+        out = np.empty((h, w, 3))
+        # a band of rows at a time: the look-ups' temporaries (~500 B a cell) stay bounded
+        step = max(1, _BAKE_CELLS // w)
+        for first in range(0, h, step):
+            rows, cols = np.meshgrid(np.arange(first, min(first + step, h)), np.arange(w), indexing="ij")
+            lo = self.chart.origin + self.cell * np.stack([cols.ravel(), rows.ravel()], axis=1)
+            band = IlluminationMap.irradiance_at(self, lo + 0.5 * self.cell)
+            for layer in self._layers:
+                band += layer.mean_over(lo, lo + self.cell)
+            out[first:first + len(rows)] = band.reshape(len(rows), w, 3)
+        return out
 
     def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         return super().mean_over(lo, hi) + sum(layer.mean_over(lo, hi) for layer in self._layers)

@@ -15,7 +15,7 @@ import numpy as np
 from ..scene import RenderSettings, Scene
 
 # RenderSettings fields that change nothing in the maps.
-_EYE_ONLY = {"spp", "lamp_samples", "world_samples", "threads", "chunk_size"}
+_EYE_ONLY = {"spp", "edge_samples", "lamp_samples", "world_samples", "threads", "chunk_size"}
 # Material fields only the eye pass reads: a receiver's map holds irradiance.
 _SHADING_ONLY = {"albedo", "specular", "emission", "texture"}
 

@@ -41,13 +41,39 @@ def rasterise_triangles(shape: tuple[int, int], corners: np.ndarray, values: np.
     corners  (m,3,2) triangle corners (x, y) in cell units, either winding;
              parts outside the grid are dropped
     """
-    h, w = shape
-    # columns -1 (everything left of the grid) to w (the last piece's right
-    # neighbour), flattened row-major
-    acc = np.zeros((values.shape[1], h * (w + 2)))
-    for first in range(0, len(corners), _BATCH):
-        _accumulate(acc, h, w, corners[first:first + _BATCH], values[first:first + _BATCH])
-    return np.cumsum(acc.reshape(-1, h, w + 2), axis=2)[:, :, 1:w + 1]
+    buffer = Coverage(shape, values.shape[1])
+    buffer.add(corners, values)
+    return buffer.planes()
+
+
+class Coverage:
+    """The accumulation buffer of triangles added batch by batch: its memory
+    is the grid's, whatever the number of triangles, and the coverage is
+    the same however they were batched (the running sum is linear)."""
+
+    def __init__(self, shape: tuple[int, int], channels: int):
+        self.shape = shape
+        h, w = shape
+        # columns -1 (everything left of the grid) to w (the last piece's
+        # right neighbour), flattened row-major
+        self.acc = np.zeros((channels, h * (w + 2)))
+
+    def add(self, corners: np.ndarray, values: np.ndarray) -> None:
+        """Add triangles `corners (m,3,2)` (cell units) of `values (m,c)`;
+        one channel of buffer takes c = 1 only."""
+        h, w = self.shape
+        for first in range(0, len(corners), _BATCH):
+            _accumulate(self.acc, h, w, corners[first:first + _BATCH], values[first:first + _BATCH])
+
+    def widen(self, channels: int) -> None:
+        """Hold `channels` channels from now on, each a copy of the one held."""
+        if len(self.acc) < channels:
+            self.acc = np.repeat(self.acc, channels, axis=0)
+
+    def planes(self) -> np.ndarray:
+        """(c,h,w) the coverage-weighted sums of everything added."""
+        h, w = self.shape
+        return np.cumsum(self.acc.reshape(-1, h, w + 2), axis=2)[:, :, 1:w + 1]
 
 
 def _accumulate(acc: np.ndarray, h: int, w: int, corners: np.ndarray, values: np.ndarray) -> None:

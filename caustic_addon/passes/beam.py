@@ -509,7 +509,28 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
         jobs += [partial(band_beams, stack, first, min(first + rows + 1, grid), accel, materials, maps,
                          settings.max_depth, medium, settings.beam_refinement, band, settings.seed)
                  for band in range(count) for first in range(0, grid - 1, rows)]
-    jobs += photon_jobs(emitters, accel, materials, maps, settings)
+    # bands of rows spread over the grids, both ends first, in any first part
+    # of the jobs: the maps lay their layers out from the first beams they get
+    # (BeamMap)
+    jobs = [jobs[i] for i in spread_order(len(jobs))] + photon_jobs(emitters, accel, materials, maps, settings)
     stats, deliver = deliverer(maps)
     run_chunks(jobs, settings.threads, monitor, 0.0, share, "beam pass", deliver)
     return stats
+
+
+def spread_order(count: int) -> np.ndarray:
+    """(count,) 0..count-1 with both ends first, then by the radical inverse
+    in base 2 of their place in the range (van der Corput: 1/2, 1/4, 3/4,
+    ...), so that every first part of the order spreads evenly over the
+    whole range."""
+    if count <= 2:
+        return np.arange(count)
+    bits = int(count - 1).bit_length() + 1
+    index = np.arange(1 << bits)
+    radical = np.zeros(len(index))
+    for b in range(bits):
+        radical += ((index >> b) & 1) * 0.5 ** (b + 1)
+    picks = np.rint(np.concatenate([[0.0, 1.0], radical]) * (count - 1)).astype(np.int64)
+    _, first = np.unique(picks, return_index=True)
+    ordered = picks[np.sort(first)]
+    return np.concatenate([ordered, np.setdiff1d(np.arange(count), ordered)])

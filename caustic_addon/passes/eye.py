@@ -37,7 +37,7 @@ from ..maps.illumination_map import IlluminationMap
 from ..scene import RenderSettings, Scene
 from ..scene.material_table import Materials
 from ..tracing.accelerator import CAMERA, Accelerator
-from ..tracing.hits import Hits
+from ..tracing.hits import MISS, Hits
 from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.rows import take_rows
 from ..util.vectors import dot
@@ -51,34 +51,42 @@ PASSES = ("direct", "caustic", "ambient")
 HOLDOUT = "holdout"
 # Hash streams of the rotations of a pixel's microfacet strata: two a bounce.
 _FACET_STREAM = 1 << 17
+# Neighbours whose light differs by more than this share of the brighter
+# one sit across an edge (a shadow's, or one seen through glass).
+EDGE_CONTRAST = 0.2
 
 
 class EyeTracer:
     """The eye pass's choices in the bounce (bounce.trace), for the eye rays
-    of the flat pixels [first_pixel, end_pixel): the world where a ray
-    escapes, shading where it meets an opaque surface, both branches at a
-    specular one, where camera rays meeting a holdout stop. A path's id is
-    its eye sample, `spp` to a pixel. Pass buffers, the holdout's among
-    them, are each (end_pixel - first_pixel, 3). A camera ray (one with no
-    specular event yet) stands for a square stratum of its pixel, of side
-    1 / sqrt(spp) pixels. `holdout (m,)` bool per object."""
+    of the flat pixels `pixels (m,)`: the world where a ray escapes, shading
+    where it meets an opaque surface, both branches at a specular one, where
+    camera rays meeting a holdout stop. A path's id is its eye sample, `spp`
+    to a pixel: local pixel * spp + stratum. Pass buffers, the holdout's
+    among them, are each (m, 3); `first (m spp,)` is the object each camera
+    ray meets first (MISS where it leaves the scene). A camera ray (one
+    with no specular event yet) stands for a square stratum of its pixel, of
+    side 1 / sqrt(spp) pixels. `holdout (objects,)` bool per object."""
 
     def __init__(self, accel: Accelerator, scene: Scene, materials: Materials, maps: dict[int, IlluminationMap],
-                 environment: Environment, settings: RenderSettings, first_pixel: int, end_pixel: int,
+                 environment: Environment, settings: RenderSettings, pixels: np.ndarray, spp: int,
                  holdout: np.ndarray):
         self.accel, self.scene, self.materials, self.maps = accel, scene, materials, maps
         self.holdout = holdout
         self.environment, self.settings = environment, settings
-        self.energy, self.spp = settings.energy, settings.spp
-        self.stratum = 1.0 / math.sqrt(settings.spp)
-        self.first_pixel, self.end_pixel = int(first_pixel), int(end_pixel)
+        self.energy, self.spp = settings.energy, spp
+        self.stratum = 1.0 / math.sqrt(spp)
+        self.pixels = pixels
         self.far = 4.0 * scene.extent() + float(np.abs(scene.camera.position).max())
-        self.buffers = {name: np.zeros((self.end_pixel - self.first_pixel, 3)) for name in (*PASSES, HOLDOUT)}
+        self.buffers = {name: np.zeros((len(pixels), 3)) for name in (*PASSES, HOLDOUT)}
+        self.first = np.full(len(pixels) * spp, MISS)
 
-    def _add(self, name: str, pixel: np.ndarray, radiance: np.ndarray) -> None:
-        size = self.end_pixel - self.first_pixel
+    def _add(self, name: str, local: np.ndarray, radiance: np.ndarray) -> None:
         for c in range(3):
-            self.buffers[name][:, c] += np.bincount(pixel - self.first_pixel, weights=radiance[:, c], minlength=size)
+            self.buffers[name][:, c] += np.bincount(local, weights=radiance[:, c], minlength=len(self.pixels))
+
+    def _met(self, rays: Paths, hits: Hits) -> None:
+        camera = ~rays.specular
+        self.first[rays.ids[camera]] = hits.obj[camera]
 
     def escaped(self, rays: Paths) -> None:
         self._add("ambient", rays.ids // self.spp, rays.weight * self.environment.radiance(rays.dirs))
@@ -93,6 +101,7 @@ class EyeTracer:
         return cut
 
     def arrived(self, rays: Paths, hits: Hits) -> None:
+        self._met(rays, hits)
         cut = self._cut_out(rays, hits)
         if cut.any():
             rays, hits = rays.select(~cut), hits.select(~cut)
@@ -110,16 +119,17 @@ class EyeTracer:
         diffuse = albedo * share[:, None]
 
         points, settings = hits.points, self.settings
-        pixel, stratum = rays.ids // self.spp, rays.ids % self.spp
+        local, stratum = rays.ids // self.spp, rays.ids % self.spp
+        pixel = np.take(self.pixels, local)
         direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view, diffuse,
                                  lobe, self.far, pixel, stratum, settings.lamp_samples, settings.seed)
-        self._add("direct", pixel, rays.weight * (direct + np.take(m.emission, hits.obj, axis=0)))
+        self._add("direct", local, rays.weight * (direct + np.take(m.emission, hits.obj, axis=0)))
         ambient = self.scene.ambient * diffuse
         if not self.scene.world.is_black:
             world, glossy = world_light(accel, self.environment, points, shading, facing, view, lobe, self.far,
                                         pixel, stratum, settings.world_samples, settings.seed)
             ambient = ambient + world * diffuse / math.pi + glossy
-        self._add("ambient", pixel, rays.weight * ambient)
+        self._add("ambient", local, rays.weight * ambient)
 
         for index, imap in self.maps.items():
             on_map = hits.obj == index
@@ -141,6 +151,7 @@ class EyeTracer:
             self._add("caustic", here.ids // self.spp, here.weight * radiance)
 
     def scattered(self, rays: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
+        self._met(rays, hits)
         cut = self._cut_out(rays, hits)
         if cut.any():
             rays, hits, surface = rays.select(~cut), hits.select(~cut), surface.select(~cut)
@@ -168,37 +179,93 @@ class EyeTracer:
         self._add("direct", pixel, np.take(rays.weight, rows, axis=0) * tint * radiance)
 
 
+def edge_pixels(first: np.ndarray, shown: np.ndarray, contrast: float = EDGE_CONTRAST) -> np.ndarray:
+    """(h,w) bool: the pixels whose samples disagree, the pixels an
+    extra-sampling pass antialiases. Samples disagree where a pixel's camera
+    rays meet different objects, or meet another object than a neighbour's
+    (a silhouette between them), or where what it shows differs from a
+    neighbour's by more than `contrast` of the brighter (a shadow's edge,
+    or an edge seen through glass). `first (h,w,s)` the object each of a
+    pixel's s camera rays meets first; `shown (h,w)` the pixels' light (max
+    channel), but for the caustic of a receiver seen directly, which is
+    already the mean over the pixel's footprint."""
+    edge = (first != first[..., :1]).any(axis=2)
+    head = first[..., 0]
+    for axis in (0, 1):
+        a, b = (np.take(head, range(0, head.shape[axis] - 1), axis=axis),
+                np.take(head, range(1, head.shape[axis]), axis=axis))
+        da, db = (np.take(shown, range(0, shown.shape[axis] - 1), axis=axis),
+                  np.take(shown, range(1, shown.shape[axis]), axis=axis))
+        differ = (a != b) | (np.abs(da - db) > contrast * np.maximum(da, db))
+        lo = [slice(None)] * 2
+        hi = [slice(None)] * 2
+        lo[axis], hi[axis] = slice(0, -1), slice(1, None)
+        edge[tuple(lo)] |= differ
+        edge[tuple(hi)] |= differ
+    return edge
+
+
 def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
              maps: dict[int, IlluminationMap], monitor: Monitor, start: float) -> dict[str, np.ndarray]:
     """Trace `spp` eye rays through every pixel, chunk by chunk, reporting
-    progress from `start` to 1. Returns the pass buffers and the holdout's,
-    each (pixels, 3)."""
+    progress from `start` to 1; then, with `edge_samples`, trace that many
+    again through each pixel whose samples disagree (`edge_pixels`: a
+    silhouette, a shadow's edge, an edge seen through glass), which replace
+    its first ones. Returns the pass buffers and the holdout's, each
+    (pixels, 3)."""
     cam = scene.camera
     pixels = cam.pixx * cam.pixy
-    offsets = pixel_offsets(settings.spp, settings.seed)
-    samples = pixels * settings.spp
     camera_medium = int(accel.medium_at(cam.position[None])[0])
-    size = chunk_size(samples, settings.chunk_size, settings.threads)
-
     environment = Environment(scene.world)
     holdout = np.array([o.visibility.holdout for o in scene.objects], dtype=bool)
+    edges = settings.edge_samples > settings.spp
+    main_share = (1.0 - start) * (0.8 if edges else 1.0)
 
-    def job(first: int) -> EyeTracer:
-        sample = np.arange(first, min(first + size, samples))
-        pixel = sample // settings.spp
-        origins, dirs = eye_rays(cam, pixel, offsets[sample % settings.spp])
-        weight = np.full((len(sample), 3), 1.0 / settings.spp)
-        tracer = EyeTracer(accel, scene, materials, maps, environment, settings, pixel[0], pixel[-1] + 1, holdout)
-        trace(accel, materials, Paths.start(origins, dirs, weight, sample, camera_medium, relative_floor(weight),
-                                            camera=True), settings.max_depth, tracer)
-        return tracer
+    def trace_pixels(pixel_list: np.ndarray, spp: int, begin: float, share: float, stage: str):
+        """Buffers (m,3) by pass and the first objects (m spp,) of `spp`
+        samples in each of the pixels `pixel_list (m,)`."""
+        offsets = pixel_offsets(spp, settings.seed)
+        per_job = max(1, chunk_size(len(pixel_list) * spp, settings.chunk_size, settings.threads) // spp)
 
-    jobs = [partial(job, first) for first in range(0, samples, size)]
-    buffers = {name: np.zeros((pixels, 3)) for name in (*PASSES, HOLDOUT)}
+        def job(first: int):
+            local = np.arange(first, min(first + per_job, len(pixel_list)))
+            sample = (local[:, None] * spp + np.arange(spp)).ravel()
+            pixel = np.take(pixel_list, sample // spp)
+            origins, dirs = eye_rays(cam, pixel, offsets[sample % spp])
+            weight = np.full((len(sample), 3), 1.0 / spp)
+            tracer = EyeTracer(accel, scene, materials, maps, environment, settings, pixel_list[local], spp,
+                               holdout)
+            trace(accel, materials, Paths.start(origins, dirs, weight, sample - first * spp, camera_medium,
+                                                relative_floor(weight), camera=True), settings.max_depth, tracer)
+            return first, tracer
 
-    def add(tracer: EyeTracer) -> None:
-        for name in buffers:
-            buffers[name][tracer.first_pixel:tracer.end_pixel] += tracer.buffers[name]
+        buffers = {name: np.zeros((len(pixel_list), 3)) for name in (*PASSES, HOLDOUT)}
+        first_objects = np.full(len(pixel_list) * spp, MISS)
 
-    run_chunks(jobs, settings.threads, monitor, start, 1.0 - start, "eye pass", add)
+        def add(done) -> None:
+            first, tracer = done
+            end = first + len(tracer.pixels)
+            for name in buffers:
+                buffers[name][first:end] += tracer.buffers[name]
+            first_objects[first * spp:end * spp] = tracer.first
+
+        jobs = [partial(job, first) for first in range(0, len(pixel_list), per_job)]
+        run_chunks(jobs, settings.threads, monitor, begin, share, stage, add)
+        return buffers, first_objects
+
+    buffers, first = trace_pixels(np.arange(pixels), settings.spp, start, main_share, "eye pass")
+    if edges and pixels > 1:
+        # the caustic a camera ray sees on a receiver is already its footprint's mean
+        seen_through = np.append(materials.specular_surface, False)[first]  # MISS (-1) takes the False
+        through = np.add.reduceat(seen_through.astype(np.float64), np.arange(0, len(first), settings.spp))
+        shown = (buffers["direct"] + buffers["ambient"] + buffers["caustic"] * (through / settings.spp)[:, None])
+        refine = np.flatnonzero(edge_pixels(first.reshape(cam.pixy, cam.pixx, settings.spp),
+                                            shown.max(axis=1).reshape(cam.pixy, cam.pixx)))
+        if len(refine):
+            extra, _ = trace_pixels(refine, settings.edge_samples, start + main_share, 1.0 - start - main_share,
+                                    "eye pass")
+            for name in buffers:
+                buffers[name][refine] = extra[name]
+        else:
+            monitor.step(1.0, "eye pass")
     return buffers

@@ -47,18 +47,41 @@ class Mesh:
                     None if self.corner_uvs is None else np.take(self.corner_uvs, rows, axis=0))
 
     def transformed(self, matrix: np.ndarray) -> "Mesh":
-        """This mesh under a (4,4) affine matrix; normals go by its inverse transpose."""
+        """This mesh under a (4,4) affine matrix. Normals go by its cofactor
+        matrix, det(M) M^-T, signed as det(M) (the inverse transpose, up to
+        scale, and defined when M is singular: a mesh scaled to 0 along an
+        axis keeps the normals of the faces across that axis); the
+        triangles such a matrix flattens to no area are dropped."""
         m = np.asarray(matrix, dtype=np.float64)
         verts = self.vertices @ m[:3, :3].T + m[:3, 3]
-        normals = None
-        if self.corner_normals is not None:
-            nmat = np.linalg.inv(m[:3, :3]).T
-            normals = self.corner_normals @ nmat.T
-            normals /= np.linalg.norm(normals, axis=-1, keepdims=True)
-        tris = self.triangles if np.linalg.det(m[:3, :3]) > 0 else self.triangles[:, ::-1]
-        if normals is not None and tris is not self.triangles:
-            normals = normals[:, ::-1]
-        uvs = None
-        if self.corner_uvs is not None:
-            uvs = self.corner_uvs if tris is self.triangles else self.corner_uvs[:, ::-1]
+        det = float(np.linalg.det(m[:3, :3]))
+        tris, normals, uvs = self.triangles, self.corner_normals, self.corner_uvs
+        if det < 0.0:
+            tris = tris[:, ::-1]
+            normals = None if normals is None else normals[:, ::-1]
+            uvs = None if uvs is None else uvs[:, ::-1]
+        if normals is not None:
+            normals = normals @ cofactor_matrix(m[:3, :3]).T * (-1.0 if det < 0.0 else 1.0)
+            length = np.linalg.norm(normals, axis=-1, keepdims=True)
+            normals = normals / np.maximum(length, 1e-300)
+        if det == 0.0:
+            keep = with_area(verts, tris)
+            tris = tris[keep]
+            normals = None if normals is None else normals[keep]
+            uvs = None if uvs is None else uvs[keep]
         return Mesh(verts, tris, normals, uvs)
+
+
+def cofactor_matrix(m: np.ndarray) -> np.ndarray:
+    """(3,3) cofactor matrix of `m (3,3)`: its columns are the cross
+    products of m's columns in turn, m1 x m2, m2 x m0, m0 x m1; it equals
+    det(m) m^-T where m is invertible."""
+    c = m.T
+    return np.stack([np.cross(c[1], c[2]), np.cross(c[2], c[0]), np.cross(c[0], c[1])], axis=1)
+
+
+def with_area(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(nt,) bool: the triangles `triangles (nt,3)` of `vertices (nv,3)`
+    whose area is not 0."""
+    corners = np.take(vertices, triangles, axis=0)
+    return np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1) > 0.0

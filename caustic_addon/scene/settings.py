@@ -32,6 +32,9 @@ class RenderSettings:
                   paths diverge (0 for a plain grid)
     max_depth     specular bounces per photon and per eye ray
     spp           eye samples per pixel
+    edge_samples  eye samples that replace a pixel's `spp` where they
+                  disagree (a silhouette, a shadow's edge); no second pass
+                  unless it is above spp
     lamp_samples  shadow rays per eye sample toward each lamp with a size
                   (a lamp of size 0 takes one), stratified over the pixel
     world_samples directions per eye sample toward the world, stratified
@@ -49,6 +52,7 @@ class RenderSettings:
     beam_refinement: int = 1
     max_depth: int = 12
     spp: int = 4
+    edge_samples: int = 8
     lamp_samples: int = 8
     world_samples: int = 8
     seed: int = 0
@@ -72,6 +76,7 @@ class RenderSettings:
              f"must be in 0..{MAX_BEAM_REFINEMENT}"),
             ("max_depth", self.max_depth >= 1, "must be >= 1"),
             ("spp", self.spp >= 1, "must be >= 1"),
+            ("edge_samples", self.edge_samples >= 0, "must be >= 0"),
             ("lamp_samples", self.lamp_samples >= 1, "must be >= 1"),
             ("world_samples", self.world_samples >= 1, "must be >= 1"),
             ("chunk_size", self.chunk_size >= 1, "must be >= 1"),

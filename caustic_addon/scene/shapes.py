@@ -1,7 +1,8 @@
 """Procedural meshes for tests, benchmarks, the gallery and the paper's
 experiments: a sphere, a cylinder, a cone (point down), a plane, an open
-tube (a mirror ring), a bowl and a slab of water with a wavy top. All but
-the tube are closed; all are wound counter-clockwise seen from outside, with smooth
+tube (a mirror ring), a bowl, a slab of water with a wavy top and an open
+wavy sheet (a subdivided plane under a Wave modifier). All but the tube and
+the sheet are closed; all are wound counter-clockwise seen from outside, with smooth
 corner normals (flat on caps, walls and the plane)."""
 
 from __future__ import annotations
@@ -124,13 +125,10 @@ def tube(radius: float = 1.0, height: float = 1.0, center=(0.0, 0.0, 0.0), segme
     return _revolve(np.array([[radius, height], [radius, 0.0]]), np.array([[1.0, 0.0]]), segments, center)
 
 
-def wavy_slab(size: float = 2.0, depth: float = 0.3, waves=((0.02, 0.5, 0.0), (0.015, 0.37, 1.1)),
-              cells: int = 128, center=(0.0, 0.0, 0.0)) -> Mesh:
-    """A closed square slab of water, `size` across and `depth` deep, its
-    top the height field depth + sum of a cos(k . (x, y)) over `waves`
-    (amplitude a m, wavelength m, direction radians), sampled on `cells` x
-    `cells` quads with the field's own normals (-dh/dx, -dh/dy, 1), smooth;
-    flat bottom and sides. `center` is the middle of its bottom face."""
+def _height_field(size: float, depth: float, waves, cells: int):
+    """The top of `wavy_slab` (its docstring gives the field): (vertices
+    ((cells+1)^2, 3), unit normals of the field alike, triangles (2 cells^2,
+    3) counter-clockwise seen from above)."""
     ticks = np.linspace(-0.5 * size, 0.5 * size, cells + 1)
     x, y = np.meshgrid(ticks, ticks, indexing="ij")
     h, dx, dy = np.full_like(x, depth), np.zeros_like(x), np.zeros_like(x)
@@ -147,6 +145,29 @@ def wavy_slab(size: float = 2.0, depth: float = 0.3, waves=((0.02, 0.5, 0.0), (0
     i, j = np.meshgrid(np.arange(cells), np.arange(cells), indexing="ij")
     a, b, c, d = i * n + j, (i + 1) * n + j, (i + 1) * n + j + 1, i * n + j + 1
     top_tris = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    return top, top_normals, top_tris
+
+
+def wavy_sheet(size: float = 2.0, waves=((0.02, 0.5, 0.0), (0.015, 0.37, 1.1)), cuts: int = 100,
+               center=(0.0, 0.0, 0.0)) -> Mesh:
+    """An open square sheet `size` across, a plane subdivided with `cuts`
+    cuts ((cuts + 1)^2 quads) displaced by waves as Blender's Wave and
+    Ocean modifiers do: the height field sum of a cos(k . (x, y)) over
+    `waves` (amplitude a m, wavelength m, direction radians) about
+    `center`, with the field's own smooth normals, facing up."""
+    top, normals, tris = _height_field(size, 0.0, waves, cuts + 1)
+    return Mesh(top + np.asarray(center, dtype=np.float64), tris, normals[tris])
+
+
+def wavy_slab(size: float = 2.0, depth: float = 0.3, waves=((0.02, 0.5, 0.0), (0.015, 0.37, 1.1)),
+              cells: int = 128, center=(0.0, 0.0, 0.0)) -> Mesh:
+    """A closed square slab of water, `size` across and `depth` deep, its
+    top the height field depth + sum of a cos(k . (x, y)) over `waves`
+    (amplitude a m, wavelength m, direction radians), sampled on `cells` x
+    `cells` quads with the field's own normals (-dh/dx, -dh/dy, 1), smooth;
+    flat bottom and sides. `center` is the middle of its bottom face."""
+    top, top_normals, top_tris = _height_field(size, depth, waves, cells)
+    n = cells + 1
     # the rim walked counter-clockwise seen from above: y = -half, x = +half, y = +half, x = -half
     grid = np.arange(n * n).reshape(n, n)
     rim = np.concatenate([grid[:-1, 0], grid[-1, :-1], grid[:0:-1, -1], grid[0, :0:-1]])

@@ -20,6 +20,17 @@ def _finite(name: str, what: str, array) -> None:
         raise SceneError(f"{name}: {what} contains NaN or infinite values")
 
 
+def _material_finite(name: str, material) -> None:
+    if isinstance(material, Dielectric):
+        parts = [("its colour", material.color), ("its absorption", material.absorption)]
+    elif isinstance(material, Diffuse):
+        parts = [("its colour", material.albedo), ("its emission", material.emission)]
+    else:
+        parts = []
+    for what, value in parts:
+        _finite(name, what, value)
+
+
 def validate_scene(scene: Scene) -> list[str]:
     """Raise SceneError for what cannot be rendered; return warnings."""
     warnings = []
@@ -39,11 +50,14 @@ def validate_scene(scene: Scene) -> list[str]:
             raise SceneError(f"{obj.name}: the mesh has no triangles")
         if mesh.triangles.min() < 0 or mesh.triangles.max() >= len(mesh.vertices):
             raise SceneError(f"{obj.name}: a triangle refers to a vertex that does not exist")
+        if mesh.corner_uvs is not None:
+            _finite(obj.name, "its UV map", mesh.corner_uvs)
         if mesh.corner_normals is not None:
             _finite(obj.name, "its normals", mesh.corner_normals)
             if mesh.corner_normals.shape != (len(mesh.triangles), 3, 3):
                 raise SceneError(f"{obj.name}: corner_normals must have shape (triangles, 3, 3)")
         material = obj.material
+        _material_finite(obj.name, material)
         if isinstance(material, (Dielectric, Reflector)) and not 0.0 <= material.roughness <= 1.0:
             raise SceneError(f"{obj.name}: roughness must be between 0 and 1 (got {material.roughness})")
         if isinstance(material, Dielectric):

@@ -41,6 +41,11 @@ def negative_ior_override(parts):
     parts["ball"].caustic.ior = 0.0
 
 
+def a_resolution_too_large_for_memory(parts):
+    bpy.context.scene.render.resolution_x = bpy.context.scene.render.resolution_y = 65536
+    bpy.context.scene.render.resolution_percentage = 100
+
+
 CASES = [
     (no_camera, "The scene has no active camera", {"render", "compare_cycles"}),
     (no_lamp, "Nothing lights the scene: it has no lamp, and its world is black", {"render", "compare_cycles", "bake"}),
@@ -49,6 +54,7 @@ CASES = [
     (zero_lamp_rays, "Lamp Rays is 0", {"render", "compare_cycles", "bake"}),
     (zero_ior_in_the_material, "Ball: IOR must be a positive number", {"render", "compare_cycles", "bake"}),
     (negative_ior_override, "Ball: IOR must be a positive number", {"render", "compare_cycles", "bake"}),
+    (a_resolution_too_large_for_memory, "this render needs about 860.2 GB of memory", {"render"}),
 ]
 
 
@@ -179,6 +185,39 @@ WARNED = [
 ]
 
 
+def the_ball_scaled_to_0_on_one_axis(parts):
+    parts["ball"].scale.z = 0.0
+
+
+def the_ball_scaled_to_0(parts):
+    parts["ball"].scale = (0.0, 0.0, 0.0)
+
+
+def the_ball_without_faces(parts):
+    bm = bmesh.new()
+    bm.from_mesh(parts["ball"].data)
+    bmesh.ops.delete(bm, geom=list(bm.faces), context='FACES_ONLY')
+    bm.to_mesh(parts["ball"].data)
+    bm.free()
+
+
+def a_box_on_the_floor_scaled_flat(parts):
+    bpy.ops.mesh.primitive_cube_add(size=0.5, location=(1.5, 0.0, 0.0))
+    bpy.context.object.name = "Box"
+    bpy.context.object.scale.z = 0.0
+    bpy.context.object.data.materials.append(bpy.data.materials["Floor"])
+
+
+WARNED += [
+    (the_ball_scaled_to_0_on_one_axis, "'Ball' is scaled to 0 along an axis: glass with no thickness bends no "
+                                       "light, so it was left out"),
+    (the_ball_scaled_to_0, "'Ball' is scaled to 0, so none of its faces has any area: it was left out"),
+    (the_ball_without_faces, "'Ball' has no faces, so it casts no caustics: it was left out"),
+    (a_box_on_the_floor_scaled_flat, "'Box' is scaled to 0 along an axis: it is rendered flat"),
+]
+
+
+@pytest.mark.filterwarnings("error")
 @pytest.mark.parametrize("spoil, message", WARNED, ids=[case[0].__name__ for case in WARNED])
 def test_odd_lamps_render_with_a_warning_that_names_them(spoil, message, reports):
     parts = scenes.ball_lens_scene(32, 24, lamp_rays=2000, segments=16, rings=8)
@@ -188,3 +227,16 @@ def test_odd_lamps_render_with_a_warning_that_names_them(spoil, message, reports
     assert bpy.ops.caustic.render() == {'FINISHED'}
     assert message in reports()
     assert np.isfinite(scenes.pixels_of("Caustic Render")).all()
+
+
+def test_a_plane_scaled_to_0_across_itself_renders_as_before(reports):
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=2000, segments=16, rings=8)
+    reports()
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    before = scenes.pixels_of("Caustic Render")
+    parts["floor"].scale.z = 0.0
+    bpy.context.view_layer.update()
+    reports()
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    assert "scaled to 0" not in reports()
+    np.testing.assert_allclose(scenes.pixels_of("Caustic Render"), before, rtol=1e-6, atol=1e-7)

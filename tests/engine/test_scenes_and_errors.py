@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from caustic_addon import (Cancelled, Dielectric, Diffuse, MapCache, Mesh, Object, PointLight, RenderSettings,
-                           Scene, SceneError, SpotLight, SunLight, render, shapes)
+from caustic_addon import (Camera, Cancelled, Dielectric, Diffuse, MapCache, Mesh, Object, PointLight,
+                           RenderSettings, Scene, SceneError, SpotLight, SunLight, render, shapes)
 from caustic_addon.tracing.topology import open_edge_count, signed_volume, triangle_normals
 from metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
@@ -76,6 +76,12 @@ def broken(**changes):
             glass.mesh = Mesh(glass.mesh.vertices, np.zeros((0, 3), int))
         elif key == "power":
             scene.lights = [PointLight((0, 0, 6), value, name="Lamp")]
+        elif key == "absorption":
+            glass.material = Dielectric(1.5, absorption=value)
+        elif key == "albedo":
+            scene.objects[0].material = Diffuse(albedo=value)
+        elif key == "uv":
+            scene.objects[0].mesh.corner_uvs[0, 0] = value
     return scene
 
 
@@ -85,6 +91,9 @@ def broken(**changes):
     (dict(vertices=[np.nan, 0, 0]), "Glass: its vertex coordinates contains NaN"),
     (dict(empty=True), "Glass: the mesh has no triangles"),
     (dict(power=-5.0), "lamp 'Lamp': its power must be"),
+    (dict(absorption=[np.nan, 0.0, 0.0]), "Glass: its absorption contains NaN"),
+    (dict(albedo=[0.5, np.inf, 0.5]), "Floor: its colour contains NaN or infinite"),
+    (dict(uv=[np.nan, 0.0]), "Floor: its UV map contains NaN"),
 ])
 def test_bad_scenes_name_the_culprit(changes, message):
     with pytest.raises(SceneError, match=message):
@@ -175,3 +184,32 @@ def test_the_wavy_slab_is_closed_faces_out_and_holds_its_volume():
     assert signed_volume(mesh.corners) == pytest.approx(exact, rel=1e-4)
     normals, _ = triangle_normals(mesh.corners)
     assert np.all(np.einsum("ij,ij->i", normals, mesh.corner_normals.mean(axis=1)) > 0.5)
+
+
+def test_a_mesh_scaled_to_0_along_an_axis_keeps_the_faces_across_it():
+    """The inverse transpose does not exist there: the cofactor matrix gives
+    the faces that keep an area their normals, and those flattened to no
+    area are dropped."""
+    box = shapes.cylinder(1.0, 1.0, segments=16)
+    flat = box.transformed(np.diag([2.0, 1.0, 0.0, 1.0]))
+    caps = np.abs(box.corner_normals[:, 0, 2]) > 0.5
+    assert len(flat.triangles) == caps.sum() > 0  # the walls are flattened to nothing, the caps stay
+    assert np.isfinite(flat.corner_normals).all()
+    np.testing.assert_allclose(np.abs(flat.corner_normals[..., 2]), 1.0)
+    assert len(box.transformed(np.diag([0.0, 0.0, 0.0, 1.0])).triangles) == 0
+
+
+def test_a_render_that_cannot_fit_in_memory_is_refused_up_front_with_the_number():
+    """Memory does not grow with the lamp rays (every pass streams its
+    chunks), so 50M of them fit where 100,000 do; a 100,000 x 100,000
+    image does not, and is refused before anything is traced."""
+    from caustic_addon.memory import needed_bytes, refusal
+
+    scene = ball_lens(pixels=8)
+    few, many = (sum(needed_bytes(scene, quick(lamp_rays=n, density="beam")).values()) for n in (100_000, 50_000_000))
+    assert few == many < 2e9
+    assert refusal(scene, quick(lamp_rays=50_000_000, density="beam"), memory=4e9) is None
+    scene.camera = Camera.look_at((0, -6, 4), (0, 0, 0.6), pixx=100_000, pixy=100_000)
+    with pytest.raises(SceneError, match=r"this render needs about 2,00\d\.\d GB of memory, more than this machine's "
+                                         r"[\d,.]+ GB; 2,000.0 GB of it for the image: lower the resolution"):
+        render(scene, quick(lamp_rays=1000))
