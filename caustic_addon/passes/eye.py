@@ -157,7 +157,8 @@ class EyeTracer:
             rays, hits, surface = rays.select(~cut), hits.select(~cut), surface.select(~cut)
         if surface.rough.any():
             self._highlights(rays, hits, surface)
-            uv = strata(rays.ids // self.spp, rays.ids % self.spp, _FACET_STREAM + 2 * depth, self.settings.seed)
+            uv = strata(np.take(self.pixels, rays.ids // self.spp), rays.ids % self.spp, _FACET_STREAM + 2 * depth,
+                        self.settings.seed)
             surface = facets(surface, rays.dirs, self.materials, hits.obj, uv)
         return split(self.accel, self.materials, rays, hits, surface, carries_light=False)
 
@@ -168,7 +169,8 @@ class EyeTracer:
             return
         rows = np.flatnonzero(surface.rough)
         m, obj = self.materials, hits.obj[rows]
-        pixel, stratum = rays.ids[rows] // self.spp, rays.ids[rows] % self.spp
+        local, stratum = rays.ids[rows] // self.spp, rays.ids[rows] % self.spp
+        pixel = np.take(self.pixels, local)
         radiance = rough_specular_radiance(
             self.accel, self.scene.lights, self.energy, np.take(surface.points, rows, axis=0),
             np.take(surface.shading, rows, axis=0), np.take(surface.facing, rows, axis=0),
@@ -176,7 +178,7 @@ class EyeTracer:
             pixel, stratum, self.settings.lamp_samples, self.settings.seed)
         factor = multiscatter(surface, m, hits.obj, rays.dirs, rays.dirs, np.zeros(len(rays), dtype=bool), False)
         tint = np.take(m.color, obj, axis=0) * np.take(factor, rows, axis=0)
-        self._add("direct", pixel, np.take(rays.weight, rows, axis=0) * tint * radiance)
+        self._add("direct", local, np.take(rays.weight, rows, axis=0) * tint * radiance)
 
 
 def edge_pixels(first: np.ndarray, shown: np.ndarray, contrast: float = EDGE_CONTRAST) -> np.ndarray:
