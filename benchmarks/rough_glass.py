@@ -19,7 +19,7 @@ different seeds give the reference (their mean) and its noise (half their
 difference).
 
 Measured for each roughness, over the pixels that see the floor directly
-within REGION shadow radii (the relative L2 error as in sized_lamps.py):
+within sized_lamps.REGION shadow radii (the relative L2 error as in sized_lamps.py):
 - the caustic's width, the radius holding three quarters of its flux over
   the region (the smooth ball's bright disc reaches its fold at 0.13 m), in
   Cycles' caustic (the reference less the engine's direct light, which
@@ -74,16 +74,13 @@ from accuracy import THRESHOLDS, time_to_reach  # noqa: E402
 from caustic_addon import RenderSettings, render  # noqa: E402
 from caustic_addon.cli.image_io import write_image  # noqa: E402
 from caustic_addon.passes import beam, bounce  # noqa: E402
-from caustic_addon.passes.camera_rays import eye_rays  # noqa: E402
 from caustic_addon.sampling.sequences import r2_sequence  # noqa: E402
-from caustic_addon.tracing.accelerator import Accelerator  # noqa: E402
-from sized_lamps import relative_l2  # noqa: E402
+from sized_lamps import floor_region, relative_l2  # noqa: E402
 from speed import machine  # noqa: E402
 
 RESULTS = HERE / "results"
 RADIUS = 0.1
 PIXX, PIXY = 160, 120
-REGION = 1.5
 ROUGHNESS = [0.1, 0.2, 0.4]
 CONVERGED = RenderSettings(lamp_rays=4_000_000, density="adaptive", k_nearest=256, spp=16, lamp_samples=32)
 LAMP_RAYS = [10_000, 20_000, 40_000, 80_000, 160_000, 320_000]
@@ -102,26 +99,6 @@ def engine_scene(roughness: float):
     the_scene.lights = [replace(the_scene.lights[0], radius=RADIUS, soft_falloff=False)]
     the_scene.objects[1].material.roughness = roughness
     return the_scene
-
-
-def floor_radius(the_scene, supersample: int = 4) -> tuple[np.ndarray, np.ndarray]:
-    """(region (pixy, pixx) bool: every sub-sample of the pixel sees the
-    floor directly within REGION shadow radii of the axis; (pixy, pixx) the
-    mean distance from the axis of what each pixel sees of the floor, m)."""
-    cam = the_scene.camera
-    spp = supersample ** 2
-    ticks = (np.arange(supersample) + 0.5) / supersample
-    offsets = np.stack(np.meshgrid(ticks, ticks), axis=-1).reshape(-1, 2)
-    sample = np.arange(cam.pixx * cam.pixy * spp)
-    origins, dirs = eye_rays(cam, sample // spp, offsets[sample % spp])
-    accel = Accelerator(the_scene.objects, the_scene.extent(), 2)
-    hits = accel.intersect(origins, dirs)
-    accel.close()
-    points = origins + np.where(hits.obj == 0, hits.t, 0.0)[:, None] * dirs
-    r = np.hypot(points[:, 0], points[:, 1])
-    inside = (hits.obj == 0) & (r < REGION * ball_lens.shadow_radius())
-    shape = (cam.pixy, cam.pixx)
-    return inside.reshape(-1, spp).all(axis=1).reshape(shape), r.reshape(-1, spp).mean(axis=1).reshape(shape)
 
 
 def flux_radius(caustic: np.ndarray, region: np.ndarray, radius: np.ndarray, share: float = 0.75,
@@ -260,7 +237,7 @@ def engine_curve(name: str, roughness: float, density: str, truth: np.ndarray, r
 def measure(roughness: float, cycles_samples: int) -> dict:
     print(f"Roughness {roughness}", flush=True)
     the_scene = engine_scene(roughness)
-    region, radius = floor_radius(the_scene)
+    region, radius = floor_region(the_scene)
     start = time.perf_counter()
     converged = render(the_scene, CONVERGED)
     converged_seconds = time.perf_counter() - start

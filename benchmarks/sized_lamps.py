@@ -74,9 +74,10 @@ def engine_scene(radius: float):
     return the_scene
 
 
-def floor_region(the_scene, supersample: int = 4) -> np.ndarray:
-    """(pixy, pixx) bool: every sub-sample of the pixel sees the floor
-    directly within REGION shadow radii of the axis."""
+def floor_region(the_scene, supersample: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """(region (pixy, pixx) bool: every sub-sample of the pixel sees the
+    floor directly within REGION shadow radii of the axis; (pixy, pixx) the
+    mean distance from the axis of what each pixel sees of the floor, m)."""
     cam = the_scene.camera
     spp = supersample ** 2
     ticks = (np.arange(supersample) + 0.5) / supersample
@@ -87,8 +88,10 @@ def floor_region(the_scene, supersample: int = 4) -> np.ndarray:
     hits = accel.intersect(origins, dirs)
     accel.close()
     points = origins + np.where(hits.obj == 0, hits.t, 0.0)[:, None] * dirs
-    inside = (hits.obj == 0) & (np.hypot(points[:, 0], points[:, 1]) < REGION * ball_lens.shadow_radius())
-    return inside.reshape(-1, spp).all(axis=1).reshape(cam.pixy, cam.pixx)
+    r = np.hypot(points[:, 0], points[:, 1])
+    inside = (hits.obj == 0) & (r < REGION * ball_lens.shadow_radius())
+    shape = (cam.pixy, cam.pixx)
+    return inside.reshape(-1, spp).all(axis=1).reshape(shape), r.reshape(-1, spp).mean(axis=1).reshape(shape)
 
 
 def relative_l2(image: np.ndarray, reference: np.ndarray, region: np.ndarray) -> float:
@@ -144,7 +147,7 @@ def main() -> None:
     args = parser.parse_args()
 
     sized = engine_scene(RADIUS)
-    region = floor_region(sized)
+    region, _ = floor_region(sized)
     start = time.perf_counter()
     converged = render(sized, CONVERGED)
     converged_seconds = time.perf_counter() - start

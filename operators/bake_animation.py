@@ -18,7 +18,8 @@ from ..writeback.images import working_colorspace
 from ..writeback.output import OutputError, check_saved, check_writable, frame_range, write_float_exr
 from ..writeback.results import record_run
 from .animation import FrameRangeOptions, frames_text
-from .bake import IMAGE_PREFIX, bakeable, map_rgba, read_for_bake, wire_bake
+from ..writeback.bake import IMAGE_PREFIX, bakeable, map_rgba, wire_bake
+from .bake import read_for_bake
 from .engine_run import EngineOperator
 
 DEFAULT_FOLDER = "//caustic_bake/"

@@ -24,7 +24,8 @@ from ..export import InputError, render_settings
 from ..export.render_view import ENGINE as READER_ENGINE
 from ..jobs import RenderJob
 from ..writeback.images import write_image
-from .bake import IMAGE_PREFIX, bake_maps, map_rgba, read_for_bake
+from ..writeback.bake import IMAGE_PREFIX, bake_maps, map_rgba
+from .bake import read_for_bake
 
 
 def _wanted(scene) -> bool:

@@ -63,14 +63,40 @@ def shadowing_weight(cos_in: np.ndarray, cos_out: np.ndarray, alpha: np.ndarray)
     return (1.0 + lam_in) / (1.0 + lam_in + ggx_lambda(cos_out, alpha))
 
 
+def reflection(cos_nv: np.ndarray, cos_nl: np.ndarray, cos_nh: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """The microfacet BRDF times cos(theta_l), without Fresnel:
+
+        f cos_l = D(h) G2(v, l) / (4 cos_v),  G2 = 1 / (1 + Lambda(v) + Lambda(l))
+
+    (Heitz 2014, eq. 99, height-correlated; Cycles' bsdf_microfacet_eval,
+    which returns f cos_l). 0 where either direction is below the surface."""
+    up = (cos_nv > 0.0) & (cos_nl > 0.0)
+    g2 = 1.0 / (1.0 + ggx_lambda(cos_nv, alpha) + ggx_lambda(cos_nl, alpha))
+    return np.where(up, ggx_d(cos_nh, alpha) * g2 / (4.0 * np.where(up, cos_nv, 1.0)), 0.0)
+
+
+def reflection_pdf(cos_nv: np.ndarray, cos_nh: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """Solid-angle density of l = reflect(v, h) for h drawn from the visible
+    normals: D(h) G1(v) / (4 cos_v), G1 = 1 / (1 + Lambda(v)) (Heitz 2018,
+    eq. 17 with the reflection Jacobian 1 / (4 v.h))."""
+    g1 = 1.0 / (1.0 + ggx_lambda(cos_nv, alpha))
+    return ggx_d(cos_nh, alpha) * g1 / (4.0 * np.maximum(cos_nv, 1e-300))
+
+
 def sample_visible_normals_local(wi: np.ndarray, alpha: np.ndarray, uv: np.ndarray) -> np.ndarray:
     """(n,3) microfacet normals drawn from GGX's distribution of normals
     visible from `wi (n,3)` (unit, local, wi.z > 0), of density
-    D_wi(h) = G1(wi) max(0, wi.h) D(h) / wi.z, from `uv (n,2)` in [0,1)^2:
-    Heitz 2018, sec. 3-4, as Cycles' `microfacet_ggx_sample_vndf`: stretch wi
-    to the hemisphere configuration, take a disc point, squeeze half the
-    disc by (1 + wi_h.z) / 2, lift it onto the hemisphere about wi_h, and
-    unstretch."""
+    D_wi(h) = G1(wi) max(0, wi.h) D(h) / wi.z, from `uv (n,2)` in [0,1)^2
+    through the concentric disc: visible_normals_of_disc."""
+    return visible_normals_of_disc(wi, alpha, concentric_disc(uv))
+
+
+def visible_normals_of_disc(wi: np.ndarray, alpha: np.ndarray, disc: np.ndarray) -> np.ndarray:
+    """(n,3) the visible normals (sample_visible_normals_local) of points
+    `disc (n,2)` of the unit disc: Heitz 2018, sec. 3-4, as Cycles'
+    `microfacet_ggx_sample_vndf`: stretch wi to the hemisphere
+    configuration, squeeze half the disc by (1 + wi_h.z) / 2, lift it onto
+    the hemisphere about wi_h, and unstretch."""
     a = alpha[:, None]
     wh = normalize(np.concatenate([a * wi[:, :2], wi[:, 2:]], axis=1))
     lensq = wh[:, 0] ** 2 + wh[:, 1] ** 2
@@ -79,7 +105,6 @@ def sample_visible_normals_local(wi: np.ndarray, alpha: np.ndarray, uv: np.ndarr
     t1 = np.stack([np.where(tilted, -wh[:, 1] * inv, 1.0), np.where(tilted, wh[:, 0] * inv, 0.0),
                    np.zeros(len(wh))], axis=1)
     t2 = cross_rows(wh, t1)
-    disc = concentric_disc(uv)
     s = 0.5 * (1.0 + wh[:, 2])
     p1 = disc[:, 0]
     p2 = (1.0 - s) * np.sqrt(np.maximum(0.0, 1.0 - p1 * p1)) + s * disc[:, 1]

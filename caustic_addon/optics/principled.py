@@ -2,7 +2,7 @@
 "Principled v2") over its diffuse base, as intern/cycles/kernel/svm/closure.h
 builds it and kernel/closure/bsdf_microfacet.h evaluates it:
 
-- a GGX lobe of alpha = Roughness^2 (ggx.py);
+- a GGX lobe of alpha = Roughness^2 (microfacet.py);
 - F0 = ((n - 1) / (n + 1))^2 of the IOR n, times 2 x Specular IOR Level
   (0.5 keeps it), and the IOR that F0 belongs to, eta = (1 + sqrt F0) /
   (1 - sqrt F0), is the one the Fresnel curve follows; Specular Tint
@@ -39,7 +39,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from . import ggx
+from . import microfacet
 from ..util.vectors import dot, max_channel, normalize
 from .specular import fresnel_dielectric
 
@@ -50,7 +50,7 @@ S_NODES = 16
 # leaves the hemisphere.
 QUADRATURE = 48
 # The smallest alpha the lobe takes: 1e-10 for alpha^2, a mirror to
-# Cycles (ggx.SMOOTH_ALPHA2), which lamps do not light.
+# Cycles (microfacet.SPECULAR_ALPHA2), which lamps do not light.
 MIN_ALPHA = 1e-5
 
 
@@ -124,13 +124,14 @@ def directional(rough: float, mu: np.ndarray, eta: float) -> tuple[np.ndarray, n
     mu_rows = np.repeat(mu, q)
     view = np.stack([np.sqrt(1.0 - mu_rows ** 2), np.zeros(q * k), mu_rows], axis=1)
     alpha = rough * rough
-    h = ggx.sample_visible_normals(view, np.full(q * k, alpha), np.tile(uv, (k, 1)))
+    r, phi = np.sqrt(uv[:, 0]), 2.0 * math.pi * uv[:, 1]
+    disc = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=1)
+    h = microfacet.visible_normals_of_disc(view, np.full(q * k, alpha), np.tile(disc, (k, 1)))
     cos_hv = dot(view, h)
     cos_l = 2.0 * cos_hv * h[:, 2] - mu_rows
-    alpha2 = alpha * alpha
-    lambda_v = ggx.smith_lambda(mu_rows, alpha2)
+    lambda_v = microfacet.ggx_lambda(mu_rows, alpha)
     up = cos_l > 0.0
-    g2_over_g1 = np.where(up, (1.0 + lambda_v) / (1.0 + lambda_v + ggx.smith_lambda(cos_l, alpha2)), 0.0)
+    g2_over_g1 = np.where(up, (1.0 + lambda_v) / (1.0 + lambda_v + microfacet.ggx_lambda(cos_l, alpha)), 0.0)
     real = f0_from_ior(eta)
     s = np.where(up, np.clip((fresnel_dielectric(cos_hv, 1.0 / eta) - real) / (1.0 - real), 0.0, 1.0), 0.0)
     weights = np.tile(weight, k)
@@ -236,7 +237,7 @@ class Lobe:
     @property
     def lamp_lit(self) -> np.ndarray:
         """(n,) the points whose lobe lamps light: not a mirror (Cycles evaluates no mirror)."""
-        return self.active & (self.alpha * self.alpha > ggx.SMOOTH_ALPHA2)
+        return self.active & (self.alpha * self.alpha > microfacet.SPECULAR_ALPHA2)
 
     def weight(self, normal: np.ndarray, view: np.ndarray, dirs: np.ndarray) -> np.ndarray:
         """(n,3) f cos(theta_l): the lobe's BRDF toward the eye `view (n,3)`
@@ -244,22 +245,22 @@ class Lobe:
         F(h.v) D G2 / (4 cos_v) x gain (bsdf_microfacet_eval x energy_scale
         x the darkening in the closure's weight)."""
         half = normalize(view + dirs)
-        lobe = ggx.reflection(dot(normal, view), dot(normal, dirs), dot(normal, half), self.alpha * self.alpha)
+        lobe = microfacet.reflection(dot(normal, view), dot(normal, dirs), dot(normal, half), self.alpha)
         return fresnel(dot(half, view), self.eta, self.f0) * self.gain * lobe[:, None]
 
     def pdf(self, normal: np.ndarray, view: np.ndarray, dirs: np.ndarray) -> np.ndarray:
         """(n,) solid-angle density of `sample` drawing `dirs (n,3)`; 0 where inactive."""
         cos_h = dot(normal, normalize(view + dirs))
-        pdf = ggx.reflection_pdf(dot(normal, view), cos_h, self.alpha * self.alpha)
+        pdf = microfacet.reflection_pdf(dot(normal, view), cos_h, self.alpha)
         return np.where(self.active & (cos_h > 0.0), pdf, 0.0)
 
     def sample(self, normal: np.ndarray, tangent: np.ndarray, bitangent: np.ndarray, view: np.ndarray,
                uv: np.ndarray) -> np.ndarray:
         """(n,3) unit directions reflect(v, h) about microfacet normals h drawn
-        from the visible normals (ggx.sample_visible_normals) of the frame
+        from the visible normals (microfacet.sample_visible_normals_local) of the frame
         (tangent, bitangent, normal), from `uv (n,2)`; some fall below the surface."""
         local = normalize(np.stack([dot(tangent, view), dot(bitangent, view), np.maximum(dot(normal, view), 1e-9)],
                                    axis=1))
-        h = ggx.sample_visible_normals(local, self.alpha, uv)
+        h = microfacet.sample_visible_normals_local(local, self.alpha, uv)
         h = h[:, 0:1] * tangent + h[:, 1:2] * bitangent + h[:, 2:3] * normal
         return 2.0 * dot(view, h)[:, None] * h - view

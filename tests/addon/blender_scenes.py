@@ -155,6 +155,13 @@ def cycles_render(folder, samples=512, specular_bounces=0) -> np.ndarray:
     cycles.pixel_filter_type, cycles.filter_width = 'BOX', 1.0
     if hasattr(cycles, "use_adaptive_sampling"):
         cycles.use_adaptive_sampling = False
+    return rendered_pixels(folder)
+
+
+def rendered_pixels(folder) -> np.ndarray:
+    """(h, w, 4) float64 RGBA, row 0 at the top: the scene rendered as it is
+    set up, through a float EXR in `folder`."""
+    scene = bpy.context.scene
     scene.render.image_settings.file_format, scene.render.image_settings.color_depth = 'OPEN_EXR', '32'
     scene.render.filepath, scene.render.use_file_extension = os.path.join(folder, "cycles.exr"), False
     bpy.ops.render.render(write_still=True)

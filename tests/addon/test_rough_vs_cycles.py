@@ -15,7 +15,6 @@ defaults but 20,000 lamp rays: in beam mode the lamp sends photons, since
 it lights a rough caster."""
 
 import math
-import os
 
 import bpy
 import numpy as np
@@ -89,15 +88,7 @@ def cycles(folder: str) -> np.ndarray:
     c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
     c.blur_glossy = 0.0
     c.max_bounces, c.transmission_bounces, c.glossy_bounces, c.diffuse_bounces = 13, 12, 12, 1
-    scene.render.image_settings.file_format, scene.render.image_settings.color_depth = 'OPEN_EXR', '32'
-    scene.render.filepath, scene.render.use_file_extension = os.path.join(folder, "cycles.exr"), False
-    bpy.ops.render.render(write_still=True)
-    image = bpy.data.images.load(scene.render.filepath)
-    w, h = image.size
-    pixels = np.empty(w * h * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    bpy.data.images.remove(image)
-    return pixels.reshape(h, w, 4)[::-1, :, :3].astype(np.float64)
+    return scenes.rendered_pixels(folder)[..., :3]
 
 
 def test_a_rough_balls_caustic_widens_with_roughness_as_in_cycles(addon, tmp_path):
