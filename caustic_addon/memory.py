@@ -1,9 +1,10 @@
 """What a render needs in memory, told before it starts, so that one that
 cannot fit is refused with the number rather than failing halfway.
 
-Every pass streams its work in chunks of `chunk_size` rays (photons, beam
-grid points, eye samples), so the need does not grow with the lamp rays:
-it is the pixels, the maps' cells, the triangles and the chunks in flight.
+Every pass streams its work in chunks of `chunk_size` rays (photons, eye
+samples; beam grid points a quarter of it), so the need does not grow with
+the lamp rays: it is the pixels, the maps' cells, the triangles and the
+chunks in flight.
 The bytes per item were measured with benchmarks/beams_at_scale.py
 (VmHWM on the ball lens: 1.0 GB at chunk 65,536, 1.4 GB at 131,072, the
 same from 1M to 50M lamp rays) and are rounded up.
@@ -15,6 +16,7 @@ import os
 from typing import Optional
 
 from .maps.beam_map import BeamMap
+from .passes.beam import BAND_SHARE
 from .scene import RenderSettings, Scene
 
 _BASE = 200e6                  # numpy, Embree and the engine's own tables
@@ -37,7 +39,7 @@ def needed_bytes(scene: Scene, settings: RenderSettings) -> dict[str, float]:
     pixels = cam.pixx * cam.pixy
     cells = len(scene.receivers) * settings.map_resolution_limit ** 2
     in_flight = settings.threads  # a result waiting its turn holds only its deposits
-    lamp_chunk = min(settings.chunk_size, settings.lamp_rays)
+    lamp_chunk = min(settings.chunk_size // (BAND_SHARE if settings.density == "beam" else 1), settings.lamp_rays)
     eye_chunk = min(settings.chunk_size, pixels * settings.spp)
     parts = {
         "the scene's triangles": _PER_TRIANGLE * sum(len(o.mesh.triangles) for o in scene.objects),

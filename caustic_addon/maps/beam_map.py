@@ -113,8 +113,8 @@ class BeamMap(IlluminationMap):
     conserved exactly and a beam squeezed to nothing at a fold cannot spike.
     Beams under 2 to 4 map cells across (the sharp part of a caustic) go
     to a grid FINE times finer (coarser by steps of 2^(1/4) where that would
-    take more than FINE_LIMIT cells a side), laid over where 99.9% of their
-    flux lands; beams about 24 cells across or more (dim, wide light) to a
+    take more than FINE_LIMIT cells a side), laid over the box of the bright
+    ones; beams about 24 cells across or more (dim, wide light) to a
     grid COARSE_CELL times coarser; the others to the map's own grid, each
     beam's light shared between two layers where its size is in between
     (`layer_shares`). Each layer spans only its beams' bounding box.
@@ -123,6 +123,7 @@ class BeamMap(IlluminationMap):
     FINE = 8
     FINE_LIMIT = 2048
     FINE_RAMP = (2.0, 4.0)
+    FINE_BRIGHT = 1e-3
     COARSE_RAMP = (16.0, 32.0)
     COARSE_CELL = 4
     # Beams held back before they are rasterised: bounds their memory (about
@@ -156,20 +157,25 @@ class BeamMap(IlluminationMap):
     def _layout(self, corners: np.ndarray, irradiance: np.ndarray, fine: np.ndarray, coarse: np.ndarray,
                 whole_chart: bool) -> list[Optional[_LayerGrid]]:
         """The (fine, own, coarse) layer grids for beams with `fine, coarse
-        (m,)` shares of the fine and coarse layers: the fine one over where 99.9% of its flux
-        lands, the others over the chart, or over their beams' bounding box
+        (m,)` shares of the fine and coarse layers: the fine one over the
+        bright ones among its beams, the others over the chart, or over their beams' bounding box
         unless `whole_chart`; None for a layer no beam has a share of."""
         lo, hi = self.chart.origin, self.chart.origin + self.chart.size
         grids: list[Optional[_LayerGrid]] = [None, None, None]
         small = fine > 0.0
         if small.any():
             centre = corners[small].mean(axis=1)
-            # by flux times irradiance: where the light is concentrated, not
-            # the dim light (a reflection off the glass) that many lamp rays
-            # also cut into small beams all over the receiver
+            # where the light is concentrated: the beams within FINE_BRIGHT
+            # of the irradiance that the brightest 1% of the flux exceeds,
+            # not the dim light (a reflection off the glass) that many lamp
+            # rays also cut into small beams all over the receiver. Their
+            # whole box: a quantile of it would cut a ring of light's
+            # outermost beams, which sit where the ring touches the box
             brightness = irradiance[small].sum(axis=1)
-            weight = fine[small] * brightness ** 2 * np.abs(signed_areas(corners[small]))
-            bounds = np.array([_weighted_quantiles(centre[:, a], weight, (5e-4, 1 - 5e-4)) for a in (0, 1)])
+            level = _weighted_quantiles(brightness, fine[small] * brightness * np.abs(signed_areas(corners[small])),
+                                        0.99)
+            bright = centre[brightness >= self.FINE_BRIGHT * level]
+            bounds = np.stack([bright.min(axis=0), bright.max(axis=0)], axis=1)
             # the map's cell over FINE, widened in steps of 2^(1/4) to fit
             # FINE_LIMIT cells: grids laid out from different beams over
             # about the same box share a lattice

@@ -21,8 +21,9 @@ from __future__ import annotations
 import numpy as np
 
 
-# Triangles per batch: bounds the pieces' temporaries (~200 B a piece).
-_BATCH = 1 << 15
+# Edge pieces per batch: bounds their temporaries (~200 B a piece), however
+# many cells the triangles span.
+_BATCH_PIECES = 1 << 19
 
 
 def signed_areas(corners: np.ndarray) -> np.ndarray:
@@ -62,8 +63,8 @@ class Coverage:
         """Add triangles `corners (m,3,2)` (cell units) of `values (m,c)`;
         one channel of buffer takes c = 1 only."""
         h, w = self.shape
-        for first in range(0, len(corners), _BATCH):
-            _accumulate(self.acc, h, w, corners[first:first + _BATCH], values[first:first + _BATCH])
+        for first, end in _batches(corners):
+            _accumulate(self.acc, h, w, corners[first:end], values[first:end])
 
     def widen(self, channels: int) -> None:
         """Hold `channels` channels from now on, each a copy of the one held."""
@@ -74,6 +75,20 @@ class Coverage:
         """(c,h,w) the coverage-weighted sums of everything added."""
         h, w = self.shape
         return np.cumsum(self.acc.reshape(-1, h, w + 2), axis=2)[:, :, 1:w + 1]
+
+
+def _batches(corners: np.ndarray) -> list[tuple[int, int]]:
+    """[first, end) runs of the triangles `corners (m,3,2)` (cell units),
+    each of at most _BATCH_PIECES edge pieces (or one triangle): an edge
+    from (x0, y0) to (x1, y1) is cut into at most |x1 - x0| + |y1 - y0| + 3
+    pieces."""
+    span = np.abs(corners - np.take(corners, [1, 2, 0], axis=1))
+    total = np.cumsum(span.sum(axis=(1, 2)) + 9.0)
+    bounds = [0]
+    while bounds[-1] < len(corners):
+        done = total[bounds[-1] - 1] if bounds[-1] else 0.0
+        bounds.append(max(int(np.searchsorted(total, done + _BATCH_PIECES, side="right")), bounds[-1] + 1))
+    return list(zip(bounds[:-1], bounds[1:]))
 
 
 def _accumulate(acc: np.ndarray, h: int, w: int, corners: np.ndarray, values: np.ndarray) -> None:

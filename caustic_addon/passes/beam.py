@@ -65,6 +65,10 @@ REFINE_RATIO = 8.0
 # Families whose throughput is below this (reflections off the outside, weak
 # internal reflections) never split a cell: too little flux for the paths.
 REFINE_THROUGHPUT = 0.2
+# A band holds at most chunk_size / BAND_SHARE grid points: each becomes up
+# to four with refinement, with its landings, lookups and beams (about 3.5 kB
+# a point in all), so that two bands in flight stay near 0.25 GB each.
+BAND_SHARE = 4
 # Beams smaller than this fraction of the chart's area squared fall back to photons.
 _MIN_AREA_FRACTION = 1e-16
 # A beam whose corners span a world triangle more than this many times the
@@ -500,12 +504,13 @@ def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materi
         stacks.setdefault((source.grid, lamp_medium(accel, source.light)), []).append(source)
     jobs = []
     for (grid, medium), stack in stacks.items():
-        # one band of rows per thread, of at most `chunk_size` points: a
+        # one band of rows per thread, of at most chunk_size / BAND_SHARE points: a
         # band's cost is mostly numpy work per bounce and refinement level,
         # whatever its paths, so fewer bands are faster (measured on the ball
         # lens: 0.19 s against 0.29 s for two per thread), and grids of one
         # size are traced together
-        rows = max(1, min(settings.chunk_size // (grid * len(stack)), -(-(grid - 1) // settings.threads)))
+        rows = max(1, min(settings.chunk_size // (BAND_SHARE * grid * len(stack)),
+                          -(-(grid - 1) // settings.threads)))
         jobs += [partial(band_beams, stack, first, min(first + rows + 1, grid), accel, materials, maps,
                          settings.max_depth, medium, settings.beam_refinement, band, settings.seed)
                  for band in range(count) for first in range(0, grid - 1, rows)]

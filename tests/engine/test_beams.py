@@ -228,3 +228,37 @@ def test_a_beam_map_rasterised_in_batches_is_the_map_rasterised_at_once():
     # ones go to the map's own grid: their light moves by under a cell
     np.testing.assert_allclose(batched.mean_over(boxes_lo, boxes_hi), at_once.mean_over(boxes_lo, boxes_hi),
                                rtol=1e-3, atol=1e-9)
+
+
+
+def test_the_fine_layer_holds_a_ring_of_light_around_a_brighter_focus():
+    """A bright focus, a ring of small beams a hundredth as bright around
+    it (a ball lens's fold ring), and dim small beams all over the floor:
+    the fine layer is laid over the whole ring. Laid over a quantile of
+    where the bright light landed, it was the focus's box: the ring's
+    beams beyond it fell to the map's own 5 cm cells, at the four sides
+    where the ring passes the box, and the ball lens's caustic came out
+    9% off at 100k lamp rays (0.8% at 120k)."""
+    verts = np.array([[0, 0, 0], [4, 0, 0], [4, 4, 0], [0, 4, 0]], dtype=float)
+    chart = PlaneChart(np.array([2.0, 2.0, 0.0]), np.array([0.0, 0.0, 1.0]), verts)
+    imap = BeamMap("floor", chart, 0.05, MapEstimate(16))
+    centre = chart.origin + 2.0
+    angle = np.linspace(0.0, 2.0 * np.pi, 7201)
+
+    def annulus(r0, r1):
+        inner, outer = (centre + r * np.stack([np.cos(angle), np.sin(angle)], axis=1) for r in (r0, r1))
+        return np.concatenate([np.stack([inner[:-1], outer[:-1], outer[1:]], axis=1),
+                               np.stack([inner[:-1], outer[1:], inner[1:]], axis=1)])
+
+    focus, ring = annulus(0.0, 0.01), annulus(0.5, 0.504)
+    rng = np.random.default_rng(8)
+    dim = centre + rng.uniform(-1.9, 1.9, (20_000, 1, 2)) + rng.uniform(-0.01, 0.01, (20_000, 3, 2))
+    corners = np.concatenate([focus, ring, dim])
+    irradiance = np.concatenate([np.full((len(focus), 3), 1e4), np.full((len(ring), 3), 100.0),
+                                 np.full((len(dim), 3), 1e-3)])
+    imap.add_beams(corners, irradiance)
+    half = 0.015
+    for x, y in ((0.502, 0.0), (0.0, 0.502), (-0.502, 0.0), (0.0, -0.502)):
+        lo, hi = centre + np.array([[x - half, y - half]]), centre + np.array([[x + half, y + half]])
+        # the ring's strip across the box, as good as straight
+        assert imap.mean_over(lo, hi)[0, 0] == pytest.approx(100.0 * 0.004 / (2.0 * half), rel=0.05)
