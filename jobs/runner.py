@@ -22,11 +22,17 @@ class JobRunner:
     """After the run, `done` lists the steps finished, `error` holds the
     message that stopped it (None if none did), `cancelled` says whether
     a stop request ended it early, and `last` is the last finished job
-    (only it is kept: a frame's images are large)."""
+    (only it is kept: a frame's images are large).
+
+    `parts` says the steps make one result together (Compare's caustic
+    render and its Cycles reference): a stop then cancels the step running,
+    as it does in a run of one step. A step's job is a RenderJob, or
+    anything with its attributes (comparison.cycles.CyclesReference)."""
 
     def __init__(self, steps: Sequence, prepare: Callable[[object], RenderJob],
-                 finish: Callable[[object, RenderJob], None]):
+                 finish: Callable[[object, RenderJob], None], parts: bool = False):
         self.steps, self._prepare, self._finish = list(steps), prepare, finish
+        self._parts = parts or len(self.steps) == 1
         self.done: list = []
         self.last: RenderJob | None = None
         self.error: str | None = None
@@ -50,9 +56,9 @@ class JobRunner:
 
     def stop(self) -> None:
         """Stop after the step running now; a second call (or a run of one
-        step) stops that step too."""
+        step, or of parts) stops that step too."""
         self._stop_requests += 1
-        if self.job is not None and (self._stop_requests > 1 or len(self.steps) == 1):
+        if self.job is not None and (self._stop_requests > 1 or self._parts):
             self.job.cancel()
 
     def _begin(self) -> bool:

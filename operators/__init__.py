@@ -9,6 +9,7 @@ from .compare import CAUSTIC_OT_compare_cycles
 from .paper_scene import CAUSTIC_OT_add_paper_scene
 from .presets import CAUSTIC_OT_apply_preset
 from .render import CAUSTIC_OT_render
+from .render_with_caustics import CAUSTIC_OT_render_animation_with_caustics, CAUSTIC_OT_render_image_with_caustics
 
 from . import bake_on_render
 
@@ -19,6 +20,8 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory((
     CAUSTIC_OT_bake_animation,
     CAUSTIC_OT_unbake,
     CAUSTIC_OT_compare_cycles,
+    CAUSTIC_OT_render_image_with_caustics,
+    CAUSTIC_OT_render_animation_with_caustics,
     CAUSTIC_OT_apply_preset,
     CAUSTIC_OT_add_paper_scene,
 ))

@@ -11,8 +11,8 @@ from ..export import InputError, read_scene, render_settings
 from ..jobs import JobRunner, RenderJob, StepError
 from ..writeback.images import show_image
 from ..writeback.output import OutputError, check_writable, frame_paths, frame_range, save_frame
+from ..writeback.results import RESULT_IMAGE, write_result
 from .engine_run import EngineOperator
-from .render import RESULT_IMAGE, write_result
 
 
 def frames_text(frames: list[int]) -> str:
@@ -68,7 +68,7 @@ class CAUSTIC_OT_render_animation(FrameRangeOptions, EngineOperator, bpy.types.O
 
     def _write(self, frame: int, job: RenderJob) -> None:
         context = bpy.context
-        image = write_result(context, job)
+        image = write_result(context.scene.caustic, job)
         try:
             save_frame(context.scene, context.view_layer.name, image, job.result, self._paths[frame])
         except OutputError as exc:

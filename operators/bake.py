@@ -23,13 +23,8 @@ def read_for_bake(context, depsgraph=None) -> SceneRead:
     return read
 
 
-
-class CAUSTIC_OT_bake(EngineOperator, bpy.types.Operator):
-    bl_idname = "caustic.bake"
-    bl_label = "Bake Caustics"
-    bl_description = ("Trace the lamp rays and store each receiver's caustic in an image its material shows "
-                      "(EEVEE and the viewport then display it)")
-    bl_options = {'REGISTER', 'UNDO'}
+class BakeFrame(EngineOperator):
+    """What Bake Caustics does, for the operators that bake the current frame."""
 
     def _runner(self, context) -> JobRunner | None:
         try:
@@ -58,6 +53,14 @@ class CAUSTIC_OT_bake(EngineOperator, bpy.types.Operator):
             return {'CANCELLED'}
         self.report({'INFO'}, f"Baked caustics onto {', '.join(self._baked)} in {runner.last.seconds:.1f} s")
         return {'FINISHED'}
+
+
+class CAUSTIC_OT_bake(BakeFrame, bpy.types.Operator):
+    bl_idname = "caustic.bake"
+    bl_label = "Bake Caustics"
+    bl_description = ("Trace the lamp rays and store each receiver's caustic in an image its material shows "
+                      "(EEVEE and the viewport then display it)")
+    bl_options = {'REGISTER', 'UNDO'}
 
 
 class CAUSTIC_OT_unbake(bpy.types.Operator):

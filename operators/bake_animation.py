@@ -32,12 +32,8 @@ def same_chart(a, b) -> bool:
         (getattr(fa, k) == getattr(fb, k)).all() for k in ("location", "rotation", "scale"))
 
 
-class CAUSTIC_OT_bake_animation(FrameRangeOptions, EngineOperator, bpy.types.Operator):
-    bl_idname = "caustic.bake_animation"
-    bl_label = "Bake Caustic Animation"
-    bl_description = ("Bake the caustics of every frame of the range into an image sequence beside the .blend, "
-                      "which the receivers' materials follow frame by frame (EEVEE and Cycles renders show it)")
-    bl_options = {'UNDO'}
+class BakeFrames(FrameRangeOptions, EngineOperator):
+    """What Bake Caustic Animation does, for the operators that bake a frame range."""
 
     directory: bpy.props.StringProperty(
         name="Folder", default=DEFAULT_FOLDER, options={'SKIP_SAVE'},
@@ -130,3 +126,11 @@ class CAUSTIC_OT_bake_animation(FrameRangeOptions, EngineOperator, bpy.types.Ope
             self.report({'INFO'}, f"Baked the caustics of {frames_text(done)} onto {', '.join(self._plan)} in "
                                   f"{self._seconds:.1f} s, into '{self._folder}'")
         return {'FINISHED'} if done else {'CANCELLED'}
+
+
+class CAUSTIC_OT_bake_animation(BakeFrames, bpy.types.Operator):
+    bl_idname = "caustic.bake_animation"
+    bl_label = "Bake Caustic Animation"
+    bl_description = ("Bake the caustics of every frame of the range into an image sequence beside the .blend, "
+                      "which the receivers' materials follow frame by frame (EEVEE and Cycles renders show it)")
+    bl_options = {'UNDO'}

@@ -11,8 +11,10 @@ render modifier levels), the maps are traced again and written into the
 same images. Blender runs these handlers on its main thread in command-line
 renders (`blender -b ... -f`, `-a`), where changing data is safe; a render
 started from the UI runs them on its render thread, where the add-on must
-not touch Blender's data, so there it leaves the materials as they are
-(bake with Bake Caustic Animation before rendering). The last frame's bake
+not touch Blender's data, so there it leaves the materials as they are:
+Render > Render Image with Caustics and Render Animation with Caustics
+bake on the main thread first and then start Blender's render through
+`start_render`, which keeps these handlers out of it. The last frame's bake
 stays in the materials after the render, as Bake Caustics leaves it."""
 
 import threading
@@ -28,15 +30,42 @@ from ..writeback.bake import IMAGE_PREFIX, bake_maps, map_rgba
 from .bake import read_for_bake
 
 
+# True while a render that start_render began runs: its frames are baked already.
+_baked_ahead = False
+
+
 def _wanted(scene) -> bool:
     # the add-on's own scene read is a render too: it must not bake
-    if not scene.caustic.use_bake_on_render or scene.render.engine == READER_ENGINE:
+    if not scene.caustic.use_bake_on_render or scene.render.engine == READER_ENGINE or _baked_ahead:
         return False
     if threading.current_thread() is not threading.main_thread():
         print("Caustics: Bake While Rendering works in command-line renders only; this render uses the "
-              "caustics baked before it")
+              "caustics baked before it (in the interface, use Render > Render Image with Caustics or "
+              "Render Animation with Caustics)")
         return False
     return True
+
+
+def start_render(invoke: bool, **options) -> set:
+    """Blender's own render (render.render with `options`) of frames baked
+    ahead, so these handlers stay out of it: with `invoke` as F12 or
+    Ctrl-F12 start it (in the background that, too, renders before it
+    returns), else here and now. Returns the render operator's result."""
+    global _baked_ahead
+    _baked_ahead = True
+    started = set()
+    try:
+        started = bpy.ops.render.render('INVOKE_DEFAULT' if invoke else 'EXEC_DEFAULT', **options)
+    finally:
+        _baked_ahead = 'RUNNING_MODAL' in started
+    return started
+
+
+@persistent
+def _render_ended(*_) -> None:
+    """render_complete or render_cancel (on the render thread in the UI: it only clears a flag)."""
+    global _baked_ahead
+    _baked_ahead = False
 
 
 def _trace(scene, depsgraph):
@@ -86,8 +115,12 @@ def bake_rendered_frame(scene, depsgraph=None) -> None:
 def register() -> None:
     bpy.app.handlers.render_init.append(bake_at_render_start)
     bpy.app.handlers.frame_change_post.append(bake_rendered_frame)
+    bpy.app.handlers.render_complete.append(_render_ended)
+    bpy.app.handlers.render_cancel.append(_render_ended)
 
 
 def unregister() -> None:
+    bpy.app.handlers.render_cancel.remove(_render_ended)
+    bpy.app.handlers.render_complete.remove(_render_ended)
     bpy.app.handlers.frame_change_post.remove(bake_rendered_frame)
     bpy.app.handlers.render_init.remove(bake_at_render_start)

@@ -9,20 +9,10 @@ import bpy
 
 from ..export import InputError, read_scene, render_settings
 from ..jobs import JobRunner, RenderJob, StepError
-from ..writeback.images import show_image, write_image, write_passes
+from ..writeback.images import show_image
 from ..writeback.output import OutputError, frame_paths, save_frame
-from ..writeback.results import record_run
+from ..writeback.results import RESULT_IMAGE, write_result
 from .engine_run import EngineOperator
-
-RESULT_IMAGE = "Caustic Render"
-
-
-def write_result(context, job: RenderJob):
-    """The job's image and passes into Blender's images, its figures into Scene.caustic. Returns the image."""
-    image = write_image(RESULT_IMAGE, job.result.image)
-    write_passes(RESULT_IMAGE, job.result.passes)
-    record_run(context.scene.caustic, job)
-    return image
 
 
 class CAUSTIC_OT_render(EngineOperator, bpy.types.Operator):
@@ -51,7 +41,7 @@ class CAUSTIC_OT_render(EngineOperator, bpy.types.Operator):
 
     def _write(self, frame: int, job: RenderJob) -> None:
         context = bpy.context
-        image = write_result(context, job)
+        image = write_result(context.scene.caustic, job)
         show_image(context, image)
         for warning in self._read.warnings + job.result.warnings:
             self.report({'WARNING'}, warning)

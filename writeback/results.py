@@ -1,4 +1,8 @@
-"""A finished run's figures written into Scene.caustic, for the panels to show."""
+"""A finished run written into Blender: its image and passes, and its figures in Scene.caustic for the panels."""
+
+from .images import write_image, write_passes
+
+RESULT_IMAGE = "Caustic Render"
 
 
 def record_run(props, job) -> None:
@@ -6,3 +10,11 @@ def record_run(props, job) -> None:
     props.last_seconds = job.seconds
     props.last_lamp_rays = job.result.stats["lamp_rays"]
     props.last_refined = job.result.stats["lamp_rays_refined"]
+
+
+def write_result(props, job):
+    """The job's image and passes into "Caustic Render" and its passes, its figures into `props`. Returns the image."""
+    image = write_image(RESULT_IMAGE, job.result.image)
+    write_passes(RESULT_IMAGE, job.result.passes)
+    record_run(props, job)
+    return image

@@ -2,12 +2,14 @@
 the error is measured, and every render setting is left as it was."""
 
 import math
+import time
 
 import bpy
 import numpy as np
+import pytest
 
 import blender_scenes as scenes
-from snapshot import rna
+from snapshot import material_state, rna
 
 
 def render_state():
@@ -74,3 +76,68 @@ def test_compare_says_cycles_cannot_render_a_mirrors_caustic(reports):
     bpy.data.materials["Chrome"].node_tree.nodes["Glossy BSDF"].inputs["Roughness"].default_value = 0.3
     assert bpy.ops.caustic.compare_cycles() == {'FINISHED'}
     assert "reflectors" not in reports()
+
+
+def tick_to_the_end(runner):
+    """What the modal operator's timer does: tick until the run is over."""
+    deadline = time.monotonic() + 120.0
+    while runner.tick() and time.monotonic() < deadline:
+        time.sleep(0.01)
+
+
+def user_scene(lamp_rays):
+    scenes.ball_lens_scene(32, 24, lamp_rays=lamp_rays, segments=32, rings=16)
+    scene = bpy.context.scene
+    # Blender fills in an image format's colour spaces when a format is first set: set one, as a user has
+    scene.render.image_settings.file_format = 'PNG'
+    scene.caustic.cycles_samples = 4
+    return scene.caustic
+
+
+def test_compare_runs_step_by_step_as_the_modal_operator_does(addon):
+    """The caustics on a worker thread, then Cycles started as F12 starts it
+    (in the background Blender renders it before the call returns), then
+    the images; every setting as it was."""
+    user_scene(20_000)
+    before = render_state()
+    comparison = addon.comparison.run.Comparison(bpy.context)
+    runner = comparison.runner
+    assert runner.tick() and runner.step == "caustics" and runner.job is comparison.caustics
+    tick_to_the_end(runner)
+    assert runner.done == ["caustics", "cycles"] and runner.error is None and not runner.cancelled
+    after = render_state()
+    assert set(after.pop("images")) - set(before.pop("images")) >= {"Caustic Render", "Cycles Reference",
+                                                                     "Difference"}
+    assert after == before
+    assert scenes.pixels_of("Cycles Reference")[..., :3].max() > 0.1
+    assert bpy.context.scene.caustic.cycles_seconds > 0
+
+
+@pytest.mark.parametrize("stopped_in", ["caustics", "cycles"])
+def test_esc_leaves_no_half_result_and_every_setting_as_it_was(addon, stopped_in):
+    """Esc in either half: nothing is written (no Caustic Render without its
+    reference), the figures stay, the settings Cycles needed are put back."""
+    props = user_scene(3_000_000 if stopped_in == "caustics" else 20_000)
+    before, figures = render_state(), (props.cycles_seconds, props.last_seconds)
+    runner = addon.comparison.run.Comparison(bpy.context).runner
+    runner.tick()
+    while runner.step != stopped_in:
+        runner.tick()
+        time.sleep(0.01)
+    runner.stop()
+    tick_to_the_end(runner)
+    assert runner.cancelled and runner.error is None and runner.done == ([] if stopped_in == "caustics" else
+                                                                         ["caustics"])
+    assert render_state() == before and (props.cycles_seconds, props.last_seconds) == figures
+
+
+def test_compare_with_bake_while_rendering_on_bakes_nothing():
+    """The reference is Cycles' own light: Bake While Rendering stays out of its render."""
+    scenes.ball_lens_scene(32, 24, lamp_rays=20_000, segments=32, rings=16)
+    scene = bpy.context.scene
+    scene.caustic.cycles_samples, scene.caustic.use_bake_on_render = 4, True
+    floor = material_state(bpy.data.objects["Floor"].active_material)
+    assert bpy.ops.caustic.compare_cycles() == {'FINISHED'}
+    assert scene.caustic.use_bake_on_render and not bpy.data.node_groups
+    assert material_state(bpy.data.objects["Floor"].active_material) == floor
+    assert not any(image.name.startswith("Caustic Map") for image in bpy.data.images)

@@ -72,3 +72,18 @@ def test_bake_and_compare_wait_while_a_render_runs(addon):
     finally:
         render.running = False
     assert bpy.ops.caustic.bake.poll() and bpy.ops.caustic.compare_cycles.poll()
+
+
+@pytest.mark.parametrize("operator", ["bake", "render_image_with_caustics"])
+def test_a_bake_survives_undo_with_its_pixels_and_its_nodes(operator):
+    parts = scenes.ball_lens_scene(24, 18, lamp_rays=10_000, segments=32, rings=16)
+    bpy.context.scene.render.engine = 'CYCLES'
+    bpy.context.scene.cycles.samples = 1
+    bpy.ops.ed.undo_push(message="Scene")
+    assert getattr(bpy.ops.caustic, operator)('EXEC_DEFAULT', True) == {'FINISHED'}
+    baked = scenes.pixels_of("Caustic Map Floor")
+    assert baked[..., :3].max() > 0.0
+
+    move_then_undo(parts["ball"])
+    assert np.array_equal(scenes.pixels_of("Caustic Map Floor"), baked)
+    assert "Caustic Bake Floor" in bpy.data.node_groups
