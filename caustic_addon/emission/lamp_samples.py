@@ -58,7 +58,8 @@ def apparent_size(light: Light, points: np.ndarray) -> np.ndarray:
     if isinstance(light, SunLight):
         return np.full(len(points), light.angle)
     if isinstance(light, AreaLight):
-        half, center = math.hypot(float(length(light.axis_x[None])[0]), float(length(light.axis_y[None])[0])), light.center
+        half = math.hypot(float(np.linalg.norm(light.axis_x)), float(np.linalg.norm(light.axis_y)))
+        center = light.center
     else:
         half, center = light.radius, light.position
     return 2.0 * np.arctan(half / np.maximum(length(points - center), DIVISION_FLOOR))

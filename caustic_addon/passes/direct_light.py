@@ -12,10 +12,11 @@ the layer leaves it) plus the layer's GGX lobe (optics/principled.py). A
 lamp of size 0 takes one sample; a lamp with a size takes `samples`,
 stratified over a pixel: eye sample s of a pixel uses points s K .. s K +
 K - 1 of the R2 sequence, rotated by a hash of the pixel. A lamp that
-looks smaller than a degree (a sun, a small lamp far off) casts two of them
-first and the rest only where a pixel's points disagree (`direct_radiance`).
-A sample behind the surface gets no shadow ray. Dielectrics and reflectors block shadow
-rays: the light they redirect arrives through the illumination maps.
+looks smaller than a degree (a sun, a small lamp far off) casts two of
+them first and the rest only where a pixel's points disagree
+(`direct_radiance`). A sample behind the surface gets no shadow ray.
+Dielectrics and reflectors block shadow rays: the light they redirect
+arrives through the illumination maps.
 Rough casters show the lamps' highlights (`rough_specular_radiance`), as
 Cycles' glossy and glass closures do.
 
@@ -122,7 +123,8 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
             seen[at[visible]] += 1
         if count == probes:
             continue
-        clear_all, blocked_all = _pixels_agree(pixel, (cast == probes) & (seen == probes), (cast == probes) & (seen == 0))
+        probed = cast == probes
+        clear_all, blocked_all = _pixels_agree(pixel, probed & (seen == probes), probed & (seen == 0))
         agreed = (clear_all | blocked_all) & (apparent_size(light, points) < SMALL_LAMP) & adaptive
         open_sky = agreed & clear_all
         rows = np.flatnonzero(open_sky | ~agreed)

@@ -13,17 +13,18 @@ eye (optics/principled.py); the lobe itself reflects the lamps and the
 world, but not the caustic, whose directions the map does not keep.
 
 At a dielectric: both the reflected ray (weight F) and the refracted ray
-(weight 1 - F) carry on, each tinted by the glass colour and by
-Beer-Lambert absorption inside, up to `max_depth` bounces. At a reflector the reflected ray carries on, times the reflectance
-colour. A branch fainter than ROULETTE_WEIGHT of its camera ray plays
-Russian roulette (`EyeTracer._roulette`): the faint internal reflections
-that make most of a glass's tree stop, and the mean stays. At a rough surface both branches leave about one GGX microfacet
-normal per eye sample (bounce.facets), the pixel's samples stratified over
-the visible normals, so rough glass and metal look rough, and lamps add
-their highlights there by next-event estimation (direct_light.py), as in
-Cycles. A ray that leaves the scene sees the world. Eye rays refract with a dispersive glass's
-IOR at 587.6 nm: the caustics it throws are spectral (photon pass), the view
-through it is not.
+(weight 1 - F) carry on, each tinted by the glass colour and by Beer-Lambert
+absorption inside, up to `max_depth` bounces. At a reflector the reflected
+ray carries on, times the reflectance colour. A branch fainter than
+ROULETTE_WEIGHT of its camera ray plays Russian roulette
+(`EyeTracer._roulette`): the faint internal reflections that make most of a
+glass's tree stop, and the mean stays. At a rough surface both branches
+leave about one GGX microfacet normal per eye sample (bounce.facets), the
+pixel's samples stratified over the visible normals, so rough glass and
+metal look rough, and lamps add their highlights there by next-event
+estimation (direct_light.py), as in Cycles. A ray that leaves the scene sees
+the world. Eye rays refract with a dispersive glass's IOR at 587.6 nm: the
+caustics it throws are spectral (photon pass), the view through it is not.
 """
 
 from __future__ import annotations
