@@ -10,7 +10,9 @@ down to the floor, so the mesh is closed), lit by a sun 20 degrees off the
 vertical, seen at 1280 x 720 with the add-on's default settings.
 
 1. Render Caustic Animation over `frames` frames: seconds per frame (each
-   frame's waves differ, so every frame traces its maps), and the total.
+   frame's waves differ, so every frame traces its maps), wall and CPU
+   (all threads; other jobs on a shared machine add wall time, not CPU),
+   the total, and the load average before and after.
 2. Caustics in Cycles, per frame, at 25% resolution and 16 samples: Cycles
    alone (no caustics of ours); Bake Caustic Animation then Cycles
    (a bake step, then the render); Bake While Rendering (the render
@@ -30,6 +32,7 @@ import argparse
 import importlib.util
 import json
 import math
+import os
 import sys
 import tempfile
 import time
@@ -97,16 +100,20 @@ def pool(folder: Path) -> None:
 
 
 def caustic_animation(frames: int) -> dict:
-    seconds = []
+    seconds, cpu = [], []
+    load = [os.getloadavg()[0]]
     for frame in range(1, frames + 1):
-        clock = time.perf_counter()
+        clock, process = time.perf_counter(), time.process_time()
         assert bpy.ops.caustic.render_animation(filepath="//frames/pool_####", frame_start=frame,
                                                 frame_end=frame) == {'FINISHED'}
         seconds.append(time.perf_counter() - clock)
-        print(f"frame {frame}: {seconds[-1]:.2f} s (engine {bpy.context.scene.caustic.last_seconds:.2f} s)",
-              flush=True)
-    return dict(frames=frames, seconds_per_frame=seconds, mean=sum(seconds) / frames, max=max(seconds),
-                total=sum(seconds), resolution=[1280, 720])
+        cpu.append(time.process_time() - process)
+        print(f"frame {frame}: {seconds[-1]:.2f} s, {cpu[-1]:.2f} CPU s "
+              f"(engine {bpy.context.scene.caustic.last_seconds:.2f} s)", flush=True)
+    load.append(os.getloadavg()[0])
+    return dict(frames=frames, seconds_per_frame=seconds, cpu_seconds_per_frame=cpu, mean=sum(seconds) / frames,
+                max=max(seconds), total=sum(seconds), cpu_total=sum(cpu), load_average=load,
+                resolution=[1280, 720])
 
 
 def per_frame(frames: int, run) -> dict:
@@ -166,7 +173,8 @@ def main() -> None:
         dict(date=date.today().isoformat(), machine=machine(), pool=speed, final_frame=options), indent=2) + "\n")
     if speed is not None:
         print(f"pool 1280x720: {speed['mean']:.2f} s a frame on average, at most {speed['max']:.2f} s, "
-              f"{speed['total']:.1f} s for {speed['frames']} frames")
+              f"{speed['total']:.1f} s for {speed['frames']} frames ({speed['cpu_total']:.1f} CPU s; load "
+              f"{speed['load_average'][0]:.1f} then {speed['load_average'][1]:.1f})")
     for name, seconds in options["seconds_per_frame"].items():
         print(f"{name}: {seconds['wall']:.2f} s a frame (CPU {seconds['cpu']:.2f} s)")
 

@@ -36,7 +36,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import ball_lens  # noqa: E402
 from caustic_addon import (Camera, Dielectric, Diffuse, MapCache, Object, PointLight, RenderSettings,  # noqa: E402
-                           Scene, SpotLight, paper, render, shapes)
+                           Scene, SpotLight, SunLight, paper, render, shapes)
 from caustic_addon import renderer  # noqa: E402
 from caustic_addon.emission import aims  # noqa: E402
 from caustic_addon.emission.lamp_samples import sample_lamp  # noqa: E402
@@ -255,6 +255,45 @@ def russian_roulette(repeats: int) -> dict:
                f"landed flux {flux[0]:.4g} vs {flux[1]:.4g} W", flux_landed_with=flux[0], flux_landed_without=flux[1])
 
 
+def pool_scene() -> Scene:
+    """A 2 m slab of wavy water (IOR 1.33) on a 4 m floor under a 0.5-degree
+    sun 20 degrees off the vertical, seen from the side at 4 samples: the
+    animation benchmark's pool, small."""
+    sun = SunLight((-0.17, 0.3, -0.94), 3.0, angle=math.radians(0.5))
+    return Scene(
+        objects=[Object("Floor", shapes.plane(4.0), Diffuse(albedo=0.8)),
+                 Object("Water", shapes.wavy_slab(2.0, 0.5), Dielectric(1.33))],
+        lights=[sun], camera=Camera.look_at((0.0, -3.0, 2.5), (0.0, 0.0, 0.3), pixx=PIXELS[0], pixy=PIXELS[1]))
+
+
+def eye_roulette(repeats: int) -> dict:
+    """The eye branches fainter than 5% of their camera ray play Russian
+    roulette; without, every branch is followed down to 1e-4 of it."""
+    scene, settings = pool_scene(), RenderSettings(lamp_rays=20_000)
+    on = timed(scene, settings, repeats)
+    with patched(eye, "ROULETTE_WEIGHT", 0.0):
+        off = timed(scene, settings, repeats)
+    return row("Russian roulette of eye branches below 5% of their camera ray", "wavy water slab, 0.5-degree sun",
+               "every branch to 1e-4 of its camera ray", "eye", on, off, image_change(on[1], off[1]))
+
+
+def small_lamp_shadows(repeats: int) -> dict:
+    """A lamp under a degree casts 2 of its 8 shadow rays, the rest where a
+    pixel's disagree; without, all 8 from every point."""
+    scene, settings = pool_scene(), RenderSettings(lamp_rays=20_000)
+    on = timed(scene, settings, repeats)
+    with patched(direct_light, "SMALL_LAMP", 0.0):
+        off = timed(scene, settings, repeats)
+    return row("two shadow rays toward a small lamp where they agree", "wavy water slab, 0.5-degree sun",
+               "8 shadow rays a point", "eye", on, off, image_change(on[1], off[1]))
+
+
+def image_change(on, off) -> str:
+    """The relative L2 difference between two renders' images."""
+    a, b = (r.image[..., :3].astype(np.float64) for r in (on, off))
+    return f"image {100 * np.linalg.norm(a - b) / np.linalg.norm(b):.2f}% from the one without"
+
+
 def one_embree_scene(repeats: int) -> dict:
     """The speed scene's 65k-triangle sphere: one BVH for both passes,
     against a second one built for the eye pass."""
@@ -318,7 +357,8 @@ def main() -> None:
     quality = Quality()
     rows = [*lamps_out_of_view(args.repeats, quality), *targeted_emission(args.repeats, quality),
             shadow_rays_behind(args.repeats), no_recursion_at_diffuse(args.repeats),
-            russian_roulette(args.repeats), one_embree_scene(args.repeats), map_cache(args.repeats)]
+            russian_roulette(args.repeats), eye_roulette(args.repeats), small_lamp_shadows(args.repeats),
+            one_embree_scene(args.repeats), map_cache(args.repeats)]
     table = markdown(rows)
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / "skips.json").write_text(json.dumps(

@@ -73,7 +73,8 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
     lamp_samples: IntProperty(
         name="Lamp Samples",
         description="Shadow rays per eye sample toward each lamp with a size (a radius, an area or a sun's "
-                    "angle), spread evenly over the pixel: more give smoother soft shadows",
+                    "angle), spread evenly over the pixel: more give smoother soft shadows. A lamp that looks smaller "
+                    "than a degree (a sun) casts two first, the rest only where a pixel's disagree",
         default=8, min=1, soft_max=64)
     world_samples: IntProperty(
         name="World Samples",

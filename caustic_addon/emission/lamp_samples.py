@@ -51,6 +51,20 @@ def sample_lamp(light: Light, energy: float, points: np.ndarray, uv: np.ndarray,
     return _sphere(light, energy, points, uv)
 
 
+def apparent_size(light: Light, points: np.ndarray) -> np.ndarray:
+    """(n,) radians: the angle the lamp spans as seen from `points (n,3)`,
+    2 atan(half-extent / distance) (the diagonal for an area lamp), a sun's
+    angle, 0 for a lamp of size 0."""
+    if isinstance(light, SunLight):
+        return np.full(len(points), light.angle)
+    if isinstance(light, AreaLight):
+        half = math.hypot(float(np.linalg.norm(light.axis_x)), float(np.linalg.norm(light.axis_y)))
+        center = light.center
+    else:
+        half, center = light.radius, light.position
+    return 2.0 * np.arctan(half / np.maximum(length(points - center), DIVISION_FLOOR))
+
+
 def _spot_mask(light: Light, leaving: np.ndarray) -> np.ndarray:
     """(n,) the spot's cone mask for rays `leaving (n,3)` its sample points
     (Cycles evaluates it per point of the lamp); 1 for a point lamp."""

@@ -11,9 +11,12 @@ under a Principled BSDF's specular layer, its base colour times the share
 the layer leaves it) plus the layer's GGX lobe (optics/principled.py). A
 lamp of size 0 takes one sample; a lamp with a size takes `samples`,
 stratified over a pixel: eye sample s of a pixel uses points s K .. s K +
-K - 1 of the R2 sequence, rotated by a hash of the pixel. A sample behind
-the surface gets no shadow ray. Dielectrics and reflectors block shadow
-rays: the light they redirect arrives through the illumination maps.
+K - 1 of the R2 sequence, rotated by a hash of the pixel. A lamp that
+looks smaller than a degree (a sun, a small lamp far off) casts two of
+them first and the rest only where a pixel's points disagree
+(`direct_radiance`). A sample behind the surface gets no shadow ray.
+Dielectrics and reflectors block shadow rays: the light they redirect
+arrives through the illumination maps.
 Rough casters show the lamps' highlights (`rough_specular_radiance`), as
 Cycles' glossy and glass closures do.
 
@@ -32,7 +35,7 @@ import numpy as np
 
 from ..emission import radiometry
 from ..emission.environment import Environment
-from ..emission.lamp_samples import sample_lamp
+from ..emission.lamp_samples import apparent_size, sample_lamp
 from ..optics.microfacet import bsdf_cosine
 from ..optics.principled import Lobe
 from ..sampling.hash import hash_uniform
@@ -46,6 +49,10 @@ from ..util.vectors import dot, max_channel
 # world's strategies, two per lamp seen in rough casters.
 _WORLD_STREAM = 1 << 16
 _ROUGH_STREAM = 1 << 18
+# A lamp that looks smaller than this (radians; the sun is 0.0093) casts
+# SHADOW_PROBES shadow rays first, the rest only where they disagree.
+SMALL_LAMP = math.radians(1.0)
+SHADOW_PROBES = 2
 
 
 def strata(ids: np.ndarray, index: np.ndarray, stream: int, seed: int) -> np.ndarray:
@@ -57,8 +64,18 @@ def strata(ids: np.ndarray, index: np.ndarray, stream: int, seed: int) -> np.nda
 def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,
                     shading: np.ndarray, facing: np.ndarray, view: np.ndarray, diffuse: np.ndarray,
                     lobe: Lobe | None, far: float, pixel: np.ndarray, first_stratum: np.ndarray, samples: int,
-                    seed: int) -> np.ndarray:
+                    seed: int, adaptive: bool = True) -> np.ndarray:
     """Radiance (n,3) toward the eye from all lamps' direct light.
+
+    With `adaptive`, for a lamp that looks smaller than SMALL_LAMP, every
+    point casts the first SHADOW_PROBES of its `samples` shadow rays; where
+    all the probes of a pixel's points agree (all blocked, or all clear)
+    the other samples take their verdict without a ray, and elsewhere they
+    are cast (adaptive shadow sampling). Such a lamp's penumbra is narrow
+    (its angle times the occluder's distance): a pixel inside it sees its
+    probes disagree but for a few points near its ends, where the penumbra
+    comes out a little sharper; the eye pass's edge samples, which take the
+    pixels across a shadow's edge, cast every ray (not `adaptive`).
 
     shading, facing   (n,3) shading and geometric normals, both on the eye's side
     view              (n,3) unit vectors from the points toward the eye
@@ -67,31 +84,65 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
     pixel, first_stratum  (n,) the pixel each point is seen in, and the
                       index of its first stratum there
     """
-    out = np.zeros((len(points), 3))
+    n = len(points)
+    out = np.zeros((n, 3))
+
+    def lamp_sample(light: Light, number: int, k: int, count: int, rows: np.ndarray):
+        """Sample k of `count` for the points `rows (m,)`: the rows lit from
+        the front (l,), their directions (l,3) and distances (l,) to clear,
+        and the radiance (l,3) each brings where nothing blocks it."""
+        uv = strata(np.take(pixel, rows), np.take(first_stratum, rows) * count + k, 2 * number, seed)
+        lamp = sample_lamp(light, energy, np.take(points, rows, axis=0), uv, far)
+        normal = np.take(shading, rows, axis=0)
+        cos = dot(normal, lamp.dirs)
+        lit = (cos > 0.0) & (dot(np.take(facing, rows, axis=0), lamp.dirs) > 0.0) & (max_channel(lamp.irradiance) > 0.0)
+        idx = np.flatnonzero(lit)
+        at, dirs = rows[idx], np.take(lamp.dirs, idx, axis=0)
+        irradiance = np.take(lamp.irradiance, idx, axis=0) / count
+        radiance = irradiance * (np.take(diffuse, at, axis=0) * (cos[idx] / math.pi)[:, None])
+        if lobe is not None:
+            glossy = np.flatnonzero(lobe.lamp_lit[at])
+            radiance[glossy] += np.take(irradiance, glossy, axis=0) * lobe.take(at[glossy]).weight(
+                np.take(normal, idx[glossy], axis=0), np.take(view, at[glossy], axis=0), np.take(dirs, glossy, axis=0))
+        return at, dirs, np.take(lamp.dist, idx), radiance
+
+    def clear(at: np.ndarray, dirs: np.ndarray, dist: np.ndarray) -> np.ndarray:
+        origins = accel.offset(np.take(points, at, axis=0), np.take(facing, at, axis=0), dirs)
+        return ~accel.occluded(origins, dirs, dist - 2.0 * accel.epsilon)
+
+    everyone = np.arange(n)
     for number, light in enumerate(lights):
         count = 1 if radiometry.is_delta(light) else samples
-        for k in range(count):
-            uv = strata(pixel, first_stratum * count + k, 2 * number, seed)
-            lamp = sample_lamp(light, energy, points, uv, far)
-            cos = dot(shading, lamp.dirs)
-            lit = (cos > 0.0) & (dot(facing, lamp.dirs) > 0.0) & (max_channel(lamp.irradiance) > 0.0)
-            idx = np.flatnonzero(lit)
-            if len(idx) == 0:
-                continue
-            dirs = np.take(lamp.dirs, idx, axis=0)
-            origins = accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), dirs)
-            blocked = accel.occluded(origins, dirs, np.take(lamp.dist, idx) - 2.0 * accel.epsilon)
-            idx, dirs = idx[~blocked], dirs[~blocked]
-            if len(idx) == 0:
-                continue
-            irradiance = np.take(lamp.irradiance, idx, axis=0) / count
-            out[idx] += irradiance * (np.take(diffuse, idx, axis=0) * (cos[idx] / math.pi)[:, None])
-            if lobe is not None:
-                glossy = np.flatnonzero(lobe.lamp_lit[idx])
-                at = idx[glossy]
-                out[at] += np.take(irradiance, glossy, axis=0) * lobe.take(at).weight(
-                    np.take(shading, at, axis=0), np.take(view, at, axis=0), np.take(dirs, glossy, axis=0))
+        probes = min(count, SHADOW_PROBES)
+        cast, seen = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
+        for k in range(probes):
+            at, dirs, dist, radiance = lamp_sample(light, number, k, count, everyone)
+            visible = clear(at, dirs, dist)
+            out[at[visible]] += radiance[visible]
+            cast[at] += 1
+            seen[at[visible]] += 1
+        if count == probes:
+            continue
+        probed = cast == probes
+        clear_all, blocked_all = _pixels_agree(pixel, probed & (seen == probes), probed & (seen == 0))
+        agreed = (clear_all | blocked_all) & (apparent_size(light, points) < SMALL_LAMP) & adaptive
+        open_sky = agreed & clear_all
+        rows = np.flatnonzero(open_sky | ~agreed)
+        for k in range(probes, count):
+            at, dirs, dist, radiance = lamp_sample(light, number, k, count, rows)
+            visible = np.take(open_sky, at)
+            test = np.flatnonzero(~visible)
+            visible[test] = clear(at[test], np.take(dirs, test, axis=0), dist[test])
+            out[at[visible]] += radiance[visible]
     return out
+
+
+def _pixels_agree(pixel: np.ndarray, clear: np.ndarray, blocked: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) bool each: is every point seen in the same pixel as point i
+    (`pixel (n,)`) `clear (n,)`, and is every one `blocked (n,)`?"""
+    _, group = np.unique(pixel, return_inverse=True)
+    points = np.bincount(group)
+    return (np.bincount(group, weights=clear) == points)[group], (np.bincount(group, weights=blocked) == points)[group]
 
 
 def world_light(accel: Accelerator, environment: Environment, points: np.ndarray, shading: np.ndarray,

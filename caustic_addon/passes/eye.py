@@ -13,15 +13,18 @@ eye (optics/principled.py); the lobe itself reflects the lamps and the
 world, but not the caustic, whose directions the map does not keep.
 
 At a dielectric: both the reflected ray (weight F) and the refracted ray
-(weight 1 - F) carry on, each tinted by the glass colour and by
-Beer-Lambert absorption inside, up to `max_depth` bounces. At a reflector the reflected ray carries on, times the reflectance
-colour. At a rough surface both branches leave about one GGX microfacet
-normal per eye sample (bounce.facets), the pixel's samples stratified over
-the visible normals, so rough glass and metal look rough, and lamps add
-their highlights there by next-event estimation (direct_light.py), as in
-Cycles. A ray that leaves the scene sees the world. Eye rays refract with a dispersive glass's
-IOR at 587.6 nm: the caustics it throws are spectral (photon pass), the view
-through it is not.
+(weight 1 - F) carry on, each tinted by the glass colour and by Beer-Lambert
+absorption inside, up to `max_depth` bounces. At a reflector the reflected
+ray carries on, times the reflectance colour. A branch fainter than
+ROULETTE_WEIGHT of its camera ray plays Russian roulette
+(`EyeTracer._roulette`): the faint internal reflections that make most of a
+glass's tree stop, and the mean stays. At a rough surface both branches
+leave about one GGX microfacet normal per eye sample (bounce.facets), the
+pixel's samples stratified over the visible normals, so rough glass and
+metal look rough, and lamps add their highlights there by next-event
+estimation (direct_light.py), as in Cycles. A ray that leaves the scene sees
+the world. Eye rays refract with a dispersive glass's IOR at 587.6 nm: the
+caustics it throws are spectral (photon pass), the view through it is not.
 """
 
 from __future__ import annotations
@@ -34,23 +37,28 @@ import numpy as np
 from ..emission.environment import Environment
 from ..maps.charts import PlaneChart
 from ..maps.illumination_map import IlluminationMap
+from ..sampling.hash import hash_uniform
 from ..scene import RenderSettings, Scene
 from ..scene.material_table import Materials
-from ..tracing.accelerator import CAMERA, Accelerator
+from ..tracing.accelerator import CAMERA, REFRACTED, Accelerator
 from ..tracing.hits import MISS, Hits
 from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.rows import take_rows
-from ..util.vectors import dot
+from ..util.vectors import dot, max_channel
 from .bounce import Interface, facets, multiscatter, split, trace
 from .camera_rays import eye_rays, pixel_offsets, ray_differentials
 from .direct_light import direct_radiance, rough_specular_radiance, strata, world_light
-from .paths import Paths, relative_floor
+from .paths import MIN_BRANCH_WEIGHT, Paths, relative_floor
 
 PASSES = ("direct", "caustic", "ambient")
 # The buffer of each pixel's share cut out by holdouts (its alpha is 1 minus it).
 HOLDOUT = "holdout"
 # Hash streams of the rotations of a pixel's microfacet strata: two a bounce.
 _FACET_STREAM = 1 << 17
+# Hash streams of the Russian roulette of faint branches: one a bounce.
+_ROULETTE_STREAM = 1 << 19
+# An eye branch fainter than this share of its camera ray plays Russian roulette.
+ROULETTE_WEIGHT = 0.05
 # Neighbours whose light differs by more than this share of the brighter
 # one sit across an edge (a shadow's, or one seen through glass).
 EDGE_CONTRAST = 0.2
@@ -69,9 +77,9 @@ class EyeTracer:
 
     def __init__(self, accel: Accelerator, scene: Scene, materials: Materials, maps: dict[int, IlluminationMap],
                  environment: Environment, settings: RenderSettings, pixels: np.ndarray, spp: int,
-                 holdout: np.ndarray):
+                 holdout: np.ndarray, adaptive_shadows: bool = True):
         self.accel, self.scene, self.materials, self.maps = accel, scene, materials, maps
-        self.holdout = holdout
+        self.holdout, self.adaptive_shadows = holdout, adaptive_shadows
         self.environment, self.settings = environment, settings
         self.energy, self.spp = settings.energy, spp
         self.stratum = 1.0 / math.sqrt(spp)
@@ -122,7 +130,8 @@ class EyeTracer:
         local, stratum = rays.ids // self.spp, rays.ids % self.spp
         pixel = np.take(self.pixels, local)
         direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view, diffuse,
-                                 lobe, self.far, pixel, stratum, settings.lamp_samples, settings.seed)
+                                 lobe, self.far, pixel, stratum, settings.lamp_samples, settings.seed,
+                                 self.adaptive_shadows)
         self._add("direct", local, rays.weight * (direct + np.take(m.emission, hits.obj, axis=0)))
         ambient = self.scene.ambient * diffuse
         if not self.scene.world.is_black:
@@ -160,7 +169,27 @@ class EyeTracer:
             uv = strata(np.take(self.pixels, rays.ids // self.spp), rays.ids % self.spp, _FACET_STREAM + 2 * depth,
                         self.settings.seed)
             surface = facets(surface, rays.dirs, self.materials, hits.obj, uv)
-        return split(self.accel, self.materials, rays, hits, surface, carries_light=False)
+        return self._roulette(split(self.accel, self.materials, rays, hits, surface, carries_light=False), depth)
+
+    def _roulette(self, rays: Paths, depth: int) -> Paths:
+        """Russian roulette on the faint branches (pbrt's, Cycles'): a branch
+        whose throughput w (max channel) falls below ROULETTE_WEIGHT of its
+        camera ray's goes on with probability p = w / that level, its weight
+        divided by p, so the mean is kept. The draw hashes the branch's eye
+        sample, its bounce and whether it was refracted."""
+        level = ROULETTE_WEIGHT * rays.floor / MIN_BRANCH_WEIGHT
+        chance = np.minimum(max_channel(rays.weight) / level, 1.0)
+        faint = np.flatnonzero(chance < 1.0)
+        if len(faint) == 0:
+            return rays
+        ids = rays.ids[faint]
+        sample = np.take(self.pixels, ids // self.spp) * self.spp + ids % self.spp
+        draw = hash_uniform(2 * sample + (rays.kind[faint] == REFRACTED), _ROULETTE_STREAM + depth,
+                            self.settings.seed)
+        survive = np.ones(len(rays), dtype=bool)
+        survive[faint] = draw < chance[faint]
+        rays.weight[faint] /= chance[faint][:, None]
+        return rays.select(survive)
 
     def _highlights(self, rays: Paths, hits: Hits, surface: Interface) -> None:
         """The lamps' direct light on the rough rows of `surface`, into the
@@ -213,7 +242,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     progress from `start` to 1; then, with `edge_samples`, trace that many
     again through each pixel whose samples disagree (`edge_pixels`: a
     silhouette, a shadow's edge, an edge seen through glass), which replace
-    its first ones. Returns the pass buffers and the holdout's, each
+    its first ones and cast all of a small lamp's shadow rays. Returns the pass buffers and the holdout's, each
     (pixels, 3)."""
     cam = scene.camera
     pixels = cam.pixx * cam.pixy
@@ -223,9 +252,11 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     edges = settings.edge_samples > settings.spp
     main_share = (1.0 - start) * (0.8 if edges else 1.0)
 
-    def trace_pixels(pixel_list: np.ndarray, spp: int, begin: float, share: float, stage: str):
+    def trace_pixels(pixel_list: np.ndarray, spp: int, begin: float, share: float, stage: str,
+                     adaptive_shadows: bool):
         """Buffers (m,3) by pass and the first objects (m spp,) of `spp`
-        samples in each of the pixels `pixel_list (m,)`."""
+        samples in each of the pixels `pixel_list (m,)`, small lamps'
+        shadows sampled adaptively or not (direct_light.direct_radiance)."""
         offsets = pixel_offsets(spp, settings.seed)
         per_job = max(1, chunk_size(len(pixel_list) * spp, settings.chunk_size, settings.threads) // spp)
 
@@ -236,7 +267,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
             origins, dirs = eye_rays(cam, pixel, offsets[sample % spp])
             weight = np.full((len(sample), 3), 1.0 / spp)
             tracer = EyeTracer(accel, scene, materials, maps, environment, settings, pixel_list[local], spp,
-                               holdout)
+                               holdout, adaptive_shadows)
             trace(accel, materials, Paths.start(origins, dirs, weight, sample - first * spp, camera_medium,
                                                 relative_floor(weight), camera=True), settings.max_depth, tracer)
             return first, tracer
@@ -255,7 +286,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
         run_chunks(jobs, settings.threads, monitor, begin, share, stage, add)
         return buffers, first_objects
 
-    buffers, first = trace_pixels(np.arange(pixels), settings.spp, start, main_share, "eye pass")
+    buffers, first = trace_pixels(np.arange(pixels), settings.spp, start, main_share, "eye pass", True)
     if edges and pixels > 1:
         # the caustic a camera ray sees on a receiver is already its footprint's mean
         seen_through = np.append(materials.specular_surface, False)[first]  # MISS (-1) takes the False
@@ -265,7 +296,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
                                             shown.max(axis=1).reshape(cam.pixy, cam.pixx)))
         if len(refine):
             extra, _ = trace_pixels(refine, settings.edge_samples, start + main_share, 1.0 - start - main_share,
-                                    "eye pass")
+                                    "eye pass", False)
             for name in buffers:
                 buffers[name][refine] = extra[name]
         else:

@@ -36,7 +36,9 @@ class RenderSettings:
                   disagree (a silhouette, a shadow's edge); no second pass
                   unless it is above spp
     lamp_samples  shadow rays per eye sample toward each lamp with a size
-                  (a lamp of size 0 takes one), stratified over the pixel
+                  (a lamp of size 0 takes one), stratified over the pixel;
+                  a lamp smaller than a degree casts two first, the rest
+                  where a pixel's disagree
     world_samples directions per eye sample toward the world, stratified
                   over the pixel (twice for an image: by cos and by radiance)
     bands         wavelength bands traced when a material disperses

@@ -1,0 +1,59 @@
+"""The eye pass does less work where it changes nothing on average: faint
+branches through glass play Russian roulette, and a small lamp's shadow
+rays stop at two where they agree."""
+
+import math
+
+import numpy as np
+import pytest
+
+from caustic_addon import Dielectric, Diffuse, Object, RenderSettings, Scene, SunLight, World, render, shapes
+from scenes import floor_points, top_camera
+
+
+def test_a_clear_glass_ball_in_a_white_world_is_as_bright_as_the_world_with_roulette():
+    """A smooth glass sphere in a uniform white world (the white furnace):
+    what it reflects and lets through, over every bounce, sums to the
+    world's radiance 1; Russian roulette keeps that mean while it stops
+    most of the faint internal reflections."""
+    pixels, spp = 48, 16
+    scene = Scene([Object("Ball", shapes.uv_sphere(1.0, (0, 0, 0), 256, 128), Dielectric(1.5))], [],
+                  top_camera(1.0, pixels, 10.0), world=World(color=1.0))
+    result = render(scene, RenderSettings(spp=spp, edge_samples=0, max_depth=32))
+    centre = (np.arange(pixels) + 0.5) / pixels * 2.0 - 1.0
+    x, y = np.meshgrid(centre, centre)
+    seen = result.image[..., 0][x * x + y * y < 0.9 ** 2]
+    assert seen.mean() == pytest.approx(1.0, abs=3e-3)
+    # the whole tree down to 1e-4 of the camera ray's weight takes 8.4 rays an eye sample
+    assert result.stats["rays_eye_pass"] / (pixels * pixels * spp) < 6.0
+
+
+def test_a_small_suns_shadow_takes_two_rays_where_they_agree():
+    """A sun 0.5 degrees wide over an opaque half-plane 1 m up, seen in 3 mm
+    pixels: the open floor gets the sun's whole irradiance and the shadow
+    none, with two shadow rays a point of the 16; across the 8.7 mm
+    penumbra, where a pixel's probes disagree, each pixel shows the visible
+    part of the sun's disc averaged over it (a circular segment at
+    s = x / (z tan(angle / 2)) of its radius, as in test_lamps), to 2% of
+    the sun (1.3% with every ray cast), for a quarter of the rays."""
+    half_angle, z, strength = 0.5 * math.radians(0.5), 1.0, 3.0
+    sun = SunLight((0, 0, -1), strength, angle=2.0 * half_angle)
+    wall = Object("Edge", shapes.plane(10.0, (-5.0, 0.0, z)), Diffuse(albedo=0.0, receiver=False))
+    pixels = 32
+    scene = Scene([Object("Floor", shapes.plane(40.0), Diffuse(albedo=1.0)), wall], [sun],
+                  top_camera(0.05, pixels, 0.5), world=World())
+    result = render(scene, RenderSettings(spp=16, edge_samples=0, lamp_rays=1000, lamp_samples=16))
+    seen = result.passes["direct"][..., 0] * math.pi / strength
+    step = scene.camera.ortho_scale / pixels
+    x = floor_points(scene)[..., 0][..., None] + step * (np.arange(64) + 0.5 - 32) / 64
+    s = np.clip(x / (z * math.tan(half_angle)), -1.0, 1.0)
+    theta = 2.0 * np.arccos(s)
+    visible = (1.0 - (theta - np.sin(theta)) / (2.0 * math.pi)).mean(axis=2)
+    np.testing.assert_allclose(seen, visible, atol=0.02)
+    assert np.all(seen[visible == 1.0] == pytest.approx(1.0, rel=1e-4)) and np.all(seen[visible == 0.0] == 0.0)
+    across = ((visible > 0.0) & (visible < 1.0)).sum()
+    assert across >= 3 * pixels
+    # the camera rays and two shadow rays each, and 14 more where the probes disagree
+    spp = 16
+    assert result.stats["rays_eye_pass"] <= spp * (pixels * pixels * 3 + across * 14)
+    assert result.stats["rays_eye_pass"] < 0.3 * spp * pixels * pixels * 17
