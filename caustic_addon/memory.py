@@ -6,8 +6,8 @@ samples; beam grid points a quarter of it), so the need does not grow with
 the lamp rays: it is the pixels, the maps' cells, the triangles and the
 chunks in flight.
 The bytes per item were measured with benchmarks/beams_at_scale.py
-(VmHWM on the ball lens: 1.0 GB at chunk 65,536, 1.4 GB at 131,072, the
-same from 1M to 50M lamp rays) and are rounded up.
+(VmHWM on the ball lens at chunk 131,072: 0.9 GB from 1M to 10M lamp
+rays, 1.1 GB at 50M) and are rounded up.
 """
 
 from __future__ import annotations
