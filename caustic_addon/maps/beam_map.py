@@ -113,9 +113,10 @@ class BeamMap(IlluminationMap):
     conserved exactly and a beam squeezed to nothing at a fold cannot spike.
     Beams under 2 to 4 map cells across (the sharp part of a caustic) go
     to a grid FINE times finer (coarser by steps of 2^(1/4) where that would
-    take more than FINE_LIMIT cells a side), laid over the box of the bright
-    ones; beams about 24 cells across or more (dim, wide light) to a
-    grid COARSE_CELL times coarser; the others to the map's own grid, each
+    take more than FINE_LIMIT cells a side), laid over where the flux of
+    the bright ones lands, all of it but FINE_TAIL each side; beams about
+    24 cells across or more (dim, wide light) to a grid COARSE_CELL times
+    coarser; the others to the map's own grid, each
     beam's light shared between two layers where its size is in between
     (`layer_shares`). Each layer spans only its beams' bounding box.
     """
@@ -123,7 +124,6 @@ class BeamMap(IlluminationMap):
     FINE = 8
     FINE_LIMIT = 2048
     FINE_RAMP = (2.0, 4.0)
-    FINE_BRIGHT = 1e-3
     COARSE_RAMP = (16.0, 32.0)
     COARSE_CELL = 4
     # Beams held back before they are rasterised: bounds their memory (about
@@ -132,6 +132,17 @@ class BeamMap(IlluminationMap):
     # The fine grid laid out from the first FLUSH_BEAMS beams spans their
     # flux's box widened by this share of it on each side.
     FINE_PAD = 0.1
+    # The fine grid spans all but FINE_TAIL of the flux, on each side, of the
+    # small beams at least FINE_BRIGHTNESS times the irradiance that the
+    # brightest 1% of their flux exceeds: the caustic, a lens's fold ring
+    # a hundred times dimmer than its focus among it, not the dim light (a
+    # reflection off the glass) that many lamp rays also cut into small
+    # beams all over the receiver. (A quantile weighted by flux times
+    # irradiance was the focus's box: the ball lens's fold ring, 125 mm off
+    # the axis, fell outside it at four points, and its fold pixels were up
+    # to 50% off on the map's own cells.)
+    FINE_BRIGHTNESS = 1e-3
+    FINE_TAIL = 1e-5
 
     def __init__(self, *args, threads: int = 1, **kwargs):
         super().__init__(*args, **kwargs)
@@ -157,25 +168,20 @@ class BeamMap(IlluminationMap):
     def _layout(self, corners: np.ndarray, irradiance: np.ndarray, fine: np.ndarray, coarse: np.ndarray,
                 whole_chart: bool) -> list[Optional[_LayerGrid]]:
         """The (fine, own, coarse) layer grids for beams with `fine, coarse
-        (m,)` shares of the fine and coarse layers: the fine one over the
-        bright ones among its beams, the others over the chart, or over their beams' bounding box
-        unless `whole_chart`; None for a layer no beam has a share of."""
+        (m,)` shares of the fine and coarse layers: the fine one over where
+        the bright ones' flux lands (FINE_BRIGHTNESS, FINE_TAIL), the others
+        over the chart, or over their beams' bounding box unless
+        `whole_chart`; None for a layer no beam has a share of."""
         lo, hi = self.chart.origin, self.chart.origin + self.chart.size
         grids: list[Optional[_LayerGrid]] = [None, None, None]
         small = fine > 0.0
         if small.any():
             centre = corners[small].mean(axis=1)
-            # where the light is concentrated: the beams within FINE_BRIGHT
-            # of the irradiance that the brightest 1% of the flux exceeds,
-            # not the dim light (a reflection off the glass) that many lamp
-            # rays also cut into small beams all over the receiver. Their
-            # whole box: a quantile of it would cut a ring of light's
-            # outermost beams, which sit where the ring touches the box
             brightness = irradiance[small].sum(axis=1)
-            level = _weighted_quantiles(brightness, fine[small] * brightness * np.abs(signed_areas(corners[small])),
-                                        0.99)
-            bright = centre[brightness >= self.FINE_BRIGHT * level]
-            bounds = np.stack([bright.min(axis=0), bright.max(axis=0)], axis=1)
+            flux = fine[small] * brightness * np.abs(signed_areas(corners[small]))
+            bright = brightness >= self.FINE_BRIGHTNESS * _weighted_quantiles(brightness, flux, 0.99)
+            tails = (self.FINE_TAIL, 1.0 - self.FINE_TAIL)
+            bounds = np.array([_weighted_quantiles(centre[bright, a], flux[bright], tails) for a in (0, 1)])
             # the map's cell over FINE, widened in steps of 2^(1/4) to fit
             # FINE_LIMIT cells: grids laid out from different beams over
             # about the same box share a lattice
@@ -185,8 +191,10 @@ class BeamMap(IlluminationMap):
             if whole_chart:
                 # the first beams stand for all of them: leave room for those that land further out
                 bounds += np.outer(bounds[:, 1] - bounds[:, 0], [-self.FINE_PAD, self.FINE_PAD])
-            # a beam with a fine share reaches at most 4 map cells from its centre
-            fine_lo, fine_hi = bounds[:, 0] - 4.0 * self.cell, bounds[:, 1] + 4.0 * self.cell
+            # a beam with a fine share reaches at most 4 map cells from its
+            # centre, and one whose centre is up to 4 cells outside the box
+            # still goes to it (the caustic's outermost fold is the box's edge)
+            fine_lo, fine_hi = bounds[:, 0] - 8.0 * self.cell, bounds[:, 1] + 8.0 * self.cell
             grids[0] = _LayerGrid(fine_lo, fine_hi, cell, lo)
         # the own grid also takes the fine share of beams outside the fine grid
         for k, chosen, cell in ((1, coarse < 1.0, self.cell), (2, coarse > 0.0, self.COARSE_CELL * self.cell)):
