@@ -92,6 +92,14 @@ class EyeTracer:
         for c in range(3):
             self.buffers[name][:, c] += np.bincount(local, weights=radiance[:, c], minlength=len(self.pixels))
 
+    def _samples(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(local, pixel, stratum), each (n,), of the eye samples `ids (n,)`:
+        the pixel's row in the buffers, its flat index in the image (which
+        the hash streams take, so that chunks do not share strata), and the
+        sample's stratum in it."""
+        local = ids // self.spp
+        return local, np.take(self.pixels, local), ids % self.spp
+
     def _met(self, rays: Paths, hits: Hits) -> None:
         camera = ~rays.specular
         self.first[rays.ids[camera]] = hits.obj[camera]
@@ -127,8 +135,7 @@ class EyeTracer:
         diffuse = albedo * share[:, None]
 
         points, settings = hits.points, self.settings
-        local, stratum = rays.ids // self.spp, rays.ids % self.spp
-        pixel = np.take(self.pixels, local)
+        local, pixel, stratum = self._samples(rays.ids)
         direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view, diffuse,
                                  lobe, self.far, pixel, stratum, settings.lamp_samples, settings.seed,
                                  self.adaptive_shadows)
@@ -166,8 +173,8 @@ class EyeTracer:
             rays, hits, surface = rays.select(~cut), hits.select(~cut), surface.select(~cut)
         if surface.rough.any():
             self._highlights(rays, hits, surface)
-            uv = strata(np.take(self.pixels, rays.ids // self.spp), rays.ids % self.spp, _FACET_STREAM + 2 * depth,
-                        self.settings.seed)
+            _, pixel, stratum = self._samples(rays.ids)
+            uv = strata(pixel, stratum, _FACET_STREAM + 2 * depth, self.settings.seed)
             surface = facets(surface, rays.dirs, self.materials, hits.obj, uv)
         return self._roulette(split(self.accel, self.materials, rays, hits, surface, carries_light=False), depth)
 
@@ -182,8 +189,8 @@ class EyeTracer:
         faint = np.flatnonzero(chance < 1.0)
         if len(faint) == 0:
             return rays
-        ids = rays.ids[faint]
-        sample = np.take(self.pixels, ids // self.spp) * self.spp + ids % self.spp
+        _, pixel, stratum = self._samples(rays.ids[faint])
+        sample = pixel * self.spp + stratum
         draw = hash_uniform(2 * sample + (rays.kind[faint] == REFRACTED), _ROULETTE_STREAM + depth,
                             self.settings.seed)
         survive = np.ones(len(rays), dtype=bool)
@@ -198,8 +205,7 @@ class EyeTracer:
             return
         rows = np.flatnonzero(surface.rough)
         m, obj = self.materials, hits.obj[rows]
-        local, stratum = rays.ids[rows] // self.spp, rays.ids[rows] % self.spp
-        pixel = np.take(self.pixels, local)
+        local, pixel, stratum = self._samples(rays.ids[rows])
         radiance = rough_specular_radiance(
             self.accel, self.scene.lights, self.energy, np.take(surface.points, rows, axis=0),
             np.take(surface.shading, rows, axis=0), np.take(surface.facing, rows, axis=0),
