@@ -20,10 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-
-# Edge pieces per batch: bounds their temporaries (~200 B a piece), however
-# many cells the triangles span.
-_BATCH_PIECES = 1 << 19
+from ..util.jit import kernel
 
 
 def signed_areas(corners: np.ndarray) -> np.ndarray:
@@ -63,8 +60,8 @@ class Coverage:
         """Add triangles `corners (m,3,2)` (cell units) of `values (m,c)`;
         one channel of buffer takes c = 1 only."""
         h, w = self.shape
-        for first, end in _batches(corners):
-            _accumulate(self.acc, h, w, corners[first:end], values[first:end])
+        _accumulate(self.acc, h, w, np.ascontiguousarray(corners, dtype=np.float64),
+                    np.ascontiguousarray(values, dtype=np.float64))
 
     def widen(self, channels: int) -> None:
         """Hold `channels` channels from now on, each a copy of the one held."""
@@ -77,76 +74,41 @@ class Coverage:
         return np.cumsum(self.acc.reshape(-1, h, w + 2), axis=2)[:, :, 1:w + 1]
 
 
-def _batches(corners: np.ndarray) -> list[tuple[int, int]]:
-    """[first, end) runs of the triangles `corners (m,3,2)` (cell units),
-    each of at most _BATCH_PIECES edge pieces (or one triangle): an edge
-    from (x0, y0) to (x1, y1) is cut into at most |x1 - x0| + |y1 - y0| + 3
-    pieces."""
-    span = np.abs(corners - np.take(corners, [1, 2, 0], axis=1))
-    total = np.cumsum(span.sum(axis=(1, 2)) + 9.0)
-    bounds = [0]
-    while bounds[-1] < len(corners):
-        done = total[bounds[-1] - 1] if bounds[-1] else 0.0
-        bounds.append(max(int(np.searchsorted(total, done + _BATCH_PIECES, side="right")), bounds[-1] + 1))
-    return list(zip(bounds[:-1], bounds[1:]))
-
-
-def _accumulate(acc: np.ndarray, h: int, w: int, corners: np.ndarray, values: np.ndarray) -> None:
-    """Add the triangles' edge pieces to the accumulation buffer `acc (c, h (w+2))`."""
-    # a counter-clockwise (y up) triangle accumulates minus its coverage
-    weight = -np.sign(signed_areas(corners))[:, None] * values
-
-    start = corners.reshape(-1, 2)
-    end = np.take(corners, [1, 2, 0], axis=1).reshape(-1, 2)
-    sloped = np.flatnonzero(start[:, 1] != end[:, 1])
-    start, end = np.take(start, sloped, axis=0), np.take(end, sloped, axis=0)
-    triangle = sloped // 3
-
-    row, x0, x1, dy, edge = _rows(start, end, h)
-    col, xmid, dy, piece = _columns(x0, x1, dy, w)
-    f = xmid - col
-    at = row[piece] * (w + 2) + col + 1
-    index = np.concatenate([at, at + 1])
-    of_piece = triangle[edge[piece]]
-    for k in range(len(acc)):
-        wk = weight[:, k][of_piece] * dy
-        acc[k] += np.bincount(index, weights=np.concatenate([wk * (1.0 - f), wk * f]), minlength=acc.shape[1])
-
-
-def _bands(lo: np.ndarray, hi: np.ndarray, first: int, last: int):
-    """The integer bands [k, k+1) that spans [lo, hi] (n,) meet, k in
-    [first, last]. Returns (owner (p,) the span of each piece, band (p,))."""
-    band_lo = np.maximum(np.floor(lo), first).astype(np.int64)
-    band_hi = np.minimum(np.floor(hi), last).astype(np.int64)
-    count = np.maximum(band_hi - band_lo + 1, 0)
-    owner = np.repeat(np.arange(len(lo)), count)
-    return owner, band_lo[owner] + (np.arange(len(owner)) - np.repeat(np.cumsum(count) - count, count))
-
-
-def _rows(start: np.ndarray, end: np.ndarray, h: int):
-    """Cut sloped edges `start, end (n,2)` at the lines y = k into pieces in
-    rows 0..h-1 (others are dropped). Returns (row, x0, x1, dy signed along
-    the edge, edge) per piece."""
-    ya, yb = start[:, 1], end[:, 1]
-    lo, hi = np.minimum(ya, yb), np.maximum(ya, yb)
-    slope = (end[:, 0] - start[:, 0]) / (yb - ya)
-    edge, row = _bands(lo, hi, 0, h - 1)
-    y0, y1 = np.maximum(lo[edge], row), np.minimum(hi[edge], row + 1.0)
-    xa, ya, k = start[:, 0][edge], ya[edge], slope[edge]
-    return row, xa + (y0 - ya) * k, xa + (y1 - ya) * k, (y1 - y0) * np.sign(yb - start[:, 1])[edge], edge
-
-
-def _columns(x0: np.ndarray, x1: np.ndarray, dy: np.ndarray, w: int):
-    """Cut row pieces at the lines x = k into pieces in columns -1..w-1:
-    everything left of the grid joins column -1, where it covers whole rows
-    of it; pieces right of the grid are dropped. Returns (col, xmid clipped
-    to the column, dy share, row piece) per piece."""
-    lo, hi = np.minimum(x0, x1), np.maximum(x0, x1)
-    piece, col = _bands(lo, np.maximum(hi, -1.0), -1, w - 1)
-    lo, hi, dy = lo[piece], hi[piece], dy[piece]
-    c0 = np.where(col == -1, lo, np.maximum(lo, col))
-    c1 = np.minimum(hi, col + 1.0)
-    width = hi - lo
-    with np.errstate(divide="ignore", invalid="ignore"):
-        share = np.where(width > 0, (c1 - c0) / width, 1.0)
-    return col, np.clip(0.5 * (c0 + c1), col, col + 1.0), dy * share, piece
+@kernel("void(f8[:, ::1], i8, i8, f8[:, :, ::1], f8[:, ::1])")
+def _accumulate(acc, h, w, corners, values):
+    """Add every edge piece of triangles `corners (m,3,2)` (cell units) of
+    `values (m,c)` to the accumulation buffer `acc (c, h (w+2))`: each
+    sloped edge is cut at the lines y = k into rows 0..h-1, and each row
+    piece at the lines x = k into columns -1..w-1 (everything left of the
+    grid joins column -1; pieces right of it are dropped)."""
+    channels = acc.shape[0]
+    for t in range(corners.shape[0]):
+        e1x, e1y = corners[t, 1, 0] - corners[t, 0, 0], corners[t, 1, 1] - corners[t, 0, 1]
+        e2x, e2y = corners[t, 2, 0] - corners[t, 0, 0], corners[t, 2, 1] - corners[t, 0, 1]
+        # a counter-clockwise (y up) triangle accumulates minus its coverage
+        area = e1x * e2y - e1y * e2x
+        sign = -1.0 if area > 0.0 else (1.0 if area < 0.0 else 0.0)
+        for e in range(3):
+            xs, ys = corners[t, e, 0], corners[t, e, 1]
+            xe, ye = corners[t, (e + 1) % 3, 0], corners[t, (e + 1) % 3, 1]
+            if ys == ye:
+                continue
+            lo, hi = min(ys, ye), max(ys, ye)
+            slope = (xe - xs) / (ye - ys)
+            up = 1.0 if ye > ys else -1.0
+            for row in range(max(int(np.floor(lo)), 0), min(int(np.floor(hi)), h - 1) + 1):
+                y0, y1 = max(lo, row), min(hi, row + 1.0)
+                xa, xb = xs + (y0 - ys) * slope, xs + (y1 - ys) * slope
+                dy = (y1 - y0) * up
+                left, right = min(xa, xb), max(xa, xb)
+                width = right - left
+                for col in range(max(int(np.floor(left)), -1), min(int(np.floor(max(right, -1.0))), w - 1) + 1):
+                    c0 = left if col == -1 else max(left, col)
+                    c1 = min(right, col + 1.0)
+                    share = (c1 - c0) / width if width > 0.0 else 1.0
+                    f = min(max(0.5 * (c0 + c1), col), col + 1.0) - col
+                    at = row * (w + 2) + col + 1
+                    for k in range(channels):
+                        piece = sign * values[t, k] * dy * share
+                        acc[k, at] += piece * (1.0 - f)
+                        acc[k, at + 1] += piece * f

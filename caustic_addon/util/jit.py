@@ -1,0 +1,123 @@
+"""Compiled kernels: the per-ray loops between Embree's casts, in numba's
+nopython mode without the GIL, so the pass's thread pool keeps both cores
+busy (numba's own parallel regions are never used: they are not safe when
+several Python threads start them).
+
+A kernel is an ordinary Python function over arrays, declared with its
+signatures:
+
+    @kernel("void(f8[:, ::1], f8[::1])")
+    def scale_rows(rows, by): ...
+
+It compiles on its first call, or ahead of it with `compile_all()`, and is
+cached on disk, so a process compiles it once per Python and engine source:
+in `use_cache_folder()`'s folder (the add-on passes Blender's user folder for
+the extension) or, by default, in this package's `__pycache__`. The cache
+is keyed by a digest of the engine's source as well as by numba's own file
+stamps, since numba would not see an edit to a function that a kernel calls
+from another module. Arrays must match the signature exactly (`f8[:, ::1]` is
+C-contiguous float64): a kernel never compiles again for other types.
+
+Scalar helpers that kernels call (`@inline`) compile into each kernel."""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import importlib
+import shutil
+import threading
+from pathlib import Path
+
+import numba
+
+_ENGINE = Path(__file__).resolve().parents[1]
+_KERNELS: list["Kernel"] = []
+_lock = threading.RLock()
+_cache_root = _ENGINE / "__pycache__" / "kernels"
+
+
+def _source_digest() -> str:
+    """The first 16 hex digits of a SHA-256 over the engine's .py files."""
+    digest = hashlib.sha256()
+    for path in sorted(_ENGINE.rglob("*.py")):
+        digest.update(path.relative_to(_ENGINE).as_posix().encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+_DIGEST = _source_digest()
+
+
+def use_cache_folder(folder: str | Path) -> None:
+    """Cache the kernels compiled from now on in `folder`, under a folder
+    named by the engine's source digest."""
+    global _cache_root
+    with _lock:
+        _cache_root = Path(folder)
+
+
+def cache_folder() -> Path:
+    """The folder the kernels compiled now are cached in; the caches of
+    other engine sources beside it are removed."""
+    if _cache_root.is_dir():
+        for stale in _cache_root.iterdir():
+            if stale.is_dir() and stale.name != _DIGEST:
+                shutil.rmtree(stale, ignore_errors=True)
+    return _cache_root / _DIGEST
+
+
+class Kernel:
+    """A kernel compiled on first use: `func` under numba.njit(signatures,
+    nogil=True, cache=True)."""
+
+    def __init__(self, func, signatures: tuple[str, ...]):
+        self.func, self.signatures = func, signatures
+        self._compiled = None
+        functools.update_wrapper(self, func)
+
+    def compiled(self):
+        """The numba dispatcher, compiled, or loaded from the cache, on first use."""
+        if self._compiled is None:
+            with _lock:
+                if self._compiled is None:
+                    self._compiled = _njit_cached(self.func, self.signatures)
+        return self._compiled
+
+    def __call__(self, *args):
+        return self.compiled()(*args)
+
+
+def _njit_cached(func, signatures: tuple[str, ...]):
+    """numba.njit with a disk cache in cache_folder(): numba reads the folder
+    from its config when a cached function is made, so it is set only for
+    that moment."""
+    previous = numba.config.CACHE_DIR
+    numba.config.CACHE_DIR = str(cache_folder())
+    try:
+        return numba.njit(list(signatures), nogil=True, cache=True)(func)
+    finally:
+        numba.config.CACHE_DIR = previous
+
+
+def kernel(*signatures: str):
+    """Declare a compiled kernel with its numba `signatures`."""
+    def declare(func) -> Kernel:
+        made = Kernel(func, signatures)
+        _KERNELS.append(made)
+        return made
+    return declare
+
+
+def inline(func):
+    """A scalar helper for kernels, compiled into each kernel that calls it."""
+    return numba.njit(nogil=True)(func)
+
+
+def compile_all() -> int:
+    """Compile (or load from the cache) every kernel of the engine; returns
+    how many there are. Imports the whole engine first, so none is missed."""
+    importlib.import_module("..renderer", __package__)  # every pass, and so every kernel
+    for declared in list(_KERNELS):
+        declared.compiled()
+    return len(_KERNELS)
