@@ -21,10 +21,11 @@ from .optics.media import absorption_from_color, volume_absorption
 from .renderer import RenderResult, render
 from .scene import (AreaLight, Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector, RenderSettings,
                     Scene, Specular, SpotLight, SunLight, Visibility, World, paper, shapes, textures)
+from .util.jit import compile_kernels, use_kernel_cache
 
 __all__ = [
     "AreaLight", "Camera", "Cancelled", "Dielectric", "Diffuse", "IlluminationMap", "ImageFrame", "MapCache", "Mesh", "Object", "PointLight", "Reflector",
     "RenderResult", "RenderSettings", "Scene", "SceneError", "Specular", "SpotLight", "SunLight", "Visibility", "World",
-    "absorption_from_color",
-    "paper", "render", "shapes", "textures", "volume_absorption", "write_exr_channels",
+    "absorption_from_color", "compile_kernels",
+    "paper", "render", "shapes", "textures", "use_kernel_cache", "volume_absorption", "write_exr_channels",
 ]

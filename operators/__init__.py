@@ -12,6 +12,8 @@ from .render import CAUSTIC_OT_render
 from .render_with_caustics import CAUSTIC_OT_render_animation_with_caustics, CAUSTIC_OT_render_image_with_caustics
 
 from . import bake_on_render
+from ..jobs import kernels
+from .engine_run import kernel_folder
 
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory((
     CAUSTIC_OT_render,
@@ -30,8 +32,10 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory((
 def register() -> None:
     _register_classes()
     bake_on_render.register()
+    kernels.start(kernel_folder())
 
 
 def unregister() -> None:
+    kernels.wait()
     bake_on_render.unregister()
     _unregister_classes()

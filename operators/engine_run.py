@@ -8,6 +8,15 @@ import bpy
 from ..jobs import JobRunner
 
 
+def kernel_folder() -> str | None:
+    """Blender's user folder for the extension's compiled kernels, or None
+    where the add-on runs from a source tree and not as an extension."""
+    try:
+        return bpy.utils.extension_path_user(__package__.rpartition(".")[0], path="kernels", create=True)
+    except ValueError:
+        return None
+
+
 def no_render_running(operator) -> bool:
     """Poll for the operators that run the engine: one run at a time."""
     if EngineOperator.running:

@@ -9,9 +9,9 @@ signatures:
     @kernel("void(f8[:, ::1], f8[::1])")
     def scale_rows(rows, by): ...
 
-It compiles on its first call, or ahead of it with `compile_all()`, and is
+It compiles on its first call, or ahead of it with `compile_kernels()`, and is
 cached on disk, so a process compiles it once per Python and engine source:
-in `use_cache_folder()`'s folder (the add-on passes Blender's user folder for
+in `use_kernel_cache()`'s folder (the add-on passes Blender's user folder for
 the extension) or, by default, in this package's `__pycache__`. The cache
 is keyed by a digest of the engine's source as well as by numba's own file
 stamps, since numba would not see an edit to a function that a kernel calls
@@ -49,7 +49,7 @@ def _source_digest() -> str:
 _DIGEST = _source_digest()
 
 
-def use_cache_folder(folder: str | Path) -> None:
+def use_kernel_cache(folder: str | Path) -> None:
     """Cache the kernels compiled from now on in `folder`, under a folder
     named by the engine's source digest."""
     global _cache_root
@@ -114,7 +114,7 @@ def inline(func):
     return numba.njit(nogil=True)(func)
 
 
-def compile_all() -> int:
+def compile_kernels() -> int:
     """Compile (or load from the cache) every kernel of the engine; returns
     how many there are. Imports the whole engine first, so none is missed."""
     importlib.import_module("..renderer", __package__)  # every pass, and so every kernel
