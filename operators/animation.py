@@ -13,25 +13,10 @@ from ..writeback.images import show_image
 from ..writeback.output import OutputError, check_writable, frame_paths, frame_range, save_frame
 from ..writeback.results import RESULT_IMAGE, write_result
 from .engine_run import EngineOperator
+from .frame_range import FrameRange, frames_text
 
 
-def frames_text(frames: list[int]) -> str:
-    return f"frame {frames[0]}" if len(frames) == 1 else f"frames {frames[0]}-{frames[-1]}"
-
-
-class FrameRangeOptions:
-    """Operator options for a frame range; unset, the scene's."""
-
-    frame_start: bpy.props.IntProperty(name="Start Frame", options={'SKIP_SAVE'},
-                                       description="First frame (default: the scene's)")
-    frame_end: bpy.props.IntProperty(name="End Frame", options={'SKIP_SAVE'},
-                                     description="Last frame (default: the scene's)")
-
-    def _given(self, name: str):
-        return getattr(self, name) if self.properties.is_property_set(name) else None
-
-
-class CAUSTIC_OT_render_animation(FrameRangeOptions, EngineOperator, bpy.types.Operator):
+class CAUSTIC_OT_render_animation(FrameRange, EngineOperator, bpy.types.Operator):
     bl_idname = "caustic.render_animation"
     bl_label = "Render Caustic Animation"
     bl_description = ("Render the frame range with caustics, each frame to the output path (Output Properties) "
@@ -52,18 +37,13 @@ class CAUSTIC_OT_render_animation(FrameRangeOptions, EngineOperator, bpy.types.O
         except (InputError, OutputError) as exc:
             self.report({'ERROR'}, str(exc))
             return None
-        self._frame_before = scene.frame_current, scene.frame_subframe
-        self._warnings, self._reused, self._seconds = [], 0, 0.0
+        self._begin(scene)
+        self._reused = 0
         return JobRunner(frames, lambda frame: self._prepare(frame, settings), self._write)
 
     def _prepare(self, frame: int, settings) -> RenderJob:
-        context = bpy.context
-        context.scene.frame_set(frame)
-        try:
-            read = read_scene(context)
-        except InputError as exc:
-            raise StepError(f"Frame {frame}: {exc}") from exc
-        self._warnings += [w for w in read.warnings if w not in self._warnings]
+        read = self._read_frame(frame, read_scene)
+        self._warn(read.warnings)
         return RenderJob(read.scene, settings)
 
     def _write(self, frame: int, job: RenderJob) -> None:
@@ -73,7 +53,7 @@ class CAUSTIC_OT_render_animation(FrameRangeOptions, EngineOperator, bpy.types.O
             save_frame(context.scene, context.view_layer.name, image, job.result, self._paths[frame])
         except OutputError as exc:
             raise StepError(f"Frame {frame} {exc}") from exc
-        self._warnings += [w for w in job.result.warnings if w not in self._warnings]
+        self._warn(job.result.warnings)
         self._reused += bool(job.result.stats["maps_cached"])
         self._seconds += job.seconds
 
@@ -82,20 +62,12 @@ class CAUSTIC_OT_render_animation(FrameRangeOptions, EngineOperator, bpy.types.O
                 f"(Esc stops after this frame)")
 
     def _done(self, context, runner: JobRunner) -> set:
-        frame, subframe = self._frame_before
-        context.scene.frame_set(frame, subframe=subframe)
-        for warning in self._warnings:
-            self.report({'WARNING'}, warning)
         if runner.last is not None:
             show_image(context, bpy.data.images[RESULT_IMAGE])
         done = runner.done
         written = f"{len(done)} of {len(runner.steps)} frames written" + (
             f" ({frames_text(done)}, the last to '{self._paths[done[-1]]}')" if done else "")
-        if runner.error is not None:
-            self.report({'ERROR'}, f"{runner.error}; {written}")
-        elif runner.cancelled:
-            self.report({'WARNING'}, f"Caustic animation stopped: {written}")
-        else:
+        if self._finish(context, runner, written, "Caustic animation stopped"):
             reused = f", maps reused on {self._reused}" if self._reused else ""
             self.report({'INFO'}, f"Rendered {frames_text(done)} with caustics in {self._seconds:.1f} s{reused}: "
                                   f"'{self._paths[done[0]]}' to '{self._paths[done[-1]]}'")

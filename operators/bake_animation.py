@@ -17,10 +17,10 @@ from ..writeback.bake_group import follow_frames, unwire
 from ..writeback.images import working_colorspace
 from ..writeback.output import OutputError, check_saved, check_writable, frame_range, write_float_exr
 from ..writeback.results import record_run
-from .animation import FrameRangeOptions, frames_text
 from ..writeback.bake import IMAGE_PREFIX, bakeable, map_rgba, wire_bake
 from .bake import read_for_bake
 from .engine_run import EngineOperator
+from .frame_range import FrameRange, frames_text
 
 DEFAULT_FOLDER = "//caustic_bake/"
 
@@ -32,7 +32,7 @@ def same_chart(a, b) -> bool:
         (getattr(fa, k) == getattr(fb, k)).all() for k in ("location", "rotation", "scale"))
 
 
-class BakeFrames(FrameRangeOptions, EngineOperator):
+class BakeFrames(FrameRange, EngineOperator):
     """What Bake Caustic Animation does, for the operators that bake a frame range."""
 
     directory: bpy.props.StringProperty(
@@ -51,21 +51,15 @@ class BakeFrames(FrameRangeOptions, EngineOperator):
         except (InputError, OutputError) as exc:
             self.report({'ERROR'}, str(exc))
             return None
-        self._frame_before = scene.frame_current, scene.frame_subframe
+        self._begin(scene)
         self._first = self._plan = None
-        self._warnings, self._seconds = [], 0.0
         return JobRunner(frames, lambda frame: self._prepare(frame, settings), self._write)
 
     def _path(self, name: str, frame: int) -> str:
         return os.path.join(self._folder, f"{bpy.path.clean_name(name)}_{frame:0{self._digits}d}.exr")
 
     def _prepare(self, frame: int, settings) -> RenderJob:
-        context = bpy.context
-        context.scene.frame_set(frame)
-        try:
-            self._read = read_for_bake(context)
-        except InputError as exc:
-            raise StepError(f"Frame {frame}: {exc}") from exc
+        self._read = self._read_frame(frame, read_for_bake)
         return RenderJob(self._read.scene, settings)
 
     def _write(self, frame: int, job: RenderJob) -> None:
@@ -75,7 +69,7 @@ class BakeFrames(FrameRangeOptions, EngineOperator):
             if not self._plan:
                 raise StepError("No receiver's material can take a baked caustic: " + "; ".join(warnings))
             self._first = frame, self._read, {name: maps[name] for name in self._plan}
-            self._warnings += warnings
+            self._warn(warnings)
         first_frame, _, first_maps = self._first
         for name in self._plan:
             if name not in maps or not same_chart(maps[name], first_maps[name]):
@@ -87,7 +81,7 @@ class BakeFrames(FrameRangeOptions, EngineOperator):
                 write_float_exr(self._path(name, frame), map_rgba(maps[name]))
             except OutputError as exc:
                 raise StepError(f"Frame {frame}: the map of '{name}' {exc}") from exc
-        self._warnings += [w for w in self._read.warnings + job.result.warnings if w not in self._warnings]
+        self._warn(self._read.warnings + job.result.warnings)
         self._seconds += job.seconds
         record_run(bpy.context.scene.caustic, job)
 
@@ -109,20 +103,12 @@ class BakeFrames(FrameRangeOptions, EngineOperator):
                 f"{runner.stage} (Esc stops after this frame)")
 
     def _done(self, context, runner: JobRunner) -> set:
-        frame, subframe = self._frame_before
-        context.scene.frame_set(frame, subframe=subframe)
-        for warning in self._warnings:
-            self.report({'WARNING'}, warning)
         done = runner.done
         if done:
             self._wire(done)
         written = f"{len(done)} of {len(runner.steps)} frames baked" + (
             f" ({frames_text(done)}) into '{self._folder}'" if done else "")
-        if runner.error is not None:
-            self.report({'ERROR'}, f"{runner.error}; {written}")
-        elif runner.cancelled:
-            self.report({'WARNING'}, f"Caustic bake stopped: {written}")
-        else:
+        if self._finish(context, runner, written, "Caustic bake stopped"):
             self.report({'INFO'}, f"Baked the caustics of {frames_text(done)} onto {', '.join(self._plan)} in "
                                   f"{self._seconds:.1f} s, into '{self._folder}'")
         return {'FINISHED'} if done else {'CANCELLED'}

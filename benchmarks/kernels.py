@@ -1,0 +1,156 @@
+"""Issue 20's targets, side by side in one run: how close each pass comes to
+Embree's own speed on the very rays it casts, and the ball lens's time to 5%
+and 2% error.
+
+    .venv/bin/python benchmarks/kernels.py [--repeats 3]
+
+- Each pass's rate, rays it casts over its stage's seconds (the fastest of
+  `repeats` renders), against raw embreex's rate on the same rays: every
+  batch the pass hands Embree, recorded from the render and replayed on 2
+  threads as the engine splits them. Measured for the beam pass, the photon
+  pass (Adaptive density) and the eye pass, on the 320x240 ball lens, and
+  for the eye pass at 1920x1080 and 4 spp.
+- The ball lens with Beam (accuracy.py's sweep): the fastest render at or
+  below 5% and 2% error against the exact pixel reference.
+- 1920x1080 at 4 spp of the ball lens, Beam at the 2% lamp-ray count: wall
+  and CPU seconds.
+
+Writes benchmarks/results/kernels.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from contextlib import contextmanager
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]
+
+import accuracy  # noqa: E402
+import ball_lens  # noqa: E402
+from budget import timed_render  # noqa: E402
+from caustic_addon import RenderSettings, render, renderer  # noqa: E402
+from caustic_addon.tracing.accelerator import Accelerator  # noqa: E402
+from skips import patched  # noqa: E402
+from speed import machine  # noqa: E402
+
+RESULTS = Path(__file__).resolve().parent / "results"
+TARGETS = {"pass_share_of_raw": 0.5, "seconds_to_5%": 0.1, "seconds_to_2%": 0.3, "seconds_1920x1080_4spp": 3.0}
+# The render stage each pass is timed by, and the renderer's function that runs it.
+PASS_STAGES = {"beam": ("lamp_pass", "beam_pass"), "photon": ("lamp_pass", "photon_pass"),
+               "eye": ("eye", "eye_pass")}
+
+
+@contextmanager
+def recording(batches: dict[str, list]):
+    """Record every batch handed to Embree, by the pass casting it."""
+    current = [None]
+    run = Accelerator._run
+
+    def recorded(self, embree, origins, dirs, **kwargs):
+        if current[0] is not None:
+            batches.setdefault(current[0], []).append((embree, np.array(origins), np.array(dirs), dict(kwargs)))
+        return run(self, embree, origins, dirs, **kwargs)
+
+    def marking(name, function):
+        def marked(*args, **kwargs):
+            current[0] = name
+            try:
+                return function(*args, **kwargs)
+            finally:
+                current[0] = None
+        return marked
+
+    with patched(Accelerator, "_run", recorded), \
+            patched(renderer, "beam_pass", marking("beam", renderer.beam_pass)), \
+            patched(renderer, "photon_pass", marking("photon", renderer.photon_pass)), \
+            patched(renderer, "eye_pass", marking("eye", renderer.eye_pass)):
+        yield
+
+
+def raw_seconds(scene, batches: list, repeats: int) -> float:
+    """Seconds embreex alone takes over `batches` (the fastest of
+    `repeats`), each split over 2 threads as the engine splits it."""
+    accel = Accelerator(scene.objects, scene.extent(), 2)
+    try:
+        best = np.inf
+        for _ in range(repeats):
+            start = time.perf_counter()
+            for embree, origins, dirs, kwargs in batches:
+                accel._run(embree, origins, dirs, **kwargs)
+            best = min(best, time.perf_counter() - start)
+        return best
+    finally:
+        accel.close()
+
+
+def pass_rates(scene, settings: RenderSettings, repeats: int) -> dict:
+    """Each pass's rays/s in the render against raw embreex's on its rays."""
+    stages = render_stages(scene, settings, repeats)
+    batches: dict[str, list] = {}
+    with recording(batches):
+        render(scene, settings)
+    rates = {}
+    for name, parts in batches.items():
+        stage = PASS_STAGES[name][0]
+        rays = sum(len(b[1]) for b in parts)
+        raw = rays / raw_seconds(scene, parts, repeats)
+        ours = rays / stages[stage]
+        rates[name] = dict(rays=rays, seconds=stages[stage], rays_per_s=ours, raw_rays_per_s=raw,
+                           share_of_raw=ours / raw)
+    return rates
+
+
+def render_stages(scene, settings: RenderSettings, repeats: int) -> dict:
+    """The fastest of `repeats` renders' seconds, stage by stage."""
+    runs = [render(scene, settings).stats["seconds"] for _ in range(repeats)]
+    return {stage: min(run[stage] for run in runs) for stage in runs[0]}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+
+    truth = ball_lens.pixel_reference(ball_lens.scene())
+    settings, counts = accuracy.engine_methods(1e5)["beam"]
+    curve = accuracy.run_engine("beam", settings, counts, truth)
+    reach = {f"{t:.0%}": accuracy.time_to_reach(curve, t) for t in (0.05, 0.02)}
+    lamp_rays = {f"{t:.0%}": min((p["lamp_rays"] for p in curve if p["error"] <= t), default=None)
+                 for t in (0.05, 0.02)}
+
+    small = ball_lens.scene()
+    large = ball_lens.scene(1920, 1080)
+    rates = {
+        "320x240": {**pass_rates(small, RenderSettings(lamp_rays=lamp_rays["5%"], spp=1), args.repeats),
+                    **{k: v for k, v in pass_rates(small, RenderSettings(lamp_rays=100_000, spp=1, density="adaptive"),
+                                                   args.repeats).items() if k == "photon"}},
+        "1920x1080_4spp": {k: v for k, v in pass_rates(large, RenderSettings(lamp_rays=lamp_rays["2%"], spp=4),
+                                                       args.repeats).items() if k == "eye"},
+    }
+    full_hd = timed_render(large, RenderSettings(lamp_rays=lamp_rays["2%"], spp=4), args.repeats)
+    report = {"date": date.today().isoformat(), "machine": machine(), "targets": TARGETS,
+              "ball_lens_beam_curve": curve, "seconds_to": reach, "lamp_rays_to": lamp_rays,
+              "pass_rates": rates, "render_1920x1080_4spp": full_hd}
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "kernels.json").write_text(json.dumps(report, indent=2) + "\n")
+
+    print(f"{report['date']}, {report['machine']}")
+    for t, seconds in reach.items():
+        print(f"ball lens 320x240 to {t} error: {seconds if seconds is None else round(seconds, 3)} s "
+              f"at {lamp_rays[t]} lamp rays (target {TARGETS[f'seconds_to_{t}']} s)")
+    for view, passes in rates.items():
+        for name, r in passes.items():
+            print(f"{view:15s} {name:6s} {r['rays_per_s'] / 1e6:6.2f} M rays/s, raw embreex "
+                  f"{r['raw_rays_per_s'] / 1e6:6.2f}: {r['share_of_raw']:.0%} (target 50%)")
+    print(f"1920x1080 4 spp: {full_hd['wall_s']:.2f} s wall, {full_hd['cpu_s']:.2f} s CPU (target 3 s)")
+
+
+if __name__ == "__main__":
+    main()
