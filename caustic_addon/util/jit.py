@@ -13,9 +13,12 @@ It compiles on its first call, or ahead of it with `compile_kernels()`, and is
 cached on disk, so a process compiles it once per Python and engine source:
 in `use_kernel_cache()`'s folder (the add-on passes Blender's user folder for
 the extension) or, by default, in this package's `__pycache__`. The cache
-is keyed by a digest of the engine's source as well as by numba's own file
-stamps, since numba would not see an edit to a function that a kernel calls
-from another module. Arrays must match the signature exactly (`f8[:, ::1]` is
+is kept apart by the name the engine is imported under (a cached kernel
+refers to its module by that name: `caustic_addon` for the CLI and the
+engine's tests, `bl_ext.<repo>.caustics.caustic_addon` in Blender), and by a
+digest of the engine's source as well as numba's own file stamps, since
+numba would not see an edit to a function that a kernel calls from another
+module. Arrays must match the signature exactly (`f8[:, ::1]` is
 C-contiguous float64): a kernel never compiles again for other types.
 
 Scalar helpers that kernels call (`@inline`) compile into each kernel."""
@@ -32,6 +35,7 @@ from pathlib import Path
 import numba
 
 _ENGINE = Path(__file__).resolve().parents[1]
+_ENGINE_NAME = __name__.rpartition(".util.")[0]
 _KERNELS: list["Kernel"] = []
 _lock = threading.RLock()
 _cache_root = _ENGINE / "__pycache__" / "kernels"
@@ -59,12 +63,13 @@ def use_kernel_cache(folder: str | Path) -> None:
 
 def cache_folder() -> Path:
     """The folder the kernels compiled now are cached in; the caches of
-    other engine sources beside it are removed."""
-    if _cache_root.is_dir():
-        for stale in _cache_root.iterdir():
+    other sources of the engine under this name are removed."""
+    named = _cache_root / _ENGINE_NAME
+    if named.is_dir():
+        for stale in named.iterdir():
             if stale.is_dir() and stale.name != _DIGEST:
                 shutil.rmtree(stale, ignore_errors=True)
-    return _cache_root / _DIGEST
+    return named / _DIGEST
 
 
 class Kernel:

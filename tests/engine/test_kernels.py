@@ -24,9 +24,19 @@ print(json.dumps({"hits": sum(stats.cache_hits.values()), "misses": sum(stats.ca
 """
 
 
-def compile_in_a_new_process(folder: Path) -> dict:
-    run = subprocess.run([sys.executable, "-c", COMPILE, str(folder)], cwd=REPO, capture_output=True, text=True,
-                         timeout=600)
+# The engine imported as package `engine_copy`, as the add-on imports it under its own name.
+RENAMED = """
+import importlib.util, sys
+spec = importlib.util.spec_from_file_location("engine_copy", "caustic_addon/__init__.py",
+                                              submodule_search_locations=["caustic_addon"])
+sys.modules["engine_copy"] = module = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(module)
+"""
+
+
+def compile_in_a_new_process(folder: Path, script: str = COMPILE, prelude: str = "") -> dict:
+    run = subprocess.run([sys.executable, "-c", prelude + script, str(folder)], cwd=REPO, capture_output=True,
+                         text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
     return json.loads(run.stdout.splitlines()[-1])
 
@@ -36,17 +46,29 @@ def test_the_second_process_loads_a_kernel_from_the_cache(tmp_path):
     second = compile_in_a_new_process(tmp_path)
     assert (first["misses"], first["hits"]) == (1, 0)
     assert (second["misses"], second["hits"]) == (0, 1)
-    assert Path(second["folder"]).parent == tmp_path
+    assert Path(second["folder"]).parent == tmp_path / "caustic_addon"
+
+
+def test_each_name_the_engine_is_imported_under_has_a_cache_of_its_own(tmp_path):
+    """A cached kernel refers to the modules of the helpers it calls by
+    name: the engine imported as another package (the add-on's is
+    bl_ext.<repo>.caustics.caustic_addon) shared the CLI's cache, where such
+    a kernel failed to load (ModuleNotFoundError: caustic_addon)."""
+    compile_in_a_new_process(tmp_path)
+    renamed = compile_in_a_new_process(tmp_path, COMPILE.replace("from caustic_addon", "from engine_copy"),
+                                       RENAMED)
+    assert (renamed["misses"], renamed["hits"]) == (1, 0)
+    assert Path(renamed["folder"]).parent == tmp_path / "engine_copy"
 
 
 def test_the_caches_of_other_engine_sources_are_removed(tmp_path):
-    stale = tmp_path / "0123456789abcdef"
-    stale.mkdir()
+    stale = tmp_path / "caustic_addon" / "0123456789abcdef"
+    stale.mkdir(parents=True)
     (stale / "old.nbi").write_bytes(b"")
-    previous = jit.cache_folder().parent
+    previous = jit.cache_folder().parents[1]
     try:
         jit.use_kernel_cache(tmp_path)
-        assert jit.cache_folder().parent == tmp_path
+        assert jit.cache_folder().parent == tmp_path / "caustic_addon"
         assert not stale.exists()
     finally:
         jit.use_kernel_cache(previous)
