@@ -12,7 +12,13 @@ for each path (`facets`, from the pass's own random numbers) instead of
 the shading normal, as Cycles' `bsdf_microfacet_sample` does: Fresnel at the
 microfacet normal, the path's weight times G2/G1 and Multiscatter GGX's
 factor (`multiscatter`), and a path that leaves on the wrong side of the
-macro surface ends."""
+macro surface ends.
+
+Between Embree's casts a bounce runs a few kernels (util.jit) over its
+rows: Embree's output decoded into Hits (tracing.accelerator), each path's
+fate and Beer-Lambert (`_arrivals`), the normals and Fresnel (`_oriented`),
+and both branches with their origins (`_branches`); only a rough surface's
+microfacet normals and multiscatter factors are numpy."""
 
 from __future__ import annotations
 

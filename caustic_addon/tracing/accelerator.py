@@ -274,11 +274,6 @@ class Accelerator:
             self.contacts.resolve(hits, origins, dirs, medium, leaving)
         return hits
 
-    def inside(self, medium: np.ndarray, obj: np.ndarray) -> np.ndarray:
-        """(n,) bool: is a ray in `medium (n,)` (an object, or MISS in air)
-        inside the body of `obj (n,)`?"""
-        return (medium != MISS) & (np.take(self.body, np.maximum(medium, 0)) == np.take(self.body, obj))
-
     def medium_at(self, points: np.ndarray) -> np.ndarray:
         """(n,) the closed object each of `points (n,3)` is inside, MISS if
         none: along each of three fixed directions, the first closed mesh
