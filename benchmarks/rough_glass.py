@@ -143,7 +143,7 @@ def spread_beams(replicas: int):
     its families and its cells bound beams, and the replicas' sharp
     caustics, each about another microfacet normal, sum to the blurred one."""
     local = threading.local()
-    original = beam.beam_sources, beam.band_beams, beam.BeamTracer.scattered, bounce._next_family
+    original = beam.beam_sources, beam.band_beams, beam.BeamTracer.scattered, bounce._own_families
 
     def sources(*args):
         out = [replace(s, grid=max(3, int(round(s.grid / replicas ** 0.5)))) for s in original[0](*args)
@@ -163,16 +163,16 @@ def spread_beams(replicas: int):
                                     r2_sequence(paths.ids // local.keys, shift))
         return bounce.split(self.accel, self.materials, paths, hits, surface, carries_light=True)
 
-    def next_family(family, obj, event, ids, rough):
-        return original[3](family, obj, event, ids, np.zeros_like(rough))
+    def own_families(surface):
+        return np.zeros(len(surface.alpha), dtype=bool)
 
-    beam.beam_sources, beam.band_beams, beam.BeamTracer.scattered, bounce._next_family = (
-        sources, band_beams, scattered, next_family)
+    beam.beam_sources, beam.band_beams, beam.BeamTracer.scattered, bounce._own_families = (
+        sources, band_beams, scattered, own_families)
     try:
         with grid_photons():
             yield
     finally:
-        beam.beam_sources, beam.band_beams, beam.BeamTracer.scattered, bounce._next_family = original
+        beam.beam_sources, beam.band_beams, beam.BeamTracer.scattered, bounce._own_families = original
 
 
 def cycles_scene(roughness: float) -> None:

@@ -2,13 +2,19 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from ..util.jit import inline
 
-def beer_lambert(absorption: np.ndarray, distance: np.ndarray) -> np.ndarray:
-    """Transmittance exp(-sigma_a * s) of a path of length `distance (n,)`
-    through a medium with absorption coefficient `absorption (n,3)` per metre."""
-    return np.exp(-absorption * distance[:, None])
+
+@inline
+def beer_lambert1(absorption, distance):
+    """Transmittance exp(-sigma_a s) of a path of length `distance` through
+    a medium of absorption coefficient `absorption` (sigma_a, one channel)
+    per metre."""
+    return math.exp(-absorption * distance)
 
 
 def absorption_from_color(color, distance: float) -> np.ndarray:

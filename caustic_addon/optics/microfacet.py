@@ -18,7 +18,8 @@ import math
 import numpy as np
 
 from ..sampling.warps import concentric_disc, frames
-from ..util.vectors import cross_rows, dot, normalize
+from ..util.jit import inline, kernel
+from ..util.vectors import cross_rows, dot, float_rows, normalize
 from .specular import fresnel_dielectric
 
 
@@ -45,22 +46,52 @@ def ggx_d(cos_h: np.ndarray, alpha: np.ndarray) -> np.ndarray:
     return a2 / (math.pi * ((1.0 - c2) + a2 * c2) ** 2)
 
 
-def ggx_lambda(cos_v: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+@inline
+def ggx_lambda1(cos_v, alpha):
     """Smith's Lambda(v) = (sqrt(1 + a^2 tan^2(theta_v)) - 1) / 2 (Heitz 2014,
     eq. 72); the masking G1(v) = 1 / (1 + Lambda(v))."""
-    c2 = np.maximum(cos_v * cos_v, 1e-300)
-    return 0.5 * (np.sqrt(1.0 + alpha * alpha * np.maximum(1.0 / c2 - 1.0, 0.0)) - 1.0)
+    c2 = max(cos_v * cos_v, 1e-300)
+    return 0.5 * (math.sqrt(1.0 + alpha * alpha * max(1.0 / c2 - 1.0, 0.0)) - 1.0)
 
 
-def shadowing_weight(cos_in: np.ndarray, cos_out: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+@inline
+def shadowing_weight1(cos_in, cos_out, alpha):
     """What a path keeps when its microfacet normal was drawn from the
     visible normals of its incoming direction: G2 / G1(in) = (1 + L(in)) /
     (1 + L(in) + L(out)), for reflection and refraction alike (Heitz 2018,
     sec. 2; Cycles' eval / pdf in `bsdf_microfacet_sample`). In particle
     tracing the light's direction is the one sampled from, and no 1/eta^2
     factor applies: flux, not radiance, crosses the interface."""
-    lam_in = ggx_lambda(cos_in, alpha)
-    return (1.0 + lam_in) / (1.0 + lam_in + ggx_lambda(cos_out, alpha))
+    lam_in = ggx_lambda1(cos_in, alpha)
+    return (1.0 + lam_in) / (1.0 + lam_in + ggx_lambda1(cos_out, alpha))
+
+
+@kernel("void(f8[::1], f8[::1], f8[::1])")
+def _lambda_values(cos_v, alpha, out):
+    for i in range(len(cos_v)):
+        out[i] = ggx_lambda1(cos_v[i], alpha[i])
+
+
+@kernel("void(f8[::1], f8[::1], f8[::1], f8[::1])")
+def _shadowing_values(cos_in, cos_out, alpha, out):
+    for i in range(len(cos_in)):
+        out[i] = shadowing_weight1(cos_in[i], cos_out[i], alpha[i])
+
+
+def ggx_lambda(cos_v, alpha) -> np.ndarray:
+    """ggx_lambda1 of each element (arguments broadcast), in their shape."""
+    cos_v, alpha = float_rows(cos_v, alpha)
+    out = np.empty(cos_v.shape)
+    _lambda_values(cos_v.ravel(), alpha.ravel(), out.reshape(-1))
+    return out
+
+
+def shadowing_weight(cos_in, cos_out, alpha) -> np.ndarray:
+    """shadowing_weight1 of each element (arguments broadcast), in their shape."""
+    cos_in, cos_out, alpha = float_rows(cos_in, cos_out, alpha)
+    out = np.empty(cos_in.shape)
+    _shadowing_values(cos_in.ravel(), cos_out.ravel(), alpha.ravel(), out.reshape(-1))
+    return out
 
 
 def reflection(cos_nv: np.ndarray, cos_nl: np.ndarray, cos_nh: np.ndarray, alpha: np.ndarray) -> np.ndarray:

@@ -1,4 +1,6 @@
-"""Specular optics at a smooth interface, vectorised over rays.
+"""Specular optics at a smooth interface: scalar forms for kernels (the
+`...1` functions, over 3-tuples) and array kernels over rays for numpy
+callers, one implementation.
 
 Conventions for every function: `d (n,3)` is the unit direction the light
 travels along; `n (n,3)` is the unit normal on the side the light comes from,
@@ -9,60 +11,107 @@ the refraction of nearly grazing rays loses about half its digits in float32.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from ..util.vectors import dot
+from ..util.jit import inline, kernel
+from ..util.vectors import dot1, float_rows, row, set_row, sum1
 
 
-def reflect(d: np.ndarray, n: np.ndarray) -> np.ndarray:
+@inline
+def reflect1(d, n):
     """Mirror reflection r = d - 2 (d.n) n (the paper's eq. 3, after De Greve 2006)."""
-    return d - 2.0 * dot(d, n)[:, None] * n
+    return sum1(1.0, d, -2.0 * dot1(d, n), n)
 
 
-def refract(d: np.ndarray, n: np.ndarray, eta) -> tuple[np.ndarray, np.ndarray]:
-    """Snell refraction, the paper's eqs. (4)-(6) in De Greve's robust form.
-
-        cos_i = -d.n,  sin2_t = eta^2 (1 - cos_i^2)
-        t = eta d + (eta cos_i - sqrt(1 - sin2_t)) n
-
-    Returns (t (n,3), tir (n,)): `tir` marks total internal reflection
-    (cos_t^2 < 0), where t is meaningless and the caller must reflect.
-    cos_t^2 = 1 - eta^2 (1 - cos_i^2) is evaluated as
-    (1 - eta)(1 + eta) + eta^2 cos_i^2, which keeps its digits at grazing
-    incidence when eta is near 1.
-    """
-    eta = np.broadcast_to(np.asarray(eta, dtype=np.float64), d.shape[:1])
-    cos_i = np.clip(-dot(d, n), 0.0, 1.0)
-    cos2_t = cos2_transmitted(cos_i, eta)
-    tir = cos2_t < 0.0
-    cos_t = np.sqrt(np.maximum(0.0, cos2_t))
-    t = eta[:, None] * d + (eta * cos_i - cos_t)[:, None] * n
-    return t, tir
-
-
-def cos2_transmitted(cos_i: np.ndarray, eta: np.ndarray) -> np.ndarray:
+@inline
+def cos2_transmitted1(cos_i, eta):
     """cos^2 of the refraction angle by Snell's law, negative under total
-    internal reflection: (1 - eta)(1 + eta) + eta^2 cos_i^2."""
+    internal reflection: 1 - eta^2 (1 - cos_i^2), evaluated as
+    (1 - eta)(1 + eta) + eta^2 cos_i^2, which keeps its digits at grazing
+    incidence when eta is near 1."""
     return (1.0 - eta) * (1.0 + eta) + eta * eta * cos_i * cos_i
 
 
-def fresnel_dielectric(cos_i: np.ndarray, eta) -> np.ndarray:
+@inline
+def refract1(d, n, eta):
+    """Snell refraction, the paper's eqs. (4)-(6) in De Greve's robust form.
+
+        cos_i = -d.n,  cos_t^2 = cos2_transmitted1(cos_i, eta)
+        t = eta d + (eta cos_i - cos_t) n
+
+    Returns (t, tir): `tir` marks total internal reflection (cos_t^2 < 0),
+    where t is meaningless and the caller must reflect."""
+    cos_i = min(max(-dot1(d, n), 0.0), 1.0)
+    cos2_t = cos2_transmitted1(cos_i, eta)
+    cos_t = math.sqrt(max(0.0, cos2_t))
+    return sum1(eta, d, eta * cos_i - cos_t, n), cos2_t < 0.0
+
+
+@inline
+def fresnel_dielectric1(cos_i, eta):
     """Exact unpolarised Fresnel reflectance F = (Rs + Rp) / 2 (Hecht, Optics, 4.34/4.35).
 
         Rs = ((eta cos_i - cos_t) / (eta cos_i + cos_t))^2
         Rp = ((cos_i - eta cos_t) / (cos_i + eta cos_t))^2
 
-    with eta = eta_i / eta_t and cos_t from Snell's law. F = 1 past the
-    critical angle (total internal reflection). At exactly grazing incidence
-    both ratios are 0/0; their limit is 1, or 0 for matched indices (eta = 1).
-    """
-    cos_i = np.clip(np.asarray(cos_i, dtype=np.float64), 0.0, 1.0)
-    eta = np.broadcast_to(np.asarray(eta, dtype=np.float64), cos_i.shape)
-    cos2_t = cos2_transmitted(cos_i, eta)
-    cos_t = np.sqrt(np.maximum(0.0, cos2_t))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
-        rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
-    f = 0.5 * (rs * rs + rp * rp)
-    f = np.where(np.isfinite(f), f, np.where(eta == 1.0, 0.0, 1.0))
-    return np.where(cos2_t < 0.0, 1.0, np.clip(f, 0.0, 1.0))
+    with eta = eta_i / eta_t, cos_i clamped to 0..1 and cos_t from Snell's
+    law. F = 1 past the critical angle (total internal reflection). At
+    exactly grazing incidence both ratios are 0/0; their limit is 1, or 0
+    for matched indices (eta = 1)."""
+    cos_i = min(max(cos_i, 0.0), 1.0)
+    cos2_t = cos2_transmitted1(cos_i, eta)
+    if cos2_t < 0.0:
+        return 1.0
+    cos_t = math.sqrt(cos2_t)
+    s_den, p_den = eta * cos_i + cos_t, cos_i + eta * cos_t
+    if s_den == 0.0 or p_den == 0.0:
+        return 0.0 if eta == 1.0 else 1.0
+    rs, rp = (eta * cos_i - cos_t) / s_den, (cos_i - eta * cos_t) / p_den
+    return min(max(0.5 * (rs * rs + rp * rp), 0.0), 1.0)
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1])")
+def _reflect_rows(d, n, out):
+    for i in range(len(d)):
+        set_row(out, i, reflect1(row(d, i), row(n, i)))
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[::1], f8[:, ::1], b1[::1])")
+def _refract_rows(d, n, eta, out, tir):
+    for i in range(len(d)):
+        t, total = refract1(row(d, i), row(n, i), eta[i])
+        set_row(out, i, t)
+        tir[i] = total
+
+
+@kernel("void(f8[::1], f8[::1], f8[::1])")
+def _fresnel_values(cos_i, eta, out):
+    for i in range(len(cos_i)):
+        out[i] = fresnel_dielectric1(cos_i[i], eta[i])
+
+
+def reflect(d: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """(n,3) reflect1 of each row of `d` about `n` (rows broadcast)."""
+    d, n = float_rows(d, n)
+    out = np.empty_like(d)
+    _reflect_rows(d, n, out)
+    return out
+
+
+def refract(d: np.ndarray, n: np.ndarray, eta) -> tuple[np.ndarray, np.ndarray]:
+    """refract1 of each row: (t (n,3), tir (n,) bool)."""
+    d, n = float_rows(d, n)
+    (eta,) = float_rows(np.broadcast_to(np.asarray(eta, dtype=np.float64), d.shape[:1]))
+    out, tir = np.empty_like(d), np.empty(len(d), dtype=bool)
+    _refract_rows(d, n, eta, out, tir)
+    return out, tir
+
+
+def fresnel_dielectric(cos_i, eta) -> np.ndarray:
+    """fresnel_dielectric1 of each element of `cos_i` and `eta` (broadcast), in their shape."""
+    cos_i, eta = float_rows(cos_i, eta)
+    out = np.empty(cos_i.shape)
+    _fresnel_values(cos_i.ravel(), eta.ravel(), out.reshape(-1))
+    return out

@@ -12,24 +12,31 @@ for each path (`facets`, from the pass's own random numbers) instead of
 the shading normal, as Cycles' `bsdf_microfacet_sample` does: Fresnel at the
 microfacet normal, the path's weight times G2/G1 and Multiscatter GGX's
 factor (`multiscatter`), and a path that leaves on the wrong side of the
-macro surface ends."""
+macro surface ends.
+
+Between Embree's casts a bounce runs a few kernels (util.jit) over its
+rows: Embree's output decoded into Hits (tracing.accelerator), each path's
+fate and Beer-Lambert (`_arrivals`), the normals and Fresnel (`_oriented`),
+and both branches with their origins (`_branches`); only a rough surface's
+microfacet normals and multiscatter factors are numpy."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np
 
-from ..optics.media import beer_lambert
-from ..optics.microfacet import sample_visible_normals, shadowing_weight
+from ..optics.media import beer_lambert1
+from ..optics.microfacet import sample_visible_normals, shadowing_weight1
 from ..optics.multiscatter import albedo_at, multiscatter_factor
-from ..optics.specular import fresnel_dielectric, reflect, refract
+from ..optics.specular import fresnel_dielectric, fresnel_dielectric1, reflect1, refract1
 from ..scene.material_table import Materials
-from ..tracing.accelerator import REFLECTED, REFRACTED, Accelerator
+from ..tracing.accelerator import REFLECTED, REFRACTED, Accelerator, inside1, offset1, shading_normal1
 from ..tracing.hits import MISS, Hits
-from ..util.rows import take_rows
-from ..util.vectors import dot, max_channel, normalize
+from ..util.jit import inline, kernel
+from ..util.rows import contiguous, take_rows
+from ..util.vectors import dot, dot1, max_channel1, normalize1, row, scale1, set_row
 from .paths import Paths
 
 _FAMILY_PRIME = np.uint64(0x100000001B3)
@@ -37,6 +44,9 @@ _ID_PRIME = np.uint64(0x9E3779B97F4A7C15)
 # The family bit of a beam path scattered at a rough surface: its family is
 # its own (its grid key is in it), so it bounds no beam with its neighbours.
 SCATTERED = np.uint64(1 << 63)
+# What became of a path at its hit (trace): it left the scene, arrived at an
+# opaque surface, or met a specular one.
+_ESCAPED, _ARRIVED, _SPECULAR = 0, 1, 2
 
 
 @dataclass
@@ -71,7 +81,34 @@ class Interface:
 
     def select(self, mask: np.ndarray) -> "Interface":
         return Interface(*take_rows(mask, self.points, self.facing, self.shading, self.entering, self.eta,
-                                    self.fresnel))
+                                    self.fresnel, self.alpha, self.scattering))
+
+
+@inline
+def oriented1(d, face, shading):
+    """(facing, shading): the geometric normal `face` turned against the
+    ray `d`, and the shading normal put on its side; where interpolation
+    tips it past the ray (d.n_s >= 0), the geometric normal instead."""
+    facing = face if dot1(d, face) < 0.0 else scale1(-1.0, face)
+    if dot1(shading, facing) < 0.0:
+        shading = scale1(-1.0, shading)
+    return facing, (facing if dot1(d, shading) >= 0.0 else shading)
+
+
+@kernel("void(i8[::1], f8[::1], f8[::1], i8[::1], f8[:, ::1], i8[::1], i8[::1], f8[:, ::1], f8[:, :, ::1], "
+        "b1[::1], i8[::1], f8[:, ::1], b1[::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1])")
+def _oriented(prim, u, v, obj, dirs, medium, band, face_normal, corner_normal, closed, body, ior, reflector,
+              facing, shading, entering, eta, fresnel):
+    """orient's rows: `ior (m,K)` per object and band, `band (n,)` each row's."""
+    for i in range(len(prim)):
+        d, o, face = row(dirs, i), obj[i], row(face_normal, prim[i])
+        entered = (not inside1(medium[i], o, body)) if closed[o] else dot1(d, face) < 0.0
+        f, s = oriented1(d, face, shading_normal1(corner_normal, face_normal, prim[i], u[i], v[i]))
+        e = 1.0 / ior[o, band[i]] if entered else ior[o, band[i]]
+        set_row(facing, i, f)
+        set_row(shading, i, s)
+        entering[i], eta[i] = entered, e
+        fresnel[i] = 1.0 if reflector[o] else fresnel_dielectric1(-dot1(d, s), e)
 
 
 def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, materials: Materials, medium: np.ndarray,
@@ -85,23 +122,19 @@ def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, materials: Material
     (the object it is inside, or MISS; any object of the same body counts)
     decides, since a hit at an edge or a grazing hit can land on a face
     whose normal says otherwise; for an open mesh, the outward geometric
-    normal does (dot(d, n) < 0 means entering).
-    The geometric normal is turned against the ray, and the shading normal
-    put on its side; where interpolation tips it past the ray
-    (dot(d, n_s) >= 0), the geometric normal is used instead.
+    normal does (dot(d, n) < 0 means entering). The normals: oriented1.
     """
-    face = np.take(accel.face_normal, hits.prim, axis=0)
-    toward = dot(dirs, face) < 0.0
-    entering = np.where(accel.closed[hits.obj], ~accel.inside(medium, hits.obj), toward)
-    facing = np.where(toward[:, None], face, -face)
-    shading = accel.shading_normal(hits.prim, hits.u, hits.v)
-    shading = np.where((dot(shading, facing) < 0.0)[:, None], -shading, shading)
-    tipped = dot(dirs, shading) >= 0.0
-    shading[tipped] = facing[tipped]
-    ior = materials.ior[hits.obj] if band is None else materials.ior_bands[hits.obj, band]
-    eta = np.where(entering, 1.0 / ior, ior)
-    fresnel = np.where(materials.reflector[hits.obj], 1.0, fresnel_dielectric(-dot(dirs, shading), eta))
-    return Interface(hits.points, facing, shading, entering, eta, fresnel, materials.alpha[hits.obj], shading)
+    n = len(hits.prim)
+    facing, shading = np.empty((n, 3)), np.empty((n, 3))
+    entering, eta, fresnel = np.empty(n, dtype=bool), np.empty(n), np.empty(n)
+    ior = materials.ior[:, None] if band is None else materials.ior_bands
+    _oriented(contiguous(hits.prim, np.int64), contiguous(hits.u, np.float64), contiguous(hits.v, np.float64),
+              contiguous(hits.obj, np.int64), contiguous(dirs, np.float64), contiguous(medium, np.int64),
+              np.zeros(n, dtype=np.int64) if band is None else contiguous(band, np.int64), accel.face_normal,
+              accel.corner_normal, accel.closed, accel.body, contiguous(ior, np.float64), materials.reflector,
+              facing, shading, entering, eta, fresnel)
+    return Interface(hits.points, facing, shading, entering, eta, fresnel, np.take(materials.alpha, hits.obj),
+                     shading)
 
 
 def facets(surface: Interface, dirs: np.ndarray, materials: Materials, obj: np.ndarray,
@@ -155,46 +188,145 @@ def multiscatter(surface: Interface, materials: Materials, obj: np.ndarray, dirs
     return factor
 
 
+@inline
+def scatter1(d, scattering, facing, shading, eta, alpha, mirror):
+    """(out, crossed, kept) of a ray `d` at an interface of `eta`: mirror
+    reflection if `mirror`, else Snell refraction (total internal
+    reflection reflects), about the `scattering` normal; `out` unit.
+
+    A smooth surface (alpha 0) keeps all the weight. A shading normal can
+    send a reflected ray into the surface or a refracted one back out (the
+    wrong side of the geometric normal `facing`); those rays are redone
+    about the geometric normal, which cannot. A rough surface keeps G2/G1
+    (optics.microfacet.shadowing_weight1; the multiscatter factor is the
+    caller's), and nothing where the ray leaves on the wrong side of the
+    geometric or the shading normal: Cycles ends those paths."""
+    through, tir = refract1(d, scattering, eta)
+    mirror = mirror or tir
+    out = reflect1(d, scattering) if mirror else through
+    side = dot1(out, facing)
+    wrong = side <= 0.0 if mirror else side >= 0.0
+    kept = 1.0
+    if alpha > 0.0:
+        macro = dot1(out, shading)
+        if wrong or (macro <= 0.0 if mirror else macro >= 0.0):
+            kept = 0.0
+        else:
+            kept = shadowing_weight1(-dot1(d, shading), abs(macro), alpha)
+    elif wrong:
+        through, tir = refract1(d, facing, eta)
+        mirror = mirror or tir
+        out = reflect1(d, facing) if mirror else through
+    return normalize1(out), not mirror, kept
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], b1[::1], "
+        "f8[:, ::1], b1[::1], f8[::1])")
+def _scattered(dirs, scattering, facing, shading, eta, alpha, mirror, out, crossed, kept):
+    for i in range(len(dirs)):
+        o, c, k = scatter1(row(dirs, i), row(scattering, i), row(facing, i), row(shading, i), eta[i], alpha[i],
+                           mirror[i])
+        set_row(out, i, o)
+        crossed[i], kept[i] = c, k
+
+
 def scatter(surface: Interface, dirs: np.ndarray,
             reflect_mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """New unit directions (n,3), which of them crossed the surface (n,)
-    bool, and the share of weight each keeps (n,): mirror reflection where
-    `reflect_mask`, Snell refraction elsewhere (total internal reflection
-    reflects), about the scattering normal.
+    """scatter1 of each row of `dirs (n,3)` at `surface`, reflecting where
+    `reflect_mask (n,)`: new unit directions (n,3), which of them crossed
+    the surface (n,) bool, and the share of weight each keeps (n,)."""
+    n = len(dirs)
+    out, crossed, kept = np.empty((n, 3)), np.empty(n, dtype=bool), np.empty(n)
+    _scattered(contiguous(dirs, np.float64), contiguous(surface.scattering, np.float64),
+               contiguous(surface.facing, np.float64), contiguous(surface.shading, np.float64),
+               contiguous(surface.eta, np.float64), contiguous(surface.alpha, np.float64),
+               contiguous(reflect_mask, bool), out, crossed, kept)
+    return out, crossed, kept
 
-    Smooth rows keep all their weight. A shading normal can send a
-    reflected ray into the surface or a refracted one back out; those rays
-    are redone about the geometric normal, which cannot. Rough rows keep
-    G2/G1 (optics.microfacet.shadowing_weight; the multiscatter factor is
-    the caller's), and none where the ray leaves on the wrong side of the
-    geometric or the shading normal: Cycles ends those paths.
-    """
-    reflected = reflect(dirs, surface.scattering)
-    refracted, tir = refract(dirs, surface.scattering, surface.eta)
-    mirror = reflect_mask | tir
-    out = np.where(mirror[:, None], reflected, refracted)
-    side = dot(out, surface.facing)
-    wrong = np.where(mirror, side <= 0.0, side >= 0.0)
-    kept = np.ones(len(dirs))
-    rough = surface.rough
-    if rough.any():
-        macro = dot(out, surface.shading)
-        lost = rough & (wrong | np.where(mirror, macro <= 0.0, macro >= 0.0))
-        kept = np.where(rough, shadowing_weight(-dot(dirs, surface.shading), np.abs(macro), surface.alpha), 1.0)
-        kept[lost] = 0.0
-        wrong &= ~rough
-    if wrong.any():
-        d, n = dirs[wrong], surface.facing[wrong]
-        redo_refract, redo_tir = refract(d, n, surface.eta[wrong])
-        mirror[wrong] |= redo_tir
-        out[wrong] = np.where(mirror[wrong][:, None], reflect(d, n), redo_refract)
-    return normalize(out), ~mirror, kept
+
+@inline
+def crossed_medium1(crossed, entering, obj, medium):
+    """The medium after a bounce at object `obj`: `obj` if the path crossed
+    into it, MISS if it crossed out, `medium` if it did not cross."""
+    if not crossed:
+        return medium
+    return obj if entering else MISS
+
+
+@kernel("void(b1[::1], b1[::1], i8[::1], i8[::1], i8[::1])")
+def _crossed_media(crossed, entering, obj, medium, out):
+    for i in range(len(crossed)):
+        out[i] = crossed_medium1(crossed[i], entering[i], obj[i], medium[i])
 
 
 def crossed_medium(surface: Interface, crossed: np.ndarray, obj: np.ndarray, medium: np.ndarray) -> np.ndarray:
-    """(n,) the medium after the bounce: the object entered, MISS after
-    leaving it, or `medium (n,)` where the path did not cross."""
-    return np.where(crossed, np.where(surface.entering, obj, MISS), medium)
+    """(n,) crossed_medium1 of each row: the medium after the bounce."""
+    out = np.empty(len(crossed), dtype=np.int64)
+    _crossed_media(contiguous(crossed, bool), contiguous(surface.entering, bool), contiguous(obj, np.int64),
+                   contiguous(medium, np.int64), out)
+    return out
+
+
+@inline
+def next_family1(family, surface, event, ident, own):
+    """The uint64 signature of a path that adds (surface, event) to
+    `family`, FNV-style: (family * P) ^ (4 surface + event + 1); the parts
+    of one body with one material are one surface. Where `own`, the path's
+    own id `ident` goes in first (family ^ ident * Q), so no other path
+    shares it, and the SCATTERED bit is set; it stays set."""
+    scattered = own or (family & SCATTERED) != np.uint64(0)
+    if own:
+        family = family ^ (np.uint64(ident) * _ID_PRIME)
+    signature = (family * _FAMILY_PRIME) ^ (np.uint64(surface) * np.uint64(4) + np.uint64(event + 1))
+    return signature | SCATTERED if scattered else signature
+
+
+def _own_families(surface: Interface) -> np.ndarray:
+    """(n,) bool: the rows whose branches take a family of their own, the rough ones."""
+    return surface.rough
+
+
+@kernel("i8(f8[:, ::1], f8[:, ::1], i8[::1], f8[::1], u8[::1], i8[::1], i8[::1], i8[::1], "
+        "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1], f8[::1], b1[::1], "
+        "f8[:, ::1], b1[::1], i8[::1], f8[:, ::1], f8, "
+        "f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], u8[::1], i1[::1], i8[::1], i8[::1])")
+def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
+              points, facing, shading, scattering, entering, eta, fresnel, alpha, own,
+              color, dielectric, surface_of, factor, epsilon,
+              out_origins, out_dirs, out_weight, out_medium, out_family, out_kind, out_surface, source):
+    """split's branches, all reflected ones, then all refracted ones, into
+    the out_ arrays (2n rows); returns how many there are. `source` is the
+    path each comes from; `factor (2n,3)` the multiscatter factors of the
+    reflected then the refracted branches, or (0,3): none; `family` (0,)
+    where the paths have none."""
+    n, count = len(dirs), 0
+    for event in range(2):
+        mirror = event == 0
+        for i in range(n):
+            o = obj[i]
+            if not (mirror or dielectric[o]):
+                continue
+            d, c = row(dirs, i), row(color, o)
+            out, crossed, kept = scatter1(d, row(scattering, i), row(facing, i), row(shading, i), eta[i], alpha[i],
+                                          mirror)
+            share = fresnel[i] if mirror else (1.0 - fresnel[i] if crossed else 0.0)
+            s = share * kept
+            w = (weight[i, 0] * c[0] * s, weight[i, 1] * c[1] * s, weight[i, 2] * c[2] * s)
+            if len(factor):
+                j = event * n + i
+                w = (w[0] * factor[j, 0], w[1] * factor[j, 1], w[2] * factor[j, 2])
+            if not max_channel1(w) >= floor[i]:
+                continue
+            set_row(out_origins, count, offset1(row(points, i), row(facing, i), out, epsilon))
+            set_row(out_dirs, count, out)
+            set_row(out_weight, count, w)
+            out_medium[count] = crossed_medium1(crossed, entering[i], o, medium[i])
+            if len(family):
+                out_family[count] = next_family1(family[i], surface_of[o], event, ids[i], own[i])
+            out_kind[count] = REFRACTED if crossed else REFLECTED
+            out_surface[count], source[count] = prim[i], i
+            count += 1
+    return count
 
 
 def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, surface: Interface,
@@ -202,43 +334,50 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
     """Both branches of every path at its specular hit: the reflected one
     with weight F and the refracted one with weight 1 - F (dielectrics
     only), each times the surface's tint, and where rough about the same
-    microfacet normal (`facets` drew it), times what `scatter` keeps and the
+    microfacet normal (`facets` drew it), times what scatter1 keeps and the
     multiscatter factor (on the eye's side: `carries_light` for beam
     vertices, not for eye rays). A branch whose weight falls below its
-    path's floor stops. With families, each branch records its event; a
-    branch scattered at a rough surface takes a family of its own
-    (SCATTERED)."""
-    tint = np.take(materials.color, hits.obj, axis=0)
-    rough = surface.rough.any()
-    branches = []
-    for event, mirror in ((0, True), (1, False)):
-        dirs, crossed, kept = scatter(surface, paths.dirs, np.full(len(paths), mirror))
-        share = surface.fresnel if mirror else np.where(crossed, 1.0 - surface.fresnel, 0.0)
-        weight = paths.weight * tint * (share * kept)[:, None]
-        if rough:
-            weight *= multiscatter(surface, materials, hits.obj, paths.dirs, dirs, crossed, carries_light)
-        family = None if paths.family is None else _next_family(paths.family, accel.surface[hits.obj], event,
-                                                                 paths.ids, surface.rough)
-        kind = None if paths.kind is None else np.where(crossed, REFRACTED, REFLECTED).astype(np.int8)
-        branch = Paths(accel.offset(surface.points, surface.facing, dirs), dirs, weight,
-                       crossed_medium(surface, crossed, hits.obj, paths.medium), paths.ids, paths.floor,
-                       np.ones(len(paths), dtype=bool), paths.band, family, kind, hits.prim)
-        exists = mirror | materials.dielectric[hits.obj]
-        branches.append(branch.select(exists & (max_channel(weight) >= paths.floor)))
-    return Paths.concat(branches)
+    path's floor stops. With families, each branch records its event
+    (next_family1); a branch scattered at a rough surface takes a family of
+    its own (SCATTERED). The branches leave epsilon off the surface
+    (offset1). All in one kernel, `_branches`, but the multiscatter factors,
+    which numpy gives first where a row is rough."""
+    n = len(paths)
+    factor = np.zeros((0, 3))
+    if surface.rough.any():
+        factor = np.concatenate([multiscatter(surface, materials, hits.obj, paths.dirs, *scatter(
+            surface, paths.dirs, np.full(n, mirror))[:2], carries_light) for mirror in (True, False)])
+    family = np.zeros(0, dtype=np.uint64) if paths.family is None else contiguous(paths.family, np.uint64)
+    out = (np.empty((2 * n, 3)), np.empty((2 * n, 3)), np.empty((2 * n, 3)), np.empty(2 * n, dtype=np.int64),
+           np.empty(2 * n if len(family) else 0, dtype=np.uint64), np.empty(2 * n, dtype=np.int8),
+           np.empty(2 * n, dtype=np.int64), np.empty(2 * n, dtype=np.int64))
+    f8, i8 = np.float64, np.int64
+    count = _branches(
+        contiguous(paths.dirs, f8), contiguous(paths.weight, f8), contiguous(paths.medium, i8),
+        contiguous(paths.floor, f8), family, contiguous(paths.ids, i8), contiguous(hits.obj, i8),
+        contiguous(hits.prim, i8), contiguous(surface.points, f8), contiguous(surface.facing, f8),
+        contiguous(surface.shading, f8), contiguous(surface.scattering, f8), contiguous(surface.entering, bool),
+        contiguous(surface.eta, f8), contiguous(surface.fresnel, f8), contiguous(surface.alpha, f8),
+        contiguous(_own_families(surface), bool), materials.color, materials.dielectric, accel.surface, factor,
+        accel.epsilon, *out)
+    origins, dirs, weight, medium, family, kind, prim, source = (a[:count] for a in out)
+    return Paths(origins, dirs, weight, medium, np.take(paths.ids, source), np.take(paths.floor, source),
+                 np.ones(count, dtype=bool), None if paths.band is None else np.take(paths.band, source),
+                 None if paths.family is None else family, None if paths.kind is None else kind, prim)
 
 
-def _next_family(family: np.ndarray, surface: np.ndarray, event: int, ids: np.ndarray,
-                 rough: np.ndarray) -> np.ndarray:
-    """(n,) uint64 signatures of paths that add (surface, event) to
-    `family`: the parts of one body with one material are one surface.
-    Where `rough`, the path's own id `ids (n,)` goes in too, so no other
-    path shares it, and the SCATTERED bit is set; it stays set."""
-    scattered = rough | ((family & SCATTERED) != 0)
-    with np.errstate(over="ignore"):
-        own = np.where(rough, family ^ (ids.astype(np.uint64) * _ID_PRIME), family)
-        signature = (own * _FAMILY_PRIME) ^ (surface.astype(np.uint64) * np.uint64(4) + np.uint64(event + 1))
-    return np.where(scattered, signature | SCATTERED, signature)
+@kernel("void(f8[:, ::1], i8[::1], f8[::1], i8[::1], f8[:, ::1], b1[::1], f8[:, ::1], i1[::1])")
+def _arrivals(weight, medium, t, obj, absorption, specular_surface, out_weight, fate):
+    """Each path's fate at its hit (_ESCAPED, _ARRIVED, _SPECULAR), and its
+    weight there: times beer_lambert1 over the leg `t` where it travelled
+    inside a medium and hit something."""
+    for i in range(len(t)):
+        o = obj[i]
+        fate[i] = _ESCAPED if o == MISS else (_SPECULAR if specular_surface[o] else _ARRIVED)
+        for c in range(3):
+            out_weight[i, c] = weight[i, c]
+            if o != MISS and medium[i] != MISS:
+                out_weight[i, c] *= beer_lambert1(absorption[medium[i], c], t[i])
 
 
 class Tracer(Protocol):
@@ -261,15 +400,15 @@ def trace(accel: Accelerator, materials: Materials, paths: Paths, max_depth: int
         if len(paths) == 0:
             return
         hits = accel.intersect(paths.origins, paths.dirs, paths.medium, paths.kind, paths.surface)
-        tracer.escaped(paths.select(~hits.hit))
-        paths, hits = paths.select(hits.hit), hits.select(hits.hit)
-        inside = paths.medium != MISS
-        if inside.any():
-            paths.weight[inside] *= beer_lambert(np.take(materials.absorption, paths.medium[inside], axis=0),
-                                                 hits.t[inside])
-        specular = materials.specular_surface[hits.obj]
-        tracer.arrived(paths.select(~specular), hits.select(~specular))
-        paths, hits = paths.select(specular), hits.select(specular)
+        weight, fate = np.empty((len(paths), 3)), np.empty(len(paths), dtype=np.int8)
+        _arrivals(contiguous(paths.weight, np.float64), contiguous(paths.medium, np.int64), hits.t, hits.obj,
+                  materials.absorption, materials.specular_surface, weight, fate)
+        tracer.escaped(paths.select(fate == _ESCAPED))
+        paths = replace(paths, weight=weight)
+        tracer.arrived(paths.select(fate == _ARRIVED), hits.select(fate == _ARRIVED))
+        specular = fate == _SPECULAR
+        if not specular.all():
+            paths, hits = paths.select(specular), hits.select(specular)
         if len(paths) == 0:
             return
         surface = orient(accel, hits, paths.dirs, materials, paths.medium, paths.band)

@@ -17,7 +17,8 @@ from embreex import rtcore_scene
 from embreex.mesh_construction import TriangleMesh
 
 from ..scene import Object
-from ..util.vectors import length, normalize
+from ..util.jit import inline, kernel
+from ..util.vectors import dot1, float_rows, length, normalize, normalize1, row, set_row, sum1
 from .contact import Contacts
 from .hits import MISS, Hits
 from .topology import open_edge_count, signed_volume, triangle_normals
@@ -126,10 +127,11 @@ class Accelerator:
             owners.append(np.full(len(normals), index, dtype=np.int64))
             offsets.append(offsets[-1] + len(normals))
 
-        self.corners = np.concatenate(all_corners) if all_corners else np.zeros((0, 3, 3))
-        self.min_barycentric = self._min_barycentric(self.corners, np.concatenate(areas) if areas else np.zeros(0))
-        self.face_normal = np.concatenate(face_normals) if face_normals else np.zeros((0, 3))
-        self.corner_normal = np.concatenate(corner_normals) if corner_normals else np.zeros((0, 3, 3))
+        self.corners = _table(all_corners, (0, 3, 3))
+        self.min_barycentric = np.ascontiguousarray(
+            self._min_barycentric(self.corners, np.concatenate(areas) if areas else np.zeros(0)))
+        self.face_normal = _table(face_normals, (0, 3))
+        self.corner_normal = _table(corner_normals, (0, 3, 3))
         self.owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
         self.prim_offset = np.asarray(offsets, dtype=np.int64)
         self._all = self.view_of(np.arange(len(objects)))
@@ -216,20 +218,24 @@ class Accelerator:
         with self._count_lock:
             self.rays_cast += n
 
-    def _run(self, embree, origins: np.ndarray, dirs: np.ndarray, **kwargs) -> list[dict]:
-        """Embree scene `embree` over the batch, split across threads; one result dict per part."""
+    def _run(self, embree, origins: np.ndarray, dirs: np.ndarray, finish=None, **kwargs) -> list:
+        """Embree scene `embree` over the batch, split across threads: per
+        part of rows a..b, embreex's result, or `finish(a, b, result)`
+        where given, run on the part's thread."""
         n = len(origins)
         self.count_rays(n)
         o32 = np.ascontiguousarray(origins, dtype=np.float32)
         d32 = np.ascontiguousarray(dirs, dtype=np.float32)
         dists = kwargs.pop("dists", None)
+
+        def part(a: int, b: int):
+            result = embree.run(o32[a:b], d32[a:b], dists=None if dists is None else dists[a:b], **kwargs)
+            return result if finish is None else finish(a, b, result)
+
         if self._pool is None or n < _MIN_SPLIT:
-            return [embree.run(o32, d32, dists=dists, **kwargs)]
+            return [part(0, n)]
         bounds = np.linspace(0, n, self.threads + 1).astype(int)
-        parts = [(bounds[i], bounds[i + 1]) for i in range(self.threads)]
-        futures = [self._pool.submit(embree.run, o32[a:b], d32[a:b],
-                                     dists=None if dists is None else dists[a:b], **kwargs)
-                   for a, b in parts]
+        futures = [self._pool.submit(part, bounds[i], bounds[i + 1]) for i in range(self.threads)]
         return [f.result() for f in futures]
 
     def intersect(self, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray | None = None,
@@ -250,9 +256,11 @@ class Accelerator:
         medium true to the side of the surface it is on. Where objects
         touch, coincident surfaces are met in the order contact.py gives,
         `leaving (n,)` being the face each ray scattered at (MISS if none)."""
+        dirs = np.ascontiguousarray(dirs, dtype=np.float64)
         hits = self._closest_by_kind(origins, dirs, kind)
         if medium is None:
             return hits
+        medium = np.ascontiguousarray(medium, dtype=np.int64)
         for _ in range(_MAX_SKIPS):
             skip = np.flatnonzero(self._contradicts(hits, dirs, medium))
             if len(skip) == 0:
@@ -265,11 +273,6 @@ class Accelerator:
         if self.contacts.boxes:
             self.contacts.resolve(hits, origins, dirs, medium, leaving)
         return hits
-
-    def inside(self, medium: np.ndarray, obj: np.ndarray) -> np.ndarray:
-        """(n,) bool: is a ray in `medium (n,)` (an object, or MISS in air)
-        inside the body of `obj (n,)`?"""
-        return (medium != MISS) & (np.take(self.body, np.maximum(medium, 0)) == np.take(self.body, obj))
 
     def medium_at(self, points: np.ndarray) -> np.ndarray:
         """(n,) the closed object each of `points (n,3)` is inside, MISS if
@@ -302,13 +305,11 @@ class Accelerator:
         return np.where((body_a == body_b) | (body_a == body_c), a, b)
 
     def _contradicts(self, hits: Hits, dirs: np.ndarray, medium: np.ndarray) -> np.ndarray:
-        """(n,) bool: hits on closed meshes from the side the ray's medium rules out."""
-        closed = hits.hit.copy()
-        closed[closed] = self.closed[hits.obj[closed]]
-        index = np.flatnonzero(closed)
-        toward = np.einsum("ij,ij->i", dirs[index], np.take(self.face_normal, hits.prim[index], axis=0)) < 0.0
-        closed[index] = toward == self.inside(medium[index], hits.obj[index])
-        return closed
+        """(n,) bool: hits on closed meshes from the side the ray's medium
+        `medium (n,)` rules out, for rays `dirs (n,3)` (contiguous float64)."""
+        out = np.empty(len(dirs), dtype=bool)
+        _contradicting(hits.obj, hits.prim, dirs, medium, self.closed, self.body, self.face_normal, out)
+        return out
 
     def _closest_by_kind(self, origins: np.ndarray, dirs: np.ndarray, kind: np.ndarray | None) -> Hits:
         """Closest hits, each ray among the objects its `kind (n,)` sees (None: all)."""
@@ -325,13 +326,16 @@ class Accelerator:
         return hits
 
     def _closest(self, origins: np.ndarray, dirs: np.ndarray, view: _View | None = None) -> Hits:
-        """Closest hits among the objects of `view` (None: all of them)."""
+        """Closest hits among the objects of `view` (None: all of them),
+        each thread decoding its own part of the batch."""
         view = self._all if view is None else view
         if len(origins) == 0 or view.embree is None:
-            return self.as_hits({}, origins, view.objects)
-        parts = self._run(view.embree, origins, dirs, output=1)
-        raw = {key: np.concatenate([p[key] for p in parts]) for key in ("geomID", "primID", "tfar", "u", "v")}
-        return self.as_hits(raw, origins, view.objects)
+            return Hits.misses(origins)
+        origins = np.ascontiguousarray(origins, dtype=np.float64)
+        hits = Hits.empty(len(origins))
+        self._run(view.embree, origins, dirs, output=1,
+                  finish=lambda a, b, raw: self._decode(raw, origins[a:b], view.objects, hits, a))
+        return hits
 
     def as_hits(self, raw: dict, origins: np.ndarray, members: np.ndarray) -> Hits:
         """Hits from embreex's output `raw` for rays from `origins (n,3)`,
@@ -339,27 +343,19 @@ class Accelerator:
         every ray a miss where `raw` is empty."""
         if not raw:
             return Hits.misses(origins)
-        geom = raw["geomID"].astype(np.int64)
-        miss = geom < 0
-        # a miss takes the MISS appended to `members`, which may be empty
-        obj = np.take(np.append(np.asarray(members, dtype=np.int64), MISS), np.where(miss, len(members), geom))
-        t = np.where(miss, np.inf, raw["tfar"].astype(np.float64))
-        u, v = raw["u"].astype(np.float64), raw["v"].astype(np.float64)
-        prim = np.where(miss, MISS, raw["primID"].astype(np.int64) + self.prim_offset[np.maximum(obj, 0)])
-        points = origins.astype(np.float64, copy=True)
-        hit = np.flatnonzero(~miss)
-        points[hit] = self.surface_points(prim[hit], u[hit], v[hit])
-        return Hits(t, obj, prim, u, v, points)
+        origins = np.ascontiguousarray(origins, dtype=np.float64)
+        hits = Hits.empty(len(origins))
+        self._decode(raw, origins, members, hits, 0)
+        return hits
 
-    def surface_points(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """(n,3) float64 points of triangles `prim` at Embree's barycentrics,
-        each kept epsilon inside its triangle's edges. A float32 hit can fall
-        just past an edge; a ray leaving from there would already be beyond
-        the neighbouring face's plane and miss it."""
-        bary = np.stack([1.0 - u - v, u, v], axis=1)
-        bary = np.maximum(bary, np.take(self.min_barycentric, prim, axis=0))
-        bary /= (bary[:, 0] + bary[:, 1] + bary[:, 2])[:, None]
-        return np.einsum("ij,ijk->ik", bary, np.take(self.corners, prim, axis=0))
+    def _decode(self, raw: dict, origins: np.ndarray, members: np.ndarray, hits: Hits, start: int) -> None:
+        """Write embreex's output `raw` for rays from `origins (k,3)` into
+        rows start..start+k of `hits` (see _decoded)."""
+        stop = start + len(origins)
+        _decoded(*(np.ascontiguousarray(raw[key], dtype=dtype) for key, dtype in _RAW), origins,
+                 np.ascontiguousarray(members, dtype=np.int64), self.prim_offset, self.corners, self.min_barycentric,
+                 hits.t[start:stop], hits.obj[start:stop], hits.prim[start:stop], hits.u[start:stop],
+                 hits.v[start:stop], hits.points[start:stop])
 
     def occluded(self, origins: np.ndarray, dirs: np.ndarray, dists: np.ndarray) -> np.ndarray:
         """(n,) bool: is anything that casts shadows between `origins` and
@@ -372,20 +368,118 @@ class Accelerator:
         return np.concatenate(parts) != MISS
 
     def shading_normal(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """(n,3) unit shading normals, interpolated from the corner normals
-        with Embree's barycentrics; the face normal where they cancel out."""
-        w = 1.0 - u - v
-        c = np.take(self.corner_normal, prim, axis=0)
-        n = w[:, None] * c[:, 0] + u[:, None] * c[:, 1] + v[:, None] * c[:, 2]
-        size = length(n)
-        bad = ~(size > 1e-12)
-        n[bad] = self.face_normal[prim[bad]]
-        size[bad] = 1.0
-        return n / size[:, None]
+        """(n,3) shading_normal1 at triangles `prim (n,)`, barycentrics `u, v (n,)`."""
+        out = np.empty((len(prim), 3))
+        _shading_normals(np.array(prim, dtype=np.int64), *float_rows(u, v), self.corner_normal, self.face_normal, out)
+        return out
 
     def offset(self, points: np.ndarray, normals: np.ndarray, dirs: np.ndarray) -> np.ndarray:
-        """Ray origins (n,3) nudged off the surface along the geometric normal
-        to the side `dirs` leave toward, so the new ray cannot hit it again."""
-        side = np.sign(np.einsum("ij,ij->i", normals, dirs))
-        side[side == 0] = 1.0
-        return points + (self.epsilon * side)[:, None] * normals
+        """(n,3) offset1 of each row: ray origins off the surface, away from the side `dirs` leave."""
+        points, normals, dirs = float_rows(points, normals, dirs)
+        out = np.empty_like(points)
+        _offsets(points, normals, dirs, self.epsilon, out)
+        return out
+
+
+def _table(parts: list[np.ndarray], empty: tuple[int, ...]) -> np.ndarray:
+    """The per-triangle arrays `parts` of each object end to end, C-contiguous float64."""
+    return np.ascontiguousarray(np.concatenate(parts), dtype=np.float64) if parts else np.zeros(empty)
+
+
+# embreex's output arrays that _decoded reads, and their types
+_RAW = (("geomID", np.int32), ("primID", np.int32), ("tfar", np.float32), ("u", np.float32), ("v", np.float32))
+
+
+@inline
+def inside1(medium, obj, body):
+    """Is a ray in `medium` (an object, or MISS in air) inside the body of
+    object `obj`? `body (m,)` per object, the first object of its body."""
+    return medium != MISS and body[medium] == body[obj]
+
+
+@inline
+def shading_normal1(corner_normal, face_normal, prim, u, v):
+    """Unit shading normal of triangle `prim` at Embree's barycentrics u, v:
+
+        n_s = normalize((1 - u - v) n_0 + u n_1 + v n_2)
+
+    from its corner normals (`corner_normal (N,3,3)`); its face normal
+    (`face_normal (N,3)`) where they cancel out (|n_s| <= 1e-12)."""
+    w = 1.0 - u - v
+    n = (w * corner_normal[prim, 0, 0] + u * corner_normal[prim, 1, 0] + v * corner_normal[prim, 2, 0],
+         w * corner_normal[prim, 0, 1] + u * corner_normal[prim, 1, 1] + v * corner_normal[prim, 2, 1],
+         w * corner_normal[prim, 0, 2] + u * corner_normal[prim, 1, 2] + v * corner_normal[prim, 2, 2])
+    if not dot1(n, n) > 1e-24:
+        return row(face_normal, prim)
+    return normalize1(n)
+
+
+@inline
+def offset1(point, normal, d, epsilon):
+    """A ray origin nudged `epsilon` off the surface at `point` along its
+    geometric `normal`, to the side direction `d` leaves toward (the front
+    where d is tangent), so the new ray cannot hit the surface again:
+    p + epsilon sign(n.d) n."""
+    return sum1(1.0, point, -epsilon if dot1(normal, d) < 0.0 else epsilon, normal)
+
+
+@inline
+def surface_point1(corners, min_barycentric, prim, u, v):
+    """The float64 point of triangle `prim` at Embree's barycentrics u, v,
+    kept epsilon inside its edges: each barycentric at least the triangle's
+    `min_barycentric (N,3)`, then renormalised to sum to 1. A float32 hit
+    can fall just past an edge; a ray leaving from there would already be
+    beyond the neighbouring face's plane and miss it."""
+    b0 = max(1.0 - u - v, min_barycentric[prim, 0])
+    b1 = max(u, min_barycentric[prim, 1])
+    b2 = max(v, min_barycentric[prim, 2])
+    total = b0 + b1 + b2
+    b0, b1, b2 = b0 / total, b1 / total, b2 / total
+    return (b0 * corners[prim, 0, 0] + b1 * corners[prim, 1, 0] + b2 * corners[prim, 2, 0],
+            b0 * corners[prim, 0, 1] + b1 * corners[prim, 1, 1] + b2 * corners[prim, 2, 1],
+            b0 * corners[prim, 0, 2] + b1 * corners[prim, 1, 2] + b2 * corners[prim, 2, 2])
+
+
+@kernel("void(i4[::1], i4[::1], f4[::1], f4[::1], f4[::1], f8[:, ::1], i8[::1], i8[::1], f8[:, :, ::1], "
+        "f8[:, ::1], f8[::1], i8[::1], i8[::1], f8[::1], f8[::1], f8[:, ::1])")
+def _decoded(geom, prim, tfar, u, v, origins, members, prim_offset, corners, min_barycentric,
+             t_out, obj_out, prim_out, u_out, v_out, points_out):
+    """Hits from embreex's arrays for rays from `origins (k,3)`: geomID
+    `geom` indexes `members` (object indices), primID `prim` the object's
+    own triangles (global: plus `prim_offset`), the point is surface_point1;
+    a miss (geomID < 0) has t = inf, MISS and the ray's origin."""
+    for i in range(len(geom)):
+        u_out[i], v_out[i] = u[i], v[i]
+        if geom[i] < 0:
+            t_out[i], obj_out[i], prim_out[i] = np.inf, MISS, MISS
+            set_row(points_out, i, row(origins, i))
+            continue
+        obj = members[geom[i]]
+        face = prim[i] + prim_offset[obj]
+        t_out[i], obj_out[i], prim_out[i] = tfar[i], obj, face
+        set_row(points_out, i, surface_point1(corners, min_barycentric, face, u_out[i], v_out[i]))
+
+
+@kernel("void(i8[::1], i8[::1], f8[:, ::1], i8[::1], b1[::1], i8[::1], f8[:, ::1], b1[::1])")
+def _contradicting(obj, prim, dirs, medium, closed, body, face_normal, out):
+    """out (n,): the hit is on a closed mesh, from the side the ray's
+    medium rules out: toward its front (entering) while inside it, or from
+    behind while outside."""
+    for i in range(len(obj)):
+        if obj[i] == MISS or not closed[obj[i]]:
+            out[i] = False
+        else:
+            toward = dot1(row(dirs, i), row(face_normal, prim[i])) < 0.0
+            out[i] = toward == inside1(medium[i], obj[i], body)
+
+
+@kernel("void(i8[::1], f8[::1], f8[::1], f8[:, :, ::1], f8[:, ::1], f8[:, ::1])")
+def _shading_normals(prim, u, v, corner_normal, face_normal, out):
+    for i in range(len(prim)):
+        set_row(out, i, shading_normal1(corner_normal, face_normal, prim[i], u[i], v[i]))
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8, f8[:, ::1])")
+def _offsets(points, normals, dirs, epsilon, out):
+    for i in range(len(points)):
+        set_row(out, i, offset1(row(points, i), row(normals, i), row(dirs, i), epsilon))

@@ -37,6 +37,12 @@ class Hits:
         return Hits(np.full(n, np.inf), np.full(n, MISS, dtype=np.int64), np.full(n, MISS, dtype=np.int64),
                     np.zeros(n), np.zeros(n), np.array(origins, dtype=np.float64).reshape(n, 3))
 
+    @staticmethod
+    def empty(n: int) -> "Hits":
+        """n hits to be filled in (tracing.accelerator decodes Embree's into them)."""
+        return Hits(np.empty(n), np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n),
+                    np.empty(n), np.empty((n, 3)))
+
     @property
     def hit(self) -> np.ndarray:
         return self.obj != MISS

@@ -13,6 +13,13 @@ def take_rows(mask: np.ndarray, *arrays: np.ndarray) -> list[np.ndarray]:
     return [np.take(a, index, axis=0) for a in arrays]
 
 
+def contiguous(a, dtype) -> np.ndarray:
+    """`a` as a writeable C-contiguous array of `dtype`, the form the
+    kernels' signatures take, copied only where it is not one already."""
+    a = np.ascontiguousarray(a, dtype=dtype)
+    return a if a.flags.writeable else a.copy()
+
+
 def row_ids(rows: np.ndarray) -> np.ndarray:
     """(n,) int64 labels of `rows (n,k)`, equal exactly where the rows are
     equal: a lexicographic sort, then a new label wherever a row differs

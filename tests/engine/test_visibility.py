@@ -104,3 +104,12 @@ def test_a_holdout_cuts_out_what_camera_rays_see_of_it_but_not_what_they_see_thr
     # Through the glass, refracted rays see the floor as usual.
     assert np.all(alpha[r < 0.9] == 1.0) and rgb[r < 0.3].min() > 0.0
     assert np.all(np.isin(alpha[(r > 0.9) & (r < 1.1)], np.arange(5) / 4.0))
+
+
+def test_a_holdout_glass_cuts_out_the_pixels_that_see_it():
+    """Camera rays that meet a specular holdout stop there (bounce.Interface.select
+    dropped the microfacet fields, a TypeError)."""
+    scene = lens(visibility=Visibility(holdout=True))
+    alpha = render(scene, quick(lamp_rays=2_000, density="beam", spp=1, edge_samples=0)).image[..., 3]
+    r = radii(scene)
+    assert np.all(alpha[r < 0.9] == 0.0) and np.all(alpha[r > 1.1] == 1.0)
