@@ -121,7 +121,7 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
         origins = accel.offset(np.take(points, at, axis=0), np.take(facing, at, axis=0), dirs)
         return ~accel.occluded(origins, dirs, dist - 2.0 * accel.epsilon)
 
-    everyone = np.arange(n)
+    everyone = np.arange(n, dtype=np.int64)
     for number, light in enumerate(lights):
         count = 1 if radiometry.is_delta(light) else samples
         probes = min(count, SHADOW_PROBES)

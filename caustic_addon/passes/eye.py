@@ -83,7 +83,7 @@ class EyeTracer:
         self.environment, self.settings = environment, settings
         self.energy, self.spp = settings.energy, spp
         self.stratum = 1.0 / math.sqrt(spp)
-        self.pixels = pixels
+        self.pixels = np.ascontiguousarray(pixels, dtype=np.int64)
         self.far = 4.0 * scene.extent() + float(np.abs(scene.camera.position).max())
         self.buffers = {name: np.zeros((len(pixels), 3)) for name in (*PASSES, HOLDOUT)}
         self.first = np.full(len(pixels) * spp, MISS)
