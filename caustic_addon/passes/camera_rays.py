@@ -17,7 +17,7 @@ import numpy as np
 
 from ..sampling.sequences import r2_sequence
 from ..scene import Camera
-from ..util.vectors import normalize
+from ..util.jit import kernel
 
 
 def _viewfac(camera: Camera) -> int:
@@ -37,53 +37,100 @@ def pixel_offsets(spp: int, seed: int) -> np.ndarray:
     return r2_sequence(np.arange(spp), np.random.default_rng(seed).random(2))
 
 
+def _view(camera: Camera) -> tuple[np.ndarray, float]:
+    """The camera's frame (4,3), rows X, Y, Z (its axes) and its position,
+    and p, a pixel's size at unit distance (its size for ORTHO)."""
+    viewfac = _viewfac(camera)
+    rot = camera.matrix[:3, :3]
+    frame = np.ascontiguousarray(np.concatenate([rot.T, camera.matrix[None, :3, 3]]), dtype=np.float64)
+    if camera.kind == "ORTHO":
+        return frame, camera.ortho_scale / viewfac
+    return frame, 2.0 * math.tan(0.5 * camera.fov) / viewfac
+
+
 def eye_rays(camera: Camera, pixels: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """World rays (origins (n,3), dirs (n,3) unit) through flat pixel indices
     `pixels (n,)` (y * pixx + x) at sub-pixel `offsets (n,2)`. Origins start at
     the clip-start plane, as Blender's do."""
+    frame, pixsize = _view(camera)
     viewfac = _viewfac(camera)
-    x = pixels % camera.pixx + offsets[:, 0]
-    y = pixels // camera.pixx + offsets[:, 1]
-    sx = x - 0.5 * camera.pixx + camera.shift_x * viewfac
-    sy = 0.5 * camera.pixy - y + camera.shift_y * viewfac
-    rot, eye = camera.matrix[:3, :3], camera.matrix[:3, 3]
-    forward = -rot[:, 2]
-    if camera.kind == "ORTHO":
-        pixsize = camera.ortho_scale / viewfac
-        local = np.stack([sx * pixsize, sy * pixsize, np.zeros_like(sx)], axis=1)
-        origins = eye + local @ rot.T + camera.clip_start * forward
-        return origins, np.broadcast_to(forward, origins.shape).copy()
-    pixsize = 2.0 * math.tan(0.5 * camera.fov) / viewfac
-    local = np.stack([sx * pixsize, sy * pixsize, -np.ones_like(sx)], axis=1)
-    dirs = local @ rot.T
-    dirs = normalize(dirs)
-    origins = eye + dirs * (camera.clip_start / (dirs @ forward))[:, None]
+    n = len(pixels)
+    origins, dirs = np.empty((n, 3)), np.empty((n, 3))
+    _eye_rays(origins, dirs, np.ascontiguousarray(pixels, dtype=np.int64),
+              np.ascontiguousarray(offsets, dtype=np.float64), frame, camera.pixx, camera.pixy,
+              camera.shift_x * viewfac, camera.shift_y * viewfac, pixsize, camera.clip_start,
+              camera.kind == "ORTHO")
     return origins, dirs
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], i8[::1], f8[:, ::1], f8[:, ::1], i8, i8, f8, f8, f8, f8, b1)")
+def _eye_rays(origins, dirs, pixels, offsets, frame, pixx, pixy, shift_x, shift_y, pixsize, clip, ortho):
+    """Fill `origins, dirs (n,3)` with the rays through `pixels (n,)` at
+    `offsets (n,2)`. The point (x, y) of the image sits at
+    sx = x - pixx/2 + shift_x, sy = pixy/2 - y + shift_y pixels from the
+    view's centre (shifts in pixels). Perspective: d = D / |D|, D = sx p X +
+    sy p Y - Z, from o = e + d c / (d.F) (F = -Z forward, c the clip start).
+    Orthographic: d = F from o = e + sx p X + sy p Y + c F."""
+    for i in range(len(pixels)):
+        sx = (pixels[i] % pixx + offsets[i, 0] - 0.5 * pixx + shift_x) * pixsize
+        sy = (0.5 * pixy - (pixels[i] // pixx + offsets[i, 1]) + shift_y) * pixsize
+        if ortho:
+            for k in range(3):
+                dirs[i, k] = -frame[2, k]
+                origins[i, k] = frame[3, k] + sx * frame[0, k] + sy * frame[1, k] - clip * frame[2, k]
+            continue
+        size = 0.0
+        for k in range(3):
+            dirs[i, k] = sx * frame[0, k] + sy * frame[1, k] - frame[2, k]
+            size += dirs[i, k] * dirs[i, k]
+        size = math.sqrt(size)
+        along = 0.0
+        for k in range(3):
+            dirs[i, k] /= size
+            along -= dirs[i, k] * frame[2, k]
+        for k in range(3):
+            origins[i, k] = frame[3, k] + dirs[i, k] * (clip / along)
 
 
 def ray_differentials(camera: Camera, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """How the camera rays with unit directions `dirs (n,3)`, as `eye_rays`
     makes them, change per pixel step right (+x) and down (+y): (d_origins
     (n,2,3), d_dirs (n,2,3)), world units per pixel (Igehy 1999, "Tracing
-    ray differentials").
-
-    Perspective: d = D / |D| with D = sx p X + sy p Y - Z (X, Y, Z the
-    camera's axes, p the pixel size at unit distance), so dD = p X per step
-    right and -p Y per step down, and dd = (dD - d (d.dD)) / |D|, where
-    |D| = 1 / (d.F) (F = -Z, forward). The origin o = e + d c / (d.F) (c the
-    clip start) moves by c (dd (d.F) - d (dd.F)) / (d.F)^2.
-    Orthographic: d = F throughout, and o moves by p X and -p Y."""
-    viewfac = _viewfac(camera)
-    rot = camera.matrix[:3, :3]
-    forward = -rot[:, 2]
-    steps = np.stack([rot[:, 0], -rot[:, 1]])
-    if camera.kind == "ORTHO":
-        d_origins = np.broadcast_to(steps * (camera.ortho_scale / viewfac), (len(dirs), 2, 3))
-        return d_origins, np.zeros((len(dirs), 2, 3))
-    pixsize = 2.0 * math.tan(0.5 * camera.fov) / viewfac
-    along = (dirs @ forward)[:, None, None]
-    d_big = pixsize * steps
-    d_dirs = (d_big - dirs[:, None] * (dirs @ d_big.T)[..., None]) * along
-    d_forward = (d_dirs.reshape(-1, 3) @ forward).reshape(-1, 2, 1)
-    d_origins = camera.clip_start * (d_dirs * along - dirs[:, None] * d_forward) / along ** 2
+    ray differentials")."""
+    frame, pixsize = _view(camera)
+    n = len(dirs)
+    d_origins, d_dirs = np.empty((n, 2, 3)), np.empty((n, 2, 3))
+    _ray_differentials(d_origins, d_dirs, np.ascontiguousarray(dirs, dtype=np.float64), frame, pixsize,
+                       camera.clip_start, camera.kind == "ORTHO")
     return d_origins, d_dirs
+
+
+@kernel("void(f8[:, :, ::1], f8[:, :, ::1], f8[:, ::1], f8[:, ::1], f8, f8, b1)")
+def _ray_differentials(d_origins, d_dirs, dirs, frame, pixsize, clip, ortho):
+    """Fill `d_origins, d_dirs (n,2,3)`, the change of each ray `dirs (n,3)`
+    per pixel step right and down (steps X and -Y of the camera's frame).
+
+    Perspective: d = D / |D| with D = sx p X + sy p Y - Z (p the pixel size
+    at unit distance), so dD = p X per step right and -p Y per step down,
+    and dd = (dD - d (d.dD)) / |D|, where |D| = 1 / (d.F) (F = -Z,
+    forward). The origin o = e + d c / (d.F) (c the clip start) moves by
+    c (dd (d.F) - d (dd.F)) / (d.F)^2.
+    Orthographic: d = F throughout, and o moves by p X and -p Y."""
+    for i in range(len(dirs)):
+        along = -(dirs[i, 0] * frame[2, 0] + dirs[i, 1] * frame[2, 1] + dirs[i, 2] * frame[2, 2])
+        for j in range(2):
+            sign = 1.0 if j == 0 else -1.0
+            if ortho:
+                for k in range(3):
+                    d_origins[i, j, k] = sign * pixsize * frame[j, k]
+                    d_dirs[i, j, k] = 0.0
+                continue
+            d_along = 0.0
+            for k in range(3):
+                d_along += dirs[i, k] * sign * pixsize * frame[j, k]
+            d_forward = 0.0
+            for k in range(3):
+                d_dirs[i, j, k] = (sign * pixsize * frame[j, k] - dirs[i, k] * d_along) * along
+                d_forward -= d_dirs[i, j, k] * frame[2, k]
+            for k in range(3):
+                d_origins[i, j, k] = clip * (d_dirs[i, j, k] * along - dirs[i, k] * d_forward) / (along * along)

@@ -38,11 +38,12 @@ from ..emission.environment import Environment
 from ..emission.lamp_samples import apparent_size, sample_lamp
 from ..optics.microfacet import bsdf_cosine
 from ..optics.principled import Lobe
-from ..sampling.hash import hash_uniform
-from ..sampling.sequences import r2_sequence
+from ..sampling.hash import hash_uniform1, stream_key
+from ..sampling.sequences import r2_point1
 from ..sampling.warps import cosine_hemisphere, frames
 from ..scene import Light
 from ..tracing.accelerator import Accelerator
+from ..util.jit import kernel
 from ..util.vectors import dot, max_channel
 
 # Hash streams of the strata's rotations: two per lamp, two for each of the
@@ -57,8 +58,18 @@ SHADOW_PROBES = 2
 
 def strata(ids: np.ndarray, index: np.ndarray, stream: int, seed: int) -> np.ndarray:
     """(n,2) points of the R2 sequence at `index (n,)`, rotated by a hash of
-    `ids (n,)`: a pixel's samples spread evenly over the unit square."""
-    return r2_sequence(index, np.stack([hash_uniform(ids, stream, seed), hash_uniform(ids, stream + 1, seed)], axis=1))
+    `ids (n,)` (streams `stream` and `stream + 1`): a pixel's samples spread
+    evenly over the unit square."""
+    out = np.empty((len(ids), 2))
+    _strata(out, np.ascontiguousarray(ids, dtype=np.int64), np.ascontiguousarray(index, dtype=np.int64),
+            np.uint64(stream_key(stream, seed)), np.uint64(stream_key(stream + 1, seed)))
+    return out
+
+
+@kernel("void(f8[:, ::1], i8[::1], i8[::1], u8, u8)")
+def _strata(out, ids, index, key_x, key_y):
+    for i in range(len(ids)):
+        out[i, 0], out[i, 1] = r2_point1(index[i], hash_uniform1(ids[i], key_x), hash_uniform1(ids[i], key_y))
 
 
 def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,
@@ -86,6 +97,8 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
     """
     n = len(points)
     out = np.zeros((n, 3))
+    shading, facing = np.ascontiguousarray(shading, dtype=np.float64), np.ascontiguousarray(facing, dtype=np.float64)
+    diffuse = np.ascontiguousarray(diffuse, dtype=np.float64)
 
     def lamp_sample(light: Light, number: int, k: int, count: int, rows: np.ndarray):
         """Sample k of `count` for the points `rows (m,)`: the rows lit from
@@ -93,24 +106,22 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
         and the radiance (l,3) each brings where nothing blocks it."""
         uv = strata(np.take(pixel, rows), np.take(first_stratum, rows) * count + k, 2 * number, seed)
         lamp = sample_lamp(light, energy, np.take(points, rows, axis=0), uv, far)
-        normal = np.take(shading, rows, axis=0)
-        cos = dot(normal, lamp.dirs)
-        lit = (cos > 0.0) & (dot(np.take(facing, rows, axis=0), lamp.dirs) > 0.0) & (max_channel(lamp.irradiance) > 0.0)
-        idx = np.flatnonzero(lit)
-        at, dirs = rows[idx], np.take(lamp.dirs, idx, axis=0)
-        irradiance = np.take(lamp.irradiance, idx, axis=0) / count
-        radiance = irradiance * (np.take(diffuse, at, axis=0) * (cos[idx] / math.pi)[:, None])
+        # a lamp's samples may be read-only broadcasts of one direction or irradiance
+        lamp_dirs = np.require(lamp.dirs, np.float64, ["C", "W"])
+        irradiance = np.require(lamp.irradiance, np.float64, ["C", "W"])
+        idx, radiance = _lambert_lit(rows, shading, facing, diffuse, lamp_dirs, irradiance, count)
+        at, dirs = rows[idx], np.take(lamp_dirs, idx, axis=0)
         if lobe is not None:
             glossy = np.flatnonzero(lobe.lamp_lit[at])
-            radiance[glossy] += np.take(irradiance, glossy, axis=0) * lobe.take(at[glossy]).weight(
-                np.take(normal, idx[glossy], axis=0), np.take(view, at[glossy], axis=0), np.take(dirs, glossy, axis=0))
+            radiance[glossy] += np.take(irradiance, idx[glossy], axis=0) / count * lobe.take(at[glossy]).weight(
+                np.take(shading, at[glossy], axis=0), np.take(view, at[glossy], axis=0), np.take(dirs, glossy, axis=0))
         return at, dirs, np.take(lamp.dist, idx), radiance
 
     def clear(at: np.ndarray, dirs: np.ndarray, dist: np.ndarray) -> np.ndarray:
         origins = accel.offset(np.take(points, at, axis=0), np.take(facing, at, axis=0), dirs)
         return ~accel.occluded(origins, dirs, dist - 2.0 * accel.epsilon)
 
-    everyone = np.arange(n)
+    everyone = np.arange(n, dtype=np.int64)
     for number, light in enumerate(lights):
         count = 1 if radiometry.is_delta(light) else samples
         probes = min(count, SHADOW_PROBES)
@@ -118,7 +129,7 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
         for k in range(probes):
             at, dirs, dist, radiance = lamp_sample(light, number, k, count, everyone)
             visible = clear(at, dirs, dist)
-            out[at[visible]] += radiance[visible]
+            _add_visible(out, at, visible, radiance)
             cast[at] += 1
             seen[at[visible]] += 1
         if count == probes:
@@ -133,8 +144,40 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
             visible = np.take(open_sky, at)
             test = np.flatnonzero(~visible)
             visible[test] = clear(at[test], np.take(dirs, test, axis=0), dist[test])
-            out[at[visible]] += radiance[visible]
+            _add_visible(out, at, visible, radiance)
     return out
+
+
+@kernel("Tuple((i8[::1], f8[:, ::1]))(i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], i8)")
+def _lambert_lit(rows, shading, facing, diffuse, dirs, irradiance, count):
+    """The lamp samples `dirs, irradiance (m,3)` of the points `rows (m,)`
+    that light them from the front (idx (l,) into the m), and the Lambert
+    radiance of each toward the eye, one of `count` samples:
+    L = (E / count) diffuse cos(theta_l) / pi, cos(theta_l) = n_s.l at the
+    shading normal; lit where n_s.l > 0, n_g.l > 0 (`facing`) and E > 0."""
+    idx = np.empty(len(rows), dtype=np.int64)
+    radiance = np.empty((len(rows), 3))
+    lit = 0
+    for j in range(len(rows)):
+        r = rows[j]
+        cos = shading[r, 0] * dirs[j, 0] + shading[r, 1] * dirs[j, 1] + shading[r, 2] * dirs[j, 2]
+        above = facing[r, 0] * dirs[j, 0] + facing[r, 1] * dirs[j, 1] + facing[r, 2] * dirs[j, 2]
+        if not (cos > 0.0 and above > 0.0 and max(irradiance[j, 0], irradiance[j, 1], irradiance[j, 2]) > 0.0):
+            continue
+        idx[lit] = j
+        for c in range(3):
+            radiance[lit, c] = irradiance[j, c] / count * (diffuse[r, c] * (cos / math.pi))
+        lit += 1
+    return idx[:lit].copy(), radiance[:lit].copy()
+
+
+@kernel("void(f8[:, ::1], i8[::1], b1[::1], f8[:, ::1])")
+def _add_visible(out, at, visible, radiance):
+    """out[at[j]] += radiance[j] where `visible (l,)`."""
+    for j in range(len(at)):
+        if visible[j]:
+            for c in range(3):
+                out[at[j], c] += radiance[j, c]
 
 
 def _pixels_agree(pixel: np.ndarray, clear: np.ndarray, blocked: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -37,14 +37,14 @@ import numpy as np
 from ..emission.environment import Environment
 from ..maps.charts import PlaneChart
 from ..maps.illumination_map import IlluminationMap
-from ..sampling.hash import hash_uniform
+from ..sampling.hash import hash_uniform1, stream_key
 from ..scene import RenderSettings, Scene
 from ..scene.material_table import Materials
 from ..tracing.accelerator import CAMERA, REFRACTED, Accelerator
 from ..tracing.hits import MISS, Hits
+from ..util.jit import kernel
 from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.rows import take_rows
-from ..util.vectors import dot, max_channel
 from .bounce import Interface, facets, multiscatter, split, trace
 from .camera_rays import eye_rays, pixel_offsets, ray_differentials
 from .direct_light import direct_radiance, rough_specular_radiance, strata, world_light
@@ -83,14 +83,16 @@ class EyeTracer:
         self.environment, self.settings = environment, settings
         self.energy, self.spp = settings.energy, spp
         self.stratum = 1.0 / math.sqrt(spp)
-        self.pixels = pixels
+        self.pixels = np.ascontiguousarray(pixels, dtype=np.int64)
         self.far = 4.0 * scene.extent() + float(np.abs(scene.camera.position).max())
         self.buffers = {name: np.zeros((len(pixels), 3)) for name in (*PASSES, HOLDOUT)}
         self.first = np.full(len(pixels) * spp, MISS)
 
-    def _add(self, name: str, local: np.ndarray, radiance: np.ndarray) -> None:
-        for c in range(3):
-            self.buffers[name][:, c] += np.bincount(local, weights=radiance[:, c], minlength=len(self.pixels))
+    def _add(self, name: str, ids: np.ndarray, weight: np.ndarray, radiance: np.ndarray) -> None:
+        """Add `weight * radiance (n,3)` of the eye samples `ids (n,)` to
+        their pixels' rows of pass buffer `name`."""
+        _accumulate(self.buffers[name], np.ascontiguousarray(ids, dtype=np.int64), self.spp,
+                    np.ascontiguousarray(weight, dtype=np.float64), np.ascontiguousarray(radiance, dtype=np.float64))
 
     def _samples(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(local, pixel, stratum), each (n,), of the eye samples `ids (n,)`:
@@ -105,7 +107,7 @@ class EyeTracer:
         self.first[rays.ids[camera]] = hits.obj[camera]
 
     def escaped(self, rays: Paths) -> None:
-        self._add("ambient", rays.ids // self.spp, rays.weight * self.environment.radiance(rays.dirs))
+        self._add("ambient", rays.ids, rays.weight, self.environment.radiance(rays.dirs))
 
     def _cut_out(self, rays: Paths, hits: Hits) -> np.ndarray:
         """(n,) bool: the camera rays that met a holdout, their weight added
@@ -113,7 +115,7 @@ class EyeTracer:
         cut = np.take(self.holdout, hits.obj) & (rays.kind == CAMERA)
         if cut.any():
             here = rays.select(cut)
-            self._add(HOLDOUT, here.ids // self.spp, here.weight)
+            self._add(HOLDOUT, here.ids, here.weight, np.ones((len(here), 3)))
         return cut
 
     def arrived(self, rays: Paths, hits: Hits) -> None:
@@ -126,26 +128,26 @@ class EyeTracer:
         m, accel = self.materials, self.accel
         view = -rays.dirs
         facing = np.take(accel.face_normal, hits.prim, axis=0)
-        facing = np.where((dot(facing, view) < 0.0)[:, None], -facing, facing)
-        shading = accel.shading_normal(hits.prim, hits.u, hits.v)
-        shading = np.where((dot(shading, view) < 0.0)[:, None], -shading, shading)
+        _turn_toward(facing, view)
+        shading = np.ascontiguousarray(accel.shading_normal(hits.prim, hits.u, hits.v))
+        cos_view = _turn_toward(shading, view)
         triangle = hits.prim - np.take(accel.prim_offset, hits.obj)
         albedo = m.albedo_at(hits.obj, triangle, hits.u, hits.v, hits.points)
-        lobe, share = m.lobe_at(hits.obj, dot(shading, view))
+        lobe, share = m.lobe_at(hits.obj, cos_view)
         diffuse = albedo * share[:, None]
 
         points, settings = hits.points, self.settings
-        local, pixel, stratum = self._samples(rays.ids)
+        _, pixel, stratum = self._samples(rays.ids)
         direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view, diffuse,
                                  lobe, self.far, pixel, stratum, settings.lamp_samples, settings.seed,
                                  self.adaptive_shadows)
-        self._add("direct", local, rays.weight * (direct + np.take(m.emission, hits.obj, axis=0)))
+        self._add("direct", rays.ids, rays.weight, direct + np.take(m.emission, hits.obj, axis=0))
         ambient = self.scene.ambient * diffuse
         if not self.scene.world.is_black:
             world, glossy = world_light(accel, self.environment, points, shading, facing, view, lobe, self.far,
                                         pixel, stratum, settings.world_samples, settings.seed)
             ambient = ambient + world * diffuse / math.pi + glossy
-        self._add("ambient", local, rays.weight * ambient)
+        self._add("ambient", rays.ids, rays.weight, ambient)
 
         for index, imap in self.maps.items():
             on_map = hits.obj == index
@@ -164,7 +166,7 @@ class EyeTracer:
                 irradiance[spread] = imap.mean_over(lo[ok], hi[ok])
             irradiance[~spread] = imap.irradiance_at(xy[~spread])
             radiance = irradiance * take_rows(on_map, diffuse)[0] / math.pi
-            self._add("caustic", here.ids // self.spp, here.weight * radiance)
+            self._add("caustic", here.ids, here.weight, radiance)
 
     def scattered(self, rays: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
         self._met(rays, hits)
@@ -184,19 +186,11 @@ class EyeTracer:
         camera ray's goes on with probability p = w / that level, its weight
         divided by p, so the mean is kept. The draw hashes the branch's eye
         sample, its bounce and whether it was refracted."""
-        level = ROULETTE_WEIGHT * rays.floor / MIN_BRANCH_WEIGHT
-        chance = np.minimum(max_channel(rays.weight) / level, 1.0)
-        faint = np.flatnonzero(chance < 1.0)
-        if len(faint) == 0:
-            return rays
-        _, pixel, stratum = self._samples(rays.ids[faint])
-        sample = pixel * self.spp + stratum
-        draw = hash_uniform(2 * sample + (rays.kind[faint] == REFRACTED), _ROULETTE_STREAM + depth,
-                            self.settings.seed)
-        survive = np.ones(len(rays), dtype=bool)
-        survive[faint] = draw < chance[faint]
-        rays.weight[faint] /= chance[faint][:, None]
-        return rays.select(survive)
+        rays.weight = np.ascontiguousarray(rays.weight, dtype=np.float64)
+        survive = _roulette_survivors(rays.weight, np.ascontiguousarray(rays.floor, dtype=np.float64),
+                                      np.ascontiguousarray(rays.ids, dtype=np.int64), rays.kind, self.pixels,
+                                      self.spp, np.uint64(stream_key(_ROULETTE_STREAM + depth, self.settings.seed)))
+        return rays if survive.all() else rays.select(survive)
 
     def _highlights(self, rays: Paths, hits: Hits, surface: Interface) -> None:
         """The lamps' direct light on the rough rows of `surface`, into the
@@ -205,7 +199,8 @@ class EyeTracer:
             return
         rows = np.flatnonzero(surface.rough)
         m, obj = self.materials, hits.obj[rows]
-        local, pixel, stratum = self._samples(rays.ids[rows])
+        ids = rays.ids[rows]
+        _, pixel, stratum = self._samples(ids)
         radiance = rough_specular_radiance(
             self.accel, self.scene.lights, self.energy, np.take(surface.points, rows, axis=0),
             np.take(surface.shading, rows, axis=0), np.take(surface.facing, rows, axis=0),
@@ -213,7 +208,52 @@ class EyeTracer:
             pixel, stratum, self.settings.lamp_samples, self.settings.seed)
         factor = multiscatter(surface, m, hits.obj, rays.dirs, rays.dirs, np.zeros(len(rays), dtype=bool), False)
         tint = np.take(m.color, obj, axis=0) * np.take(factor, rows, axis=0)
-        self._add("direct", local, np.take(rays.weight, rows, axis=0) * tint * radiance)
+        self._add("direct", ids, np.take(rays.weight, rows, axis=0), tint * radiance)
+
+
+@kernel("void(f8[:, ::1], i8[::1], i8, f8[:, ::1], f8[:, ::1])")
+def _accumulate(buffer, ids, spp, weight, radiance):
+    """buffer[ids[i] // spp] += weight[i] radiance[i], channel by channel,
+    in the order of the rows: `buffer (m,3)`, `ids (n,)` eye samples."""
+    for i in range(len(ids)):
+        row = ids[i] // spp
+        for c in range(3):
+            buffer[row, c] += weight[i, c] * radiance[i, c]
+
+
+@kernel("f8[::1](f8[:, ::1], f8[:, ::1])")
+def _turn_toward(normals, view):
+    """Flip, in place, each of `normals (n,3)` that faces away from `view
+    (n,3)` (n.v < 0); returns (n,) n.v of the normals turned."""
+    cos = np.empty(len(normals))
+    for i in range(len(normals)):
+        c = normals[i, 0] * view[i, 0] + normals[i, 1] * view[i, 1] + normals[i, 2] * view[i, 2]
+        if c < 0.0:
+            for k in range(3):
+                normals[i, k] = -normals[i, k]
+            c = -c
+        cos[i] = c
+    return cos
+
+
+@kernel("b1[::1](f8[:, ::1], f8[::1], i8[::1], i1[::1], i8[::1], i8, u8)")
+def _roulette_survivors(weight, floor, ids, kind, pixels, spp, key):
+    """(n,) bool: the branches that survive the roulette (EyeTracer._roulette),
+    `weight (n,3)` divided in place by the chance p of each faint one.
+    Branch i's draw hashes 2 s + (it was refracted), s = pixel * spp +
+    stratum its eye sample in the image (`pixels (m,)` the chunk's), with
+    `key` (sampling.hash.stream_key of its bounce's stream)."""
+    survive = np.ones(len(ids), dtype=np.bool_)
+    for i in range(len(ids)):
+        level = ROULETTE_WEIGHT * floor[i] / MIN_BRANCH_WEIGHT
+        chance = min(max(weight[i, 0], weight[i, 1], weight[i, 2]) / level, 1.0)
+        if chance < 1.0:
+            sample = pixels[ids[i] // spp] * spp + ids[i] % spp
+            refracted = 1 if kind[i] == REFRACTED else 0
+            survive[i] = hash_uniform1(2 * sample + refracted, key) < chance
+            for c in range(3):
+                weight[i, c] /= chance
+    return survive
 
 
 def edge_pixels(first: np.ndarray, shown: np.ndarray, contrast: float = EDGE_CONTRAST) -> np.ndarray:
