@@ -48,8 +48,8 @@ $(addprefix test-,$(NEWEST) $(OLDER)): test-%: venv package
 	@echo "== Blender $* =="
 	$(call venv_of,$*)/bin/python -m pytest -c tests/pytest.ini tests
 
-# The extension: one zip per platform in dist/, each with the embreex wheels
-# for Blender 4.2-5.0 (Python 3.11) and 5.1+ (Python 3.13).
+# The extension: one zip per platform in dist/, each with the embreex, numba
+# and llvmlite wheels for Blender 4.2-5.0 (Python 3.11) and 5.1+ (Python 3.13).
 # The wheels blender_manifest.toml lists, and only those.
 WHEELS := $(shell sed -n 's|^ *"\./\(wheels/[^"]*\.whl\)",*|\1|p' blender_manifest.toml)
 BLENDER_EXT = $(VENV)/bin/python $(firstword $(wildcard $(VENV)/lib/python3.13/site-packages/bpy/*/scripts/addons_core/bl_pkg/cli/blender_ext.py))
