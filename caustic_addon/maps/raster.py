@@ -20,14 +20,27 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..util.jit import kernel
+from ..util.jit import inline, kernel
+
+
+@inline
+def signed_area1(a, b, c):
+    """Area of the 2D triangle a, b, c ((2,) each), positive when
+    counter-clockwise (y up): half the cross product (b - a) x (c - a)."""
+    return 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
 
 
 def signed_areas(corners: np.ndarray) -> np.ndarray:
-    """(m,) areas of 2D triangles `corners (m,3,2)`, positive when
-    counter-clockwise (y up)."""
-    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
-    return 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    """(m,) `signed_area1` of 2D triangles `corners (m,3,2)`."""
+    return _signed_areas(np.ascontiguousarray(corners, dtype=np.float64))
+
+
+@kernel("f8[::1](f8[:, :, ::1])")
+def _signed_areas(corners):
+    out = np.empty(len(corners))
+    for t in range(len(corners)):
+        out[t] = signed_area1(corners[t, 0], corners[t, 1], corners[t, 2])
+    return out
 
 
 def rasterise_triangles(shape: tuple[int, int], corners: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -83,10 +96,8 @@ def _accumulate(acc, h, w, corners, values):
     grid joins column -1; pieces right of it are dropped)."""
     channels = acc.shape[0]
     for t in range(corners.shape[0]):
-        e1x, e1y = corners[t, 1, 0] - corners[t, 0, 0], corners[t, 1, 1] - corners[t, 0, 1]
-        e2x, e2y = corners[t, 2, 0] - corners[t, 0, 0], corners[t, 2, 1] - corners[t, 0, 1]
         # a counter-clockwise (y up) triangle accumulates minus its coverage
-        area = e1x * e2y - e1y * e2x
+        area = signed_area1(corners[t, 0], corners[t, 1], corners[t, 2])
         sign = -1.0 if area > 0.0 else (1.0 if area < 0.0 else 0.0)
         for e in range(3):
             xs, ys = corners[t, e, 0], corners[t, e, 1]

@@ -97,14 +97,13 @@ def test_beam_renders_are_finite_and_conserve_flux_under_glass_colour_and_absorp
 def test_refined_cells_are_tiled_without_cracks():
     """A cell beside split neighbours becomes a fan through their shared
     vertex, so no beam edge ends in the middle of another's."""
-    from caustic_addon.passes.beam import _Cells, _crack_free_triangles
+    from caustic_addon.passes.beam_grid import Cells, crack_free_triangles
 
     width = 9
     row, col, size = np.array([0, 0, 2, 0, 2]), np.array([0, 4, 4, 6, 6]), np.array([4, 2, 2, 2, 2])
     traced = np.unique([(r + dr) * width + c + dc for r, c, s in zip(row, col, size)
                         for dr in (0, s) for dc in (0, s)])
-    triangles, area, centres = _crack_free_triangles(_Cells(row, col, size, np.zeros(5, dtype=np.int64)), width,
-                                                     traced)
+    triangles, area, centres = crack_free_triangles(Cells(row, col, size, np.zeros(5, dtype=np.int64)), width, traced)
     assert area.sum() == pytest.approx(float((size ** 2).sum()))
     assert np.all(area > 0)
     np.testing.assert_array_equal(centres, [2 * width + 2])
