@@ -120,14 +120,20 @@ def box_sum(table, i, j, r):
 
 
 def summed_area_table(grid: np.ndarray) -> np.ndarray:
-    """Summed-area table (h+1, w+1) of `grid (h, w)`, zero-padded. Rows are
-    summed down one at a time, each a contiguous vector add: numpy's cumsum
-    along axis 0 strides a row apart per element (1024 x 1024: 5.7 ms
-    against 18 ms)."""
+    """Summed-area table (h+1, w+1) of `grid (h, w)`, zero-padded: each
+    entry the sum of the grid's cells above and left of it, T[r, c] =
+    (sum of row r-1 up to column c-1) + T[r-1, c]."""
+    return _summed_area_table(np.ascontiguousarray(grid, dtype=np.float64))
+
+
+@kernel("f8[:, ::1](f8[:, ::1])")
+def _summed_area_table(grid):
     table = np.zeros((grid.shape[0] + 1, grid.shape[1] + 1))
-    np.cumsum(grid, axis=1, out=table[1:, 1:])
-    for row in range(2, len(table)):
-        table[row] += table[row - 1]
+    for r in range(1, len(table)):
+        run = 0.0
+        for c in range(1, table.shape[1]):
+            run += grid[r - 1, c - 1]
+            table[r, c] = run + table[r - 1, c]
     return table
 
 

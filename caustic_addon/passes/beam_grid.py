@@ -153,9 +153,9 @@ class Cells:
         half = cut.size // 2
         kept = self.take(~rows)
         return Cells(np.concatenate([kept.row, cut.row, cut.row + half, cut.row, cut.row + half]),
-                      np.concatenate([kept.col, cut.col, cut.col, cut.col + half, cut.col + half]),
-                      np.concatenate([kept.size] + [half] * 4),
-                      np.concatenate([kept.base] + [cut.base] * 4))
+                     np.concatenate([kept.col, cut.col, cut.col, cut.col + half, cut.col + half]),
+                     np.concatenate([kept.size] + [half] * 4),
+                     np.concatenate([kept.base] + [cut.base] * 4))
 
 
 def diverging(lookup: LandingIndex, cells: Cells, width: int) -> np.ndarray:
@@ -178,8 +178,8 @@ def _diverging(vertex, order, group, throughput, scattered, xy, island, corners,
     than REFINE_RATIO apart, unless its corners land on different islands
     (across a box chart's seam chart areas do not compare). Paths a rough
     surface scattered (`scattered (landings,)`) part from every neighbour,
-    and splitting would not bring them together: they split no cell, and
-    nor does a cell one step across."""
+    and splitting would not bring them together: they split no cell. A
+    cell one fine step across is never split."""
     split = np.zeros(len(corners), dtype=np.bool_)
     start, end, found = np.zeros(4, dtype=np.int64), np.empty(4, dtype=np.int64), np.empty(4, dtype=np.int64)
     for c in range(len(corners)):
