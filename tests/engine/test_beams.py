@@ -288,3 +288,16 @@ def test_the_fine_layer_holds_a_ring_of_light_around_a_brighter_focus():
         lo, hi = centre + np.array([[x - half, y - half]]), centre + np.array([[x + half, y + half]])
         # the ring's strip across the box, as good as straight
         assert imap.mean_over(lo, hi)[0, 0] == pytest.approx(100.0 * 0.004 / (2.0 * half), rel=0.05)
+
+
+def test_the_galloping_search_finds_what_a_binary_search_finds_from_any_hint():
+    """The beam grid looks landings up from where the last element's were
+    (beam_grid._search_from): any hint, before, after or off the ends,
+    gives numpy's searchsorted position, on runs of equal keys too."""
+    from caustic_addon.passes.beam_grid import _search_from
+
+    rng = np.random.default_rng(5)
+    for size in (0, 1, 2, 7, 300):
+        keys = np.sort(rng.integers(0, 40, size))
+        for key, hint in zip(rng.integers(-2, 43, 200), rng.integers(-3, size + 4, 200)):
+            assert _search_from(keys, key, hint) == np.searchsorted(keys, key), (size, key, hint)
