@@ -9,6 +9,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..util.jit import kernel
 from ..util.rows import take_rows
 from .grid import bilinear_sample, channel_tables, rect_means
 from .illumination_map import IlluminationMap
@@ -78,12 +79,13 @@ class _LayerGrid:
         self.lo, self.cell = lo, cell
         self.coverage = Coverage(tuple(np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)[::-1]), 1)
 
-    def add(self, corners: np.ndarray, irradiance: np.ndarray) -> None:
-        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2;
-        parts outside the box are dropped."""
-        if not (irradiance == irradiance[:, :1]).all():
+    def add(self, corners: np.ndarray, irradiance: np.ndarray, share: np.ndarray, white: bool) -> None:
+        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2,
+        times `share (m,)`, all `white` or not; parts outside the box are
+        dropped."""
+        if not white:
             self.coverage.widen(3)
-        self.coverage.add((corners - self.lo) / self.cell, irradiance[:, :len(self.coverage.acc)])
+        self.coverage.add(corners, irradiance, self.lo, self.cell, share)
 
 
 def _weighted_quantiles(values: np.ndarray, weights: np.ndarray, q) -> np.ndarray:
@@ -103,6 +105,33 @@ def layer_shares(size: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     cells."""
     (f0, f1), (c0, c1) = BeamMap.FINE_RAMP, BeamMap.COARSE_RAMP
     return np.clip((f1 - size) / (f1 - f0), 0.0, 1.0), np.clip((size - c0) / (c1 - c0), 0.0, 1.0)
+
+
+@kernel("Tuple((f8[::1], f8[:, ::1]))(f8[:, :, ::1])")
+def _spans(corners):
+    """(span (m,), centre (m,2)) of triangles `corners (m,3,2)`: the longer
+    side of each one's bounding box, and the mean of its corners."""
+    span, centre = np.empty(len(corners)), np.empty((len(corners), 2))
+    for t in range(len(corners)):
+        span[t] = 0.0
+        for a in range(2):
+            c0, c1, c2 = corners[t, 0, a], corners[t, 1, a], corners[t, 2, a]
+            span[t] = max(span[t], max(max(c0, c1), c2) - min(min(c0, c1), c2))
+            centre[t, a] = (c0 + c1 + c2) / 3.0
+    return span, centre
+
+
+@kernel("UniTuple(f8[::1], 2)(f8[:, :, ::1], b1[::1])")
+def _bounding_box(corners, chosen):
+    """(lo (2,), hi (2,)) the box around the `chosen (m,)` triangles of
+    `corners (m,3,2)`."""
+    lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
+    for t in range(len(corners)):
+        if chosen[t]:
+            for k in range(3):
+                for a in range(2):
+                    lo[a], hi[a] = min(lo[a], corners[t, k, a]), max(hi[a], corners[t, k, a])
+    return lo, hi
 
 
 class BeamMap(IlluminationMap):
@@ -165,20 +194,21 @@ class BeamMap(IlluminationMap):
             if self._pending_beams >= self.FLUSH_BEAMS:
                 self._rasterise_pending(whole_chart=True)
 
-    def _layout(self, corners: np.ndarray, irradiance: np.ndarray, fine: np.ndarray, coarse: np.ndarray,
-                whole_chart: bool) -> list[Optional[_LayerGrid]]:
-        """The (fine, own, coarse) layer grids for beams with `fine, coarse
-        (m,)` shares of the fine and coarse layers: the fine one over where
-        the bright ones' flux lands (FINE_BRIGHTNESS, FINE_TAIL), the others
-        over the chart, or over their beams' bounding box unless
-        `whole_chart`; None for a layer no beam has a share of."""
+    def _layout(self, corners: np.ndarray, centres: np.ndarray, irradiance: np.ndarray, fine: np.ndarray,
+                coarse: np.ndarray, whole_chart: bool) -> list[Optional[_LayerGrid]]:
+        """The (fine, own, coarse) layer grids for beams `corners (m,3,2)`
+        (their `centres (m,2)`) with `fine, coarse (m,)` shares of the fine
+        and coarse layers: the fine one over where the bright ones' flux
+        lands (FINE_BRIGHTNESS, FINE_TAIL), the others over the chart, or
+        over their beams' bounding box unless `whole_chart`; None for a
+        layer no beam has a share of."""
         lo, hi = self.chart.origin, self.chart.origin + self.chart.size
         grids: list[Optional[_LayerGrid]] = [None, None, None]
         small = fine > 0.0
         if small.any():
-            centre = corners[small].mean(axis=1)
-            brightness = irradiance[small].sum(axis=1)
-            flux = fine[small] * brightness * np.abs(signed_areas(corners[small]))
+            centre = np.take(centres, np.flatnonzero(small), axis=0)
+            brightness = np.take(irradiance[:, 0] + irradiance[:, 1] + irradiance[:, 2], np.flatnonzero(small))
+            flux = fine[small] * brightness * np.abs(signed_areas(np.take(corners, np.flatnonzero(small), axis=0)))
             bright = brightness >= self.FINE_BRIGHTNESS * _weighted_quantiles(brightness, flux, 0.99)
             tails = (self.FINE_TAIL, 1.0 - self.FINE_TAIL)
             bounds = np.array([_weighted_quantiles(centre[bright, a], flux[bright], tails) for a in (0, 1)])
@@ -201,9 +231,8 @@ class BeamMap(IlluminationMap):
             if whole_chart:
                 grids[k] = _LayerGrid(lo, hi, cell, lo)
             elif chosen.any():
-                points = corners[chosen].reshape(-1, 2)
-                box_lo, box_hi = np.maximum(lo, points.min(axis=0)), np.minimum(hi, points.max(axis=0))
-                grids[k] = _LayerGrid(box_lo, box_hi, cell, lo)
+                box_lo, box_hi = _bounding_box(corners, chosen)
+                grids[k] = _LayerGrid(np.maximum(lo, box_lo), np.minimum(hi, box_hi), cell, lo)
         return grids
 
     def _rasterise_pending(self, whole_chart: bool) -> None:
@@ -212,26 +241,28 @@ class BeamMap(IlluminationMap):
         first if there are none; a beam whose centre is outside the fine
         grid's box gives its fine share to the map's own grid. Each layer
         is rasterised on a thread of its own (of `threads`)."""
-        corners = np.concatenate([c for c, _ in self._beam_parts])
-        irradiance = np.concatenate([e for _, e in self._beam_parts])
+        corners = np.ascontiguousarray(np.concatenate([c for c, _ in self._beam_parts]), dtype=np.float64)
+        irradiance = np.ascontiguousarray(np.concatenate([e for _, e in self._beam_parts]), dtype=np.float64)
         self._beam_parts, self._pending_beams = [], 0
-        fine, coarse = layer_shares(np.ptp(corners, axis=1).max(axis=1) / self.cell)
+        span, centres = _spans(corners)
+        fine, coarse = layer_shares(span / self.cell)
         if self._grids is None:
-            self._grids = self._layout(corners, irradiance, fine, coarse, whole_chart)
+            self._grids = self._layout(corners, centres, irradiance, fine, coarse, whole_chart)
         grid = self._grids[0]
         if grid is not None:
-            centre = corners.mean(axis=1)
-            end = grid.lo + grid.cell * np.array(grid.coverage.shape[::-1])
-            fine = np.where(((centre >= grid.lo + 4.0 * self.cell) & (centre <= end - 4.0 * self.cell)).all(axis=1),
-                            fine, 0.0)
+            lo = grid.lo + 4.0 * self.cell
+            hi = grid.lo + grid.cell * np.array(grid.coverage.shape[::-1]) - 4.0 * self.cell
+            x, y = centres[:, 0], centres[:, 1]
+            fine = np.where((x >= lo[0]) & (y >= lo[1]) & (x <= hi[0]) & (y <= hi[1]), fine, 0.0)
         else:
             fine = np.zeros(len(corners))
         shares = (fine, (1.0 - fine) * (1.0 - coarse), coarse)
-        work = [(g, share > 0.0, share) for g, share in zip(self._grids, shares) if g is not None and (share > 0).any()]
+        coloured = (irradiance[:, 0] != irradiance[:, 1]) | (irradiance[:, 0] != irradiance[:, 2])
+        work = [(g, share) for g, share in zip(self._grids, shares) if g is not None and (share > 0).any()]
 
         def rasterise(job) -> None:
-            g, chosen, share = job
-            g.add(corners[chosen], irradiance[chosen] * share[chosen, None])
+            g, share = job
+            g.add(corners, irradiance, share, not (coloured & (share > 0.0)).any())
 
         with ThreadPoolExecutor(max(1, min(self.threads, len(work)))) as pool:
             list(pool.map(rasterise, work))

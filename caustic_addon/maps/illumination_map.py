@@ -30,18 +30,14 @@ import numpy as np
 
 from ..util.vectors import DIVISION_FLOOR
 from .charts import Chart, ImageFrame
-from .grid import as_rgb, bilinear_sample, bilinear_splat, box_sums, channel_tables, rect_means, summed_area_table
+from ..util.jit import kernel
+from .grid import as_rgb, bilinear_sample, bilinear_splat, box_sum, channel_tables, rect_means, summed_area_table
 
-# Photons held back before a splat: as many as the map has cells (at least
-# _MIN_FLUSH_PHOTONS), so the bincount over the whole grid costs at most about
-# one pass per photon, and the splat's temporaries (~300 B a photon) stay
-# bounded by the map's size, whatever the photon count.
-_MIN_FLUSH_PHOTONS = 1 << 15
-# Half-widths, in cells, of the windows the adaptive estimate tries. The
-# largest bounds the blur: where fewer than k photons land within it, the
-# estimate is its plain mean (zero far from any caustic), not a halo of flux
-# borrowed from far away.
-_WINDOW_RADII = np.arange(17)
+# Half-width, in cells, of the largest window the adaptive estimate tries. It
+# bounds the blur: where fewer than k photons land within it, the estimate is
+# its plain mean (zero far from any caustic), not a halo of flux borrowed
+# from far away.
+_MAX_WINDOW_RADIUS = 16
 
 
 @dataclass
@@ -67,8 +63,6 @@ class IlluminationMap:
         # photon count (plane 0) and flux W (planes 1..3) landed per cell
         self._cells = np.zeros((4,) + self.shape)
         self.photons = 0
-        self._pending: list[tuple[np.ndarray, np.ndarray]] = []
-        self._pending_count = 0
         self._tables = None
         # summed-area table of the share of each cell the receiver covers,
         # made at the first adaptive read; None: every cell is covered
@@ -81,17 +75,13 @@ class IlluminationMap:
         return (xy[:, ::-1] - self.chart.origin[::-1]) / self.cell - 0.5
 
     def add_photons(self, xy: np.ndarray, flux: np.ndarray, scale: np.ndarray) -> None:
-        """Hold photons given in chart coordinates `xy (n,2)`, with flux
-        (n,3) W and chart area per world area `scale (n,)`. They are
-        splatted in large batches, when the pending ones outnumber the map's
-        cells or the map is read. Safe to call from several threads."""
+        """Splat photons given in chart coordinates `xy (n,2)`, with flux
+        (n,3) W and chart area per world area `scale (n,)` (the paper's
+        figure 2). Safe to call from several threads."""
         with self._lock:
-            self._pending.append((xy, flux * scale[:, None]))
-            self._pending_count += len(xy)
+            bilinear_splat(self._cells, self._cell_coords(xy), np.c_[np.ones(len(xy)), flux * scale[:, None]])
             self.photons += len(xy)
             self._tables = None
-            if self._pending_count >= max(_MIN_FLUSH_PHOTONS, self.shape[0] * self.shape[1]):
-                self._flush()
 
     @property
     def flux(self) -> np.ndarray:
@@ -106,11 +96,9 @@ class IlluminationMap:
         return self._cells[0]
 
     def prepare(self) -> None:
-        """Splat what is pending and build the look-up tables, so that
-        concurrent reads need no lock. The count's table serves only the
-        adaptive estimate."""
+        """Build the look-up tables, so that concurrent reads need no lock.
+        The count's table serves only the adaptive estimate."""
         with self._lock:
-            self._flush()
             adaptive = self.estimate.k_nearest is not None
             if self._tables is None:
                 self._tables = (summed_area_table(self._cells[0])[None] if adaptive else None,
@@ -119,15 +107,6 @@ class IlluminationMap:
                 share = self.chart.coverage(self.chart.origin, self.cell, self.shape)
                 self._covered = None if share is None else summed_area_table(share)[None]
                 self._covered_ready = True
-
-    def _flush(self) -> None:
-        """Splat the pending photons (the paper's figure 2)."""
-        if not self._pending:
-            return
-        xy = np.concatenate([p[0] for p in self._pending])
-        flux = np.concatenate([p[1] for p in self._pending])
-        self._pending, self._pending_count = [], 0
-        bilinear_splat(self._cells, self._cell_coords(xy), np.c_[np.ones(len(xy)), flux])
 
     def irradiance_at(self, xy: np.ndarray) -> np.ndarray:
         """Caustic irradiance (n,3) W/m^2 at chart coordinates `xy (n,2)`."""
@@ -170,32 +149,48 @@ class IlluminationMap:
         """(2,) chart (y, x) of the grid's first corner."""
         return self.chart.origin[::-1]
 
-    def _adaptive(self, xy: np.ndarray, min_radius: np.ndarray = 0) -> np.ndarray:
+    def _adaptive(self, xy: np.ndarray, min_radius: np.ndarray | int = 0) -> np.ndarray:
+        """(n,3) `_adaptive_estimate` at chart points `xy (n,2)`, windows of
+        at least `min_radius` cells ((n,) or one for all)."""
         count_table, flux_table = self._tables
         h, w = self.shape
         rc = np.floor(self._cell_coords(xy) + 0.5).astype(np.int64)
         i, j = np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)
-        # Smallest window holding k photons, and at least min_radius: a binary
-        # search per point over _WINDOW_RADII, since the count only grows with
-        # the radius.
-        lo = np.searchsorted(_WINDOW_RADII, np.minimum(min_radius, _WINDOW_RADII[-1]) * np.ones(len(xy), np.int64))
-        hi = np.full(len(xy), len(_WINDOW_RADII) - 1)
-        active = lo < hi
-        while active.any():
+        covered = np.zeros((0, 1, 1)) if self._covered is None else self._covered
+        return as_rgb(_adaptive_estimate(count_table[0], flux_table, covered, i, j,
+                                         np.broadcast_to(np.asarray(min_radius, dtype=np.int64), i.shape).copy(),
+                                         float(self.estimate.k_nearest), self.cell))
+
+
+@kernel("f8[:, ::1](f8[:, ::1], f8[:, :, ::1], f8[:, :, ::1], i8[::1], i8[::1], i8[::1], f8, f8)")
+def _adaptive_estimate(count_table, flux_tables, covered, i, j, min_radius, k_nearest, cell):
+    """(n,c) irradiance W/m^2 of the adaptive estimate at cells `i, j (n,)`:
+    the flux in the smallest square window about the cell, of half-width
+    up to _MAX_WINDOW_RADIUS and at least `min_radius (n,)`, that holds
+    `k_nearest` photons (a binary search, since the count only grows with
+    the radius), over the window's area, the area the receiver covers in
+    it where `covered (1, h+1, w+1)` (summed-area table of the covered
+    share; (0,1,1): all) is given. Tables: `count_table (h+1, w+1)`,
+    `flux_tables (c, h+1, w+1)`."""
+    h, w = count_table.shape[0] - 1, count_table.shape[1] - 1
+    out = np.zeros((len(i), len(flux_tables)))
+    for n in range(len(i)):
+        lo, hi = min(min_radius[n], _MAX_WINDOW_RADIUS), _MAX_WINDOW_RADIUS
+        while lo < hi:
             mid = (lo + hi) // 2
-            enough = box_sums(count_table, i, j, _WINDOW_RADII[mid])[:, 0] >= self.estimate.k_nearest
-            hi = np.where(active & enough, mid, hi)
-            lo = np.where(active & ~enough, mid + 1, lo)
-            active = lo < hi
-        radius = np.maximum(_WINDOW_RADII[lo], min_radius)
-        flux = box_sums(flux_table, i, j, radius)
-        if self._covered is None:
-            cells = (np.minimum(i + radius + 1, h) - np.maximum(i - radius, 0)) * (
-                np.minimum(j + radius + 1, w) - np.maximum(j - radius, 0))
+            if box_sum(count_table, i[n], j[n], mid) >= k_nearest:
+                hi = mid
+            else:
+                lo = mid + 1
+        r = max(lo, min_radius[n])
+        if len(covered) == 0:
+            cells = float((min(i[n] + r + 1, h) - max(i[n] - r, 0)) * (min(j[n] + r + 1, w) - max(j[n] - r, 0)))
         else:
-            cells = box_sums(self._covered, i, j, radius)[:, 0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(cells[:, None] > 0, as_rgb(flux) / (cells * self.cell ** 2)[:, None], 0.0)
+            cells = box_sum(covered[0], i[n], j[n], r)
+        if cells > 0:
+            for c in range(len(flux_tables)):
+                out[n, c] = box_sum(flux_tables[c], i[n], j[n], r) / (cells * cell ** 2)
+    return out
 
 
 def auto_cell_size(chart: Chart, limit: int) -> float:

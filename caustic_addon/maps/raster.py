@@ -20,14 +20,27 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..util.jit import kernel
+from ..util.jit import inline, kernel
+
+
+@inline
+def signed_area1(a, b, c):
+    """Area of the 2D triangle a, b, c ((2,) each), positive when
+    counter-clockwise (y up): half the cross product (b - a) x (c - a)."""
+    return 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
 
 
 def signed_areas(corners: np.ndarray) -> np.ndarray:
-    """(m,) areas of 2D triangles `corners (m,3,2)`, positive when
-    counter-clockwise (y up)."""
-    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
-    return 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    """(m,) `signed_area1` of 2D triangles `corners (m,3,2)`."""
+    return _signed_areas(np.ascontiguousarray(corners, dtype=np.float64))
+
+
+@kernel("f8[::1](f8[:, :, ::1])")
+def _signed_areas(corners):
+    out = np.empty(len(corners))
+    for t in range(len(corners)):
+        out[t] = signed_area1(corners[t, 0], corners[t, 1], corners[t, 2])
+    return out
 
 
 def rasterise_triangles(shape: tuple[int, int], corners: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -56,12 +69,17 @@ class Coverage:
         # right neighbour), flattened row-major
         self.acc = np.zeros((channels, h * (w + 2)))
 
-    def add(self, corners: np.ndarray, values: np.ndarray) -> None:
-        """Add triangles `corners (m,3,2)` (cell units) of `values (m,c)`;
-        one channel of buffer takes c = 1 only."""
+    def add(self, corners: np.ndarray, values: np.ndarray, origin=(0.0, 0.0), cell: float = 1.0,
+            share: np.ndarray | None = None) -> None:
+        """Add triangles `corners (m,3,2)`, cell units or, given the
+        grid's first corner `origin (2,)` and its `cell` edge, in those
+        units, of `values (m,c)` times `share (m,)` (None: 1; a triangle of
+        share 0 is skipped); one channel of buffer takes the first."""
         h, w = self.shape
+        share = np.ones(len(corners)) if share is None else share
         _accumulate(self.acc, h, w, np.ascontiguousarray(corners, dtype=np.float64),
-                    np.ascontiguousarray(values, dtype=np.float64))
+                    np.ascontiguousarray(values, dtype=np.float64), np.asarray(origin, dtype=np.float64), float(cell),
+                    np.ascontiguousarray(share, dtype=np.float64))
 
     def widen(self, channels: int) -> None:
         """Hold `channels` channels from now on, each a copy of the one held."""
@@ -74,23 +92,27 @@ class Coverage:
         return np.cumsum(self.acc.reshape(-1, h, w + 2), axis=2)[:, :, 1:w + 1]
 
 
-@kernel("void(f8[:, ::1], i8, i8, f8[:, :, ::1], f8[:, ::1])")
-def _accumulate(acc, h, w, corners, values):
-    """Add every edge piece of triangles `corners (m,3,2)` (cell units) of
-    `values (m,c)` to the accumulation buffer `acc (c, h (w+2))`: each
-    sloped edge is cut at the lines y = k into rows 0..h-1, and each row
-    piece at the lines x = k into columns -1..w-1 (everything left of the
-    grid joins column -1; pieces right of it are dropped)."""
+@kernel("void(f8[:, ::1], i8, i8, f8[:, :, ::1], f8[:, ::1], f8[::1], f8, f8[::1])")
+def _accumulate(acc, h, w, corners, values, origin, cell, share):
+    """Add every edge piece of triangles `corners (m,3,2)` (in units of
+    `cell` from `origin (2,)`) of `values (m,c)` times `share (m,)` to the
+    accumulation buffer `acc (c, h (w+2))`: each sloped edge is cut at the
+    lines y = k into rows 0..h-1, and each row piece at the lines x = k
+    into columns -1..w-1 (everything left of the grid joins column -1;
+    pieces right of it are dropped)."""
     channels = acc.shape[0]
+    local = np.empty((3, 2))
     for t in range(corners.shape[0]):
-        e1x, e1y = corners[t, 1, 0] - corners[t, 0, 0], corners[t, 1, 1] - corners[t, 0, 1]
-        e2x, e2y = corners[t, 2, 0] - corners[t, 0, 0], corners[t, 2, 1] - corners[t, 0, 1]
+        if share[t] == 0.0:
+            continue
+        for k in range(3):
+            local[k, 0], local[k, 1] = (corners[t, k, 0] - origin[0]) / cell, (corners[t, k, 1] - origin[1]) / cell
         # a counter-clockwise (y up) triangle accumulates minus its coverage
-        area = e1x * e2y - e1y * e2x
+        area = signed_area1(local[0], local[1], local[2])
         sign = -1.0 if area > 0.0 else (1.0 if area < 0.0 else 0.0)
         for e in range(3):
-            xs, ys = corners[t, e, 0], corners[t, e, 1]
-            xe, ye = corners[t, (e + 1) % 3, 0], corners[t, (e + 1) % 3, 1]
+            xs, ys = local[e, 0], local[e, 1]
+            xe, ye = local[(e + 1) % 3, 0], local[(e + 1) % 3, 1]
             if ys == ye:
                 continue
             lo, hi = min(ys, ye), max(ys, ye)
@@ -105,10 +127,10 @@ def _accumulate(acc, h, w, corners, values):
                 for col in range(max(int(np.floor(left)), -1), min(int(np.floor(max(right, -1.0))), w - 1) + 1):
                     c0 = left if col == -1 else max(left, col)
                     c1 = min(right, col + 1.0)
-                    share = (c1 - c0) / width if width > 0.0 else 1.0
+                    part = (c1 - c0) / width if width > 0.0 else 1.0
                     f = min(max(0.5 * (c0 + c1), col), col + 1.0) - col
                     at = row * (w + 2) + col + 1
                     for k in range(channels):
-                        piece = sign * values[t, k] * dy * share
+                        piece = sign * (values[t, k] * share[t]) * dy * part
                         acc[k, at] += piece * (1.0 - f)
                         acc[k, at + 1] += piece * f

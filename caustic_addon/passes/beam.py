@@ -45,26 +45,22 @@ from ..emission.world_sun import extract_sun
 from ..maps.deposits import Deposits
 from ..maps.illumination_map import IlluminationMap
 from ..maps.receivers import GUTTER_CELLS
-from ..maps.raster import signed_areas
+from ..maps.raster import signed_area1
 from ..sampling.hash import hash_uniform
 from ..scene import Light, RenderSettings, Scene
 from ..scene.material_table import Materials
 from ..tracing.accelerator import Accelerator
 from ..tracing.hits import MISS, Hits
 from ..util.parallel import Monitor, run_chunks
-from ..util.rows import row_ids, take_rows
-from ..util.vectors import DIVISION_FLOOR, cross_rows, length, max_channel
-from .bounce import SCATTERED, Interface, facets, on_maps, split, trace
+from ..util.jit import inline, kernel
+from ..util.rows import take_rows
+from ..util.vectors import DIVISION_FLOOR, max_channel
+from .beam_grid import Cells, LandingIndex, coherent_triangles, crack_free_triangles, diverging, fallback_shares
+from .bounce import Interface, facets, on_maps, split, trace
 from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
 from .paths import MIN_BRANCH_WEIGHT, Paths, relative_floor
 from .photon import FACET_STREAM, photon_jobs
 
-# A cell whose two triangles' landed areas differ by more than this factor is
-# split (measured on the ball lens: lower factors spend paths for no gain).
-REFINE_RATIO = 8.0
-# Families whose throughput is below this (reflections off the outside, weak
-# internal reflections) never split a cell: too little flux for the paths.
-REFINE_THROUGHPUT = 0.2
 # A band holds at most chunk_size / BAND_SHARE grid points: each becomes up
 # to four with refinement, with its landings, lookups and beams (about 3.5 kB
 # a point in all), so that two bands in flight stay near 0.25 GB each.
@@ -160,129 +156,6 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
     return Landings.concat(tracer.landed)
 
 
-class _Lookup:
-    """Landings indexed by grid vertex and by family group.
-
-    Vertices are keys on a grid 2^levels times finer than the source's,
-    key = row * width + col; a group is one (family, receiver, island of
-    its chart, unless the chart `projects` beams into any island), and a
-    pair (element, group) is numbered element * stride + group."""
-
-    def __init__(self, landings: Landings, keys: int, maps: dict[int, IlluminationMap]):
-        self.landings, self.keys = landings, keys
-        projects = np.zeros(max(maps, default=-1) + 1, dtype=bool)
-        for index, imap in maps.items():
-            projects[index] = imap.chart.projects
-        piece = np.where(projects[landings.obj], 0, landings.island)
-        self.group = row_ids(np.stack([landings.family, landings.obj.astype(np.uint64),
-                                       piece.astype(np.uint64)], axis=1))
-        self.stride = max(int(self.group.max(initial=-1)) + 1, 1)
-        combo = self.group * keys + landings.vertex
-        self._combo_order = np.argsort(combo)
-        self._combo = combo[self._combo_order]
-        self._vertex_order = np.argsort(landings.vertex, kind="stable")
-        self._vertex = landings.vertex[self._vertex_order]
-
-    def find(self, group: np.ndarray, vertex: np.ndarray) -> np.ndarray:
-        """(n,) index of the landing of `group` at `vertex` (both (n,)); the
-        caller knows it exists."""
-        pos = np.searchsorted(self._combo, group * self.keys + vertex)
-        return self._combo_order[pos.clip(0, max(len(self._combo) - 1, 0))]
-
-    def pairs(self, corners: np.ndarray):
-        """Every landing at a corner of every element (a cell or a triangle
-        with k corners, `corners (n,k)` vertex keys). Returns (element (p,),
-        group (p,), landing (p,), count (p,) how many of the element's
-        corners landed in that group)."""
-        start = np.searchsorted(self._vertex, corners.ravel(), side="left")
-        found = np.searchsorted(self._vertex, corners.ravel(), side="right") - start
-        element = np.repeat(np.repeat(np.arange(len(corners)), corners.shape[1]), found)
-        offset = np.arange(len(element)) - np.repeat(np.cumsum(found) - found, found)
-        landing = self._vertex_order[np.repeat(start, found) + offset]
-        group = self.group[landing]
-        _, inverse, count = np.unique(element * self.stride + group, return_inverse=True,
-                                      return_counts=True)
-        return element, group, landing, count[inverse.reshape(-1)]
-
-    def first_of_each(self, element: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The distinct (element, group) pairs among rows of `pairs`."""
-        _, first = np.unique(element * self.stride + group, return_index=True)
-        return element[first], group[first]
-
-
-@dataclass
-class _Cells:
-    """Square cells of stacked grids: the corner `row, col (n,)` nearest
-    each grid's origin and the edge `size (n,)`, in fine grid steps, on the
-    grid whose vertex keys start at `base (n,)` (key = base + row * width +
-    col)."""
-
-    row: np.ndarray
-    col: np.ndarray
-    size: np.ndarray
-    base: np.ndarray
-
-    def corners(self, width: int) -> np.ndarray:
-        """(n,4) vertex keys: (r, c), (r+s, c), (r, c+s), (r+s, c+s)."""
-        row, col, size = self.row, self.col, self.size
-        return self.base[:, None] + np.stack([row * width + col, (row + size) * width + col,
-                                              row * width + col + size, (row + size) * width + col + size], axis=1)
-
-    def take(self, rows) -> "_Cells":
-        return _Cells(self.row[rows], self.col[rows], self.size[rows], self.base[rows])
-
-    def split(self, rows: np.ndarray) -> "_Cells":
-        """These cells with those at `rows` (bool) cut in four."""
-        cut = self.take(rows)
-        half = cut.size // 2
-        kept = self.take(~rows)
-        return _Cells(np.concatenate([kept.row, cut.row, cut.row + half, cut.row, cut.row + half]),
-                      np.concatenate([kept.col, cut.col, cut.col, cut.col + half, cut.col + half]),
-                      np.concatenate([kept.size] + [half] * 4),
-                      np.concatenate([kept.base] + [cut.base] * 4))
-
-
-def _cell_halves(corners: np.ndarray, cells: _Cells, width: int) -> tuple[np.ndarray, np.ndarray]:
-    """The two triangles (n,3) of each cell `corners (n,4)`, split along the
-    diagonal that points at the grid's centre. The concentric map that lays
-    the grid over an aim bends along the square's two diagonals, so a
-    triangle across one lands distorted: its beam comes out too bright and
-    its neighbour too dim, a dotted seam. Cut this way, no triangle crosses
-    them."""
-    half = 0.5 * (width - 1)
-    toward = (cells.row + 0.5 * cells.size - half) * (cells.col + 0.5 * cells.size - half) >= 0.0
-    main = np.stack([corners[:, [0, 1, 3]], corners[:, [0, 3, 2]]])
-    anti = np.stack([corners[:, [0, 1, 2]], corners[:, [1, 3, 2]]])
-    chosen = np.where(toward[None, :, None], main, anti)
-    return chosen[0], chosen[1]
-
-
-def _diverging(lookup: _Lookup, cells: _Cells, width: int) -> np.ndarray:
-    """(n,) bool: the cells whose paths diverge. Some but not all of a
-    cell's corners land in a family of throughput at least
-    REFINE_THROUGHPUT (a silhouette, total internal reflection), or its two
-    triangles land with opposite orientation (a fold of the caustic crosses
-    it) or areas more than REFINE_RATIO apart. Paths a rough surface
-    scattered (SCATTERED families) part from every neighbour, and splitting
-    would not bring them together: they split no cell."""
-    corners = cells.corners(width)
-    element, group, landing, count = lookup.pairs(corners)
-    split = np.zeros(len(corners), dtype=bool)
-    strong = lookup.landings.throughput[landing] >= REFINE_THROUGHPUT
-    scattered = (lookup.landings.family[landing] & SCATTERED) != 0
-    split[element[(count < 4) & strong & ~scattered]] = True
-    cell, group = lookup.first_of_each(element[count == 4], group[count == 4])
-    first, second = _cell_halves(corners[cell], cells.take(cell), width)
-    a, b = (signed_areas(np.stack([lookup.landings.xy[lookup.find(group, tri[:, k])] for k in range(3)], axis=1))
-            for tri in (first, second))
-    small, large = np.minimum(np.abs(a), np.abs(b)), np.maximum(np.abs(a), np.abs(b))
-    # across a box chart's seam chart areas do not compare
-    island = np.stack([lookup.landings.island[lookup.find(group, corners[cell, k])] for k in range(4)], axis=1)
-    seam = (island != island[:, :1]).any(axis=1)
-    split[cell[~seam & ((a * b <= 0.0) | (large > REFINE_RATIO * small))]] = True
-    return split
-
-
 def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: Accelerator, materials: Materials,
                maps: dict[int, IlluminationMap], max_depth: int, start_medium: int = MISS,
                levels: int = 0, band: int = 0, seed: int = 0) -> JobResult:
@@ -310,14 +183,14 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
 
     row, col = (a.ravel() * scale for a in np.meshgrid(np.arange(first_row, end_row - 1), np.arange(grid - 1),
                                                          indexing="ij"))
-    cells = _Cells(np.tile(row, len(sources)), np.tile(col, len(sources)), np.full(len(row) * len(sources), scale),
+    cells = Cells(np.tile(row, len(sources)), np.tile(col, len(sources)), np.full(len(row) * len(sources), scale),
                    np.repeat(np.arange(len(sources)) * keys, len(row)))
     traced = np.unique(cells.corners(width))
     on_grid = len(traced)
     owned = on_grid - (grid * len(sources) if end_row < grid else 0)
     landings = trace_vertices(traced)
     for _ in range(levels):
-        diverge = _diverging(_Lookup(landings, keys * len(sources), maps), cells, width) & (cells.size > 1)
+        diverge = diverging(LandingIndex(landings, maps), cells, width)
         if not diverge.any():
             break
         cells = cells.split(diverge)
@@ -326,139 +199,125 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
         landings = Landings.concat([landings, trace_vertices(fresh)])
         traced = np.union1d(traced, fresh)
 
-    triangles, area, centres = _crack_free_triangles(cells, width, traced)
+    triangles, area, centres = crack_free_triangles(cells, width, traced)
     landings = Landings.concat([landings, trace_vertices(centres)])
     cell_measure = np.array([source.cell_measure for source in sources])
     measure = cell_measure[triangles[:, 0] // keys] * area / scale ** 2
-    deposits, beams, flux_landed = _beams_and_photons(_Lookup(landings, keys * len(sources), maps), triangles, measure,
-                                                      maps)
+    deposits, beams, flux_landed = _beams_and_photons(LandingIndex(landings, maps), triangles, measure, maps)
     refined = len(traced) + len(centres) - on_grid
     return JobResult(deposits, LampPassStats(owned + refined, refined, beams, flux_landed))
 
 
-def _crack_free_triangles(cells: _Cells, width: int, traced: np.ndarray):
-    """Triangles over the leaf cells that share every traced vertex with
-    their neighbours, so that beams of a split cell and of its unsplit
-    neighbour meet without cracks. A cell with no traced point inside its
-    edges is two triangles; one with such points (a split neighbour's) is a
-    fan from its centre through its boundary points in order.
-
-    Returns (triangles (n,3) vertex keys, area (n,) in fine grid units
-    squared, centres (k,) vertex keys of the fan centres, still to trace)."""
-    row, col, size, base = cells.row, cells.col, cells.size, cells.base
-    count = 4 * size
-    cell = np.repeat(np.arange(len(size)), count)
-    j = np.arange(len(cell)) - np.repeat(np.cumsum(count) - count, count)
-    s, side, along = size[cell], j // size[cell], j % size[cell]
-    # the boundary walked counter-clockwise in (col, row): bottom, right, top, left
-    r = row[cell] + np.choose(side, [0 * along, along, s, s - along])
-    c = col[cell] + np.choose(side, [along, s, s - along, 0 * along])
-    key = base[cell] + r * width + c
-    pos = np.searchsorted(traced, key).clip(0, len(traced) - 1)
-    kept = (along == 0) | (traced[pos] == key)
-    kept_per_cell = np.bincount(cell[kept], minlength=len(size))
-    fan = kept_per_cell > 4
-
-    plain = cells.take(~fan)
-    corners = plain.corners(width)
-    halves = 0.5 * plain.size.astype(np.float64) ** 2
-    on_fan = kept & fan[cell]
-    ring_cell, ring_key = cell[on_fan], key[on_fan]
-    new_cell = np.r_[True, ring_cell[1:] != ring_cell[:-1]][:len(ring_cell)]
-    ring_next = np.roll(ring_key, -1)
-    ring_next[np.roll(new_cell, -1)] = ring_key[new_cell]
-    half = size // 2
-    centre_key = base + (row + half) * width + col + half
-    centres = centre_key[fan]
-    tri_centre = centre_key[ring_cell]
-    local = [(k - base[ring_cell]) for k in (tri_centre, ring_key, ring_next)]
-    (cr, cc), (ar, ac), (br, bc) = (np.divmod(k, width) for k in local)
-    fan_area = 0.5 * np.abs((ac - cc) * (br - cr) - (ar - cr) * (bc - cc)).astype(np.float64)
-    first, second = _cell_halves(corners, plain, width)
-    triangles = np.concatenate([first, second, np.stack([tri_centre, ring_key, ring_next], axis=1)])
-    return triangles, np.concatenate([halves, halves, fan_area]), centres
-
-
-def _beams_and_photons(lookup: _Lookup, triangles: np.ndarray, measure: np.ndarray,
+def _beams_and_photons(lookup: LandingIndex, triangles: np.ndarray, measure: np.ndarray,
                        maps: dict[int, IlluminationMap]):
     """Triangles `triangles (n,3)` (vertex keys) of emission measure
     `measure (n,)` (sr or m^2) whose three paths landed in one family become
-    beams; the landed corners of the others carry a third of the triangle's
-    flux each, as photons. Returns (the deposits, the number of beams, the
-    flux (3,) W that beams and photons carry)."""
+    beams (`_beam_geometry`); the landed corners of the others carry a third
+    of the triangle's flux each, as photons. Returns (the deposits, the
+    number of beams, the flux (3,) W that beams and photons carry)."""
     land = lookup.landings
-    element, group, landing, count = lookup.pairs(triangles)
-    tri, tri_group = lookup.first_of_each(element[count == 3], group[count == 3])
-    idx = np.stack([lookup.find(tri_group, triangles[tri, k]) for k in range(3)], axis=1)
-    obj = land.obj[idx[:, 0]]
-    xy = np.take(land.xy, idx, axis=0)
-    area = np.abs(signed_areas(xy))
-    corner_weight = np.take(land.weight, idx, axis=0)
-    flux = measure[tri, None] * (corner_weight[:, 0] + corner_weight[:, 1] + corner_weight[:, 2]) / 3.0
-    chart_area = np.zeros(max(maps, default=-1) + 1)
+    tri, idx = coherent_triangles(lookup, triangles)
+    min_area, reach = np.zeros(max(maps, default=-1) + 1), np.zeros(max(maps, default=-1) + 1)
     for index, imap in maps.items():
-        chart_area[index] = np.prod(np.maximum(imap.chart.size, DIVISION_FLOOR))
-    scale = land.scale[idx]
-    mean_scale = (scale[:, 0] + scale[:, 1] + scale[:, 2]) / 3.0
-    world = np.take(land.points, idx, axis=0)
-    world_area = 0.5 * length(cross_rows(world[:, 1] - world[:, 0], world[:, 2] - world[:, 0]))
-    good = (area > _MIN_AREA_FRACTION * chart_area[obj]) & (world_area * mean_scale <= _MAX_STRETCH * area)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        irradiance = flux * (mean_scale / area)[:, None]
-    island = land.island[idx]
-    copies = _seam_copies(island, world, world_area, obj, maps)
-    copied = copies[:, 0]
-    good &= (island[:, 0] == island[:, 1]) & (island[:, 0] == island[:, 2])
-
-    # fallback: each landed corner of an incoherent or degenerate triangle
-    # carries a third of that triangle's flux
-    pair = element * lookup.stride + group
-    degenerate = tri[~good & ~copied] * lookup.stride + tri_group[~good & ~copied]
-    loose = (count < 3) | np.isin(pair, degenerate)
-    share = np.bincount(landing[loose], weights=measure[element[loose]] / 3.0, minlength=len(land.vertex))
+        min_area[index] = _MIN_AREA_FRACTION * np.prod(np.maximum(imap.chart.size, DIVISION_FLOOR))
+        reach[index] = (GUTTER_CELLS - SEAM_MARGIN_CELLS) * imap.cell if imap.chart.projects else 0.0
+    corners, flux, irradiance, world_area, good, copies = _beam_geometry(
+        tri, idx, measure, *(np.ascontiguousarray(a) for a in (land.xy, land.weight, land.scale, land.points)),
+        land.island, land.obj, min_area, reach)
+    obj = np.take(land.obj, idx[:, 0])
+    kept = good | copies[:, 0]
+    share = fallback_shares(lookup, triangles, measure, tri, idx, kept)
     holders = np.flatnonzero(share > 0)
     photon_flux = share[holders, None] * np.take(land.weight, holders, axis=0)
 
     deposits = Deposits()
     for o in np.unique(obj[good]):
-        deposits.add_beams(int(o), *take_rows(good & (obj == o), xy, irradiance))
+        deposits.add_beams(int(o), *take_rows(good & (obj == o), corners, irradiance))
     for k in range(3):
         rows = np.flatnonzero(copies[:, k])
         for o in np.unique(obj[rows]):
             mine = rows[obj[rows] == o]
-            corners = maps[int(o)].chart.project(island[mine, k], np.take(world, mine, axis=0))
-            deposits.add_beams(int(o), corners, np.take(flux, mine, axis=0) / world_area[mine, None])
-    good |= copied
+            projected = maps[int(o)].chart.project(np.take(land.island, idx[mine, k]),
+                                                   np.take(land.points, idx[mine], axis=0))
+            deposits.add_beams(int(o), projected, np.take(flux, mine, axis=0) / world_area[mine, None])
     for o in np.unique(land.obj[holders]):
         sel = np.flatnonzero(land.obj[holders] == o)
         at = np.take(holders, sel)
         deposits.add_photons(int(o), np.take(land.xy, at, axis=0), np.take(photon_flux, sel, axis=0),
                              np.take(land.scale, at))
-    return deposits, int(good.sum()), flux[good].sum(axis=0) + photon_flux.sum(axis=0)
+    return deposits, int(kept.sum()), flux[kept].sum(axis=0) + photon_flux.sum(axis=0)
 
 
-def _seam_copies(island: np.ndarray, world: np.ndarray, world_area: np.ndarray, obj: np.ndarray,
-                 maps: dict[int, IlluminationMap]) -> np.ndarray:
-    """(m,3) bool: for beams whose corners landed on different islands of
-    a chart that `projects` (`island (m,3)`, world corners `world
-    (m,3,3)`), the corners whose island gets a copy of the whole beam, one
-    per island, projected into it, of irradiance flux / world area: the
-    beam's light reaches across the seam on both sides (the part past an
+@inline
+def _world_area(a, b, c):
+    """Area of the world triangle a, b, c ((3,) each): |(b - a) x (c - a)| / 2."""
+    e1x, e1y, e1z = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    e2x, e2y, e2z = c[0] - a[0], c[1] - a[1], c[2] - a[2]
+    nx, ny, nz = e1y * e2z - e1z * e2y, e1z * e2x - e1x * e2z, e1x * e2y - e1y * e2x
+    return 0.5 * np.sqrt(nx * nx + ny * ny + nz * nz)
+
+
+@inline
+def _distance(a, b):
+    """|b - a| of (3,) points."""
+    return np.sqrt((b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2 + (b[2] - a[2]) ** 2)
+
+
+@kernel("Tuple((f8[:, :, ::1], f8[:, ::1], f8[:, ::1], f8[::1], b1[::1], b1[:, ::1]))(i8[::1], i8[:, ::1], f8[::1], "
+        "f8[:, ::1], f8[:, ::1], f8[::1], f8[:, ::1], i8[::1], i8[::1], f8[::1], f8[::1])")
+def _beam_geometry(tri, idx, measure, xy, weight, scale, points, island, obj, min_area, reach):
+    """Beams of grid triangles `tri (b,)` (of emission measure `measure`,
+    sr or m^2) whose corners landed as landings `idx (b,3)` (by landing:
+    chart `xy (L,2)`, `weight (L,3)`, chart area per world area `scale
+    (L,)`, world `points (L,3)`, `island (L,)`, receiver `obj (L,)`).
+
+    A beam's flux is Phi = measure (w0 + w1 + w2) / 3 (W), spread evenly
+    over the triangle its corners land on: irradiance E = Phi s / A, A its
+    chart area and s its mean chart area per world area (Heckbert and
+    Hanrahan 1984). It is good where A > `min_area` of its receiver (by
+    object), its corners share an island, and its world triangle is at most
+    _MAX_STRETCH times what A stands for (A / s): more crosses a gap in the
+    chart island (a bowl's bottom to its rim, over the wall, in other
+    islands).
+
+    Across a box chart's seam (corners on different islands of a chart that
+    projects) a beam shorter than the receiver's `reach` (m, 0: none),
+    the gutter less SEAM_MARGIN_CELLS, and of positive world area, is
+    copied into each island, projected there, of irradiance Phi / world
+    area: the light reaches across the seam on both sides (the part past an
     island's edge falls in its gutter, unseen), where photons would leave a
-    line. Only beams shorter than the gutter, less SEAM_MARGIN_CELLS, so no
-    copy reaches another island, and of positive area. Over a crease (a
-    rim's edge) both sides get the beam's mean irradiance, a strip one beam
-    wide: still closer than photons (measured on a bowl's rim)."""
-    reach = np.zeros(len(obj))
-    for index, imap in maps.items():
-        reach[obj == index] = (GUTTER_CELLS - SEAM_MARGIN_CELLS) * imap.cell if imap.chart.projects else 0.0
-    edges = np.maximum(np.maximum(length(world[:, 1] - world[:, 0]), length(world[:, 2] - world[:, 1])),
-                       length(world[:, 0] - world[:, 2]))
-    mixed = (island[:, 0] != island[:, 1]) | (island[:, 0] != island[:, 2])
-    mixed &= (edges < reach) & (world_area > 0.0)
-    first = np.stack([np.ones(len(obj), dtype=bool), island[:, 1] != island[:, 0],
-                      (island[:, 2] != island[:, 0]) & (island[:, 2] != island[:, 1])], axis=1)
-    return first & mixed[:, None]
+    line; over a crease (a rim's edge) both sides get the beam's mean
+    irradiance, a strip one beam wide, still closer than photons (measured
+    on a bowl's rim). `copies (b,3)` marks the corners whose island gets
+    one: the first corner's, and each later one on an island not yet
+    named.
+
+    Returns (corners (b,3,2) chart metres, flux (b,3) W, irradiance (b,3)
+    W/m^2, world_area (b,) m^2, good (b,), copies (b,3))."""
+    count = len(tri)
+    corners, flux, irradiance = np.empty((count, 3, 2)), np.empty((count, 3)), np.zeros((count, 3))
+    world_area, good, copies = np.empty(count), np.zeros(count, dtype=np.bool_), np.zeros((count, 3), dtype=np.bool_)
+    for b in range(count):
+        i0, i1, i2 = idx[b, 0], idx[b, 1], idx[b, 2]
+        for k in range(3):
+            corners[b, k, 0], corners[b, k, 1] = xy[idx[b, k], 0], xy[idx[b, k], 1]
+            flux[b, k] = measure[tri[b]] * (weight[i0, k] + weight[i1, k] + weight[i2, k]) / 3.0
+        area = abs(signed_area1(xy[i0], xy[i1], xy[i2]))
+        mean_scale = (scale[i0] + scale[i1] + scale[i2]) / 3.0
+        world_area[b] = _world_area(points[i0], points[i1], points[i2])
+        if area > 0.0:
+            for k in range(3):
+                irradiance[b, k] = flux[b, k] * (mean_scale / area)
+        one_island = island[i0] == island[i1] and island[i0] == island[i2]
+        good[b] = (one_island and area > min_area[obj[i0]]
+                   and world_area[b] * mean_scale <= _MAX_STRETCH * area)
+        longest = max(max(_distance(points[i0], points[i1]), _distance(points[i1], points[i2])),
+                      _distance(points[i2], points[i0]))
+        if not one_island and longest < reach[obj[i0]] and world_area[b] > 0.0:
+            copies[b, 0] = True
+            copies[b, 1] = island[i1] != island[i0]
+            copies[b, 2] = island[i2] != island[i0] and island[i2] != island[i1]
+    return corners, flux, irradiance, world_area, good, copies
 
 
 def photon_lamps(lights: list[Light], scene: Scene) -> list[Light]:

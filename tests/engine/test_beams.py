@@ -97,14 +97,13 @@ def test_beam_renders_are_finite_and_conserve_flux_under_glass_colour_and_absorp
 def test_refined_cells_are_tiled_without_cracks():
     """A cell beside split neighbours becomes a fan through their shared
     vertex, so no beam edge ends in the middle of another's."""
-    from caustic_addon.passes.beam import _Cells, _crack_free_triangles
+    from caustic_addon.passes.beam_grid import Cells, crack_free_triangles
 
     width = 9
     row, col, size = np.array([0, 0, 2, 0, 2]), np.array([0, 4, 4, 6, 6]), np.array([4, 2, 2, 2, 2])
     traced = np.unique([(r + dr) * width + c + dc for r, c, s in zip(row, col, size)
                         for dr in (0, s) for dc in (0, s)])
-    triangles, area, centres = _crack_free_triangles(_Cells(row, col, size, np.zeros(5, dtype=np.int64)), width,
-                                                     traced)
+    triangles, area, centres = crack_free_triangles(Cells(row, col, size, np.zeros(5, dtype=np.int64)), width, traced)
     assert area.sum() == pytest.approx(float((size ** 2).sum()))
     assert np.all(area > 0)
     np.testing.assert_array_equal(centres, [2 * width + 2])
@@ -289,3 +288,16 @@ def test_the_fine_layer_holds_a_ring_of_light_around_a_brighter_focus():
         lo, hi = centre + np.array([[x - half, y - half]]), centre + np.array([[x + half, y + half]])
         # the ring's strip across the box, as good as straight
         assert imap.mean_over(lo, hi)[0, 0] == pytest.approx(100.0 * 0.004 / (2.0 * half), rel=0.05)
+
+
+def test_the_galloping_search_finds_what_a_binary_search_finds_from_any_hint():
+    """The beam grid looks landings up from where the last element's were
+    (beam_grid._search_from): any hint, before, after or off the ends,
+    gives numpy's searchsorted position, on runs of equal keys too."""
+    from caustic_addon.passes.beam_grid import _search_from
+
+    rng = np.random.default_rng(5)
+    for size in (0, 1, 2, 7, 300):
+        keys = np.sort(rng.integers(0, 40, size))
+        for key, hint in zip(rng.integers(-2, 43, 200), rng.integers(-3, size + 4, 200)):
+            assert _search_from(keys, key, hint) == np.searchsorted(keys, key), (size, key, hint)

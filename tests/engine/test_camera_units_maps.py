@@ -158,8 +158,8 @@ def test_rectangle_means_of_a_grid_are_exact(channels):
 
 @pytest.mark.parametrize("photons", [10, 100_000])
 def test_few_or_many_photons_splat_the_same_as_one_at_a_time(photons):
-    """A small batch sums over the cells it touches, a large one over the
-    whole grid; both equal adding each photon's four shares in turn."""
+    """A small batch and a large one both equal adding each photon's four
+    shares in turn."""
     rng = np.random.default_rng(3)
     rc = rng.random((photons, 2)) * [60, 40] - 1.0
     values = rng.random((photons, 2))
