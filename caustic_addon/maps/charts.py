@@ -12,8 +12,9 @@ import numpy as np
 from ..sampling.warps import orthonormal_basis
 from ..scene import Mesh
 from ..tracing.topology import mesh_pieces
+from ..util.jit import kernel
 from ..util.rows import row_ids
-from ..util.vectors import DIVISION_FLOOR
+from ..util.vectors import DIVISION_FLOOR, dot1, float_rows, row, sum1
 from .raster import rasterise_triangles
 
 
@@ -121,18 +122,13 @@ class PlaneChart(Chart):
         where it is sheared (off the image's centre lines) and blurs a
         caustic's fold. The hit moves by dp = do + s dd - d (N.(do + s dd))
         / (N.d), s the distance along the ray (Igehy 1999)."""
-        along = dirs @ self.normal
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s = ((self.point - origins) @ self.normal) / along
-        ok = np.isfinite(s) & (s > 0)
-        s, along = np.where(ok, s, 0.0), np.where(ok, along, 1.0)
-        moved = (d_origins + s[:, None, None] * d_dirs).reshape(-1, 3)
-        across = np.repeat(dirs / along[:, None], 2, axis=0)
-        d_points = moved - across * (moved @ self.normal)[:, None]
-        jacobian = (d_points @ np.stack([self.axis_x, self.axis_y], axis=1)).reshape(-1, 2, 2)
-        half = 0.5 * stratum * np.sqrt(jacobian[:, 0] ** 2 + jacobian[:, 1] ** 2)
-        centre = self._local(origins + s[:, None] * dirs)
-        return centre - half, centre + half, ok
+        origins, dirs = float_rows(origins, dirs)
+        d_origins, d_dirs = float_rows(d_origins, d_dirs)
+        lo, hi = np.empty((len(origins), 2)), np.empty((len(origins), 2))
+        ok = np.empty(len(origins), dtype=bool)
+        frame = np.array([self.point, self.normal, self.axis_x, self.axis_y], dtype=np.float64)
+        _plane_footprints(origins, dirs, d_origins, d_dirs, float(stratum), frame, lo, hi, ok)
+        return lo, hi, ok
 
     def image_frame(self, corner, extent):
         rotation = np.stack([self.axis_x, self.axis_y, self.normal], axis=1)
@@ -143,6 +139,34 @@ class PlaneChart(Chart):
         """(n,3) world points of chart coordinates `xy (n,2)`."""
         return self.point + xy[:, :1] * self.axis_x + xy[:, 1:] * self.axis_y
 
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, :, ::1], f8[:, :, ::1], f8, f8[:, ::1], f8[:, ::1], f8[:, ::1], "
+        "b1[::1])")
+def _plane_footprints(origins, dirs, d_origins, d_dirs, stratum, frame, lo, hi, ok):
+    """PlaneChart.footprint's rectangles `lo, hi (n,2)` and `ok (n,)` on
+    the plane of `frame (4,3)`: a point on it, its unit normal, its chart's
+    x and y axes."""
+    p, n, x, y = row(frame, 0), row(frame, 1), row(frame, 2), row(frame, 3)
+    for i in range(len(origins)):
+        o, d = row(origins, i), row(dirs, i)
+        along = dot1(d, n)
+        s = dot1(sum1(1.0, p, -1.0, o), n) / along if along != 0.0 else math.inf
+        ok[i] = math.isfinite(s) and s > 0.0
+        if not ok[i]:
+            s, along = 0.0, 1.0
+        var_x = var_y = 0.0
+        for k in range(2):
+            moved = sum1(1.0, (d_origins[i, k, 0], d_origins[i, k, 1], d_origins[i, k, 2]), s,
+                         (d_dirs[i, k, 0], d_dirs[i, k, 1], d_dirs[i, k, 2]))
+            d_point = sum1(1.0, moved, -dot1(moved, n) / along, d)
+            var_x += dot1(d_point, x) ** 2
+            var_y += dot1(d_point, y) ** 2
+        hit = sum1(1.0, o, s, d)
+        centre_x, centre_y = dot1(sum1(1.0, hit, -1.0, p), x), dot1(sum1(1.0, hit, -1.0, p), y)
+        half_x, half_y = 0.5 * stratum * math.sqrt(var_x), 0.5 * stratum * math.sqrt(var_y)
+        lo[i, 0], lo[i, 1] = centre_x - half_x, centre_y - half_y
+        hi[i, 0], hi[i, 1] = centre_x + half_x, centre_y + half_y
 
 class UVChart(Chart):
     """A curved receiver, through its UV map scaled to metres: one UV unit is
