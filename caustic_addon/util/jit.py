@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import importlib
 import shutil
 import threading
 from pathlib import Path
@@ -120,9 +119,9 @@ def inline(func):
 
 
 def compile_kernels() -> int:
-    """Compile (or load from the cache) every kernel of the engine; returns
-    how many there are. Imports the whole engine first, so none is missed."""
-    importlib.import_module("..renderer", __package__)  # every pass, and so every kernel
+    """Compile (or load from the cache) every kernel declared so far;
+    returns how many there are. Importing the engine (`caustic_addon`)
+    imports every pass, so every kernel is declared by then."""
     for declared in list(_KERNELS):
         declared.compiled()
     return len(_KERNELS)
