@@ -162,8 +162,8 @@ def _plane_footprints(origins, dirs, d_origins, d_dirs, stratum, frame, lo, hi, 
             d_point = sum1(1.0, moved, -dot1(moved, n) / along, d)
             var_x += dot1(d_point, x) ** 2
             var_y += dot1(d_point, y) ** 2
-        hit = sum1(1.0, o, s, d)
-        centre_x, centre_y = dot1(sum1(1.0, hit, -1.0, p), x), dot1(sum1(1.0, hit, -1.0, p), y)
+        rel = sum1(1.0, sum1(1.0, o, s, d), -1.0, p)
+        centre_x, centre_y = dot1(rel, x), dot1(rel, y)
         half_x, half_y = 0.5 * stratum * math.sqrt(var_x), 0.5 * stratum * math.sqrt(var_y)
         lo[i, 0], lo[i, 1] = centre_x - half_x, centre_y - half_y
         hi[i, 0], hi[i, 1] = centre_x + half_x, centre_y + half_y

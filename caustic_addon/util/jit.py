@@ -38,6 +38,7 @@ _ENGINE_NAME = __name__.rpartition(".util.")[0]
 _KERNELS: list["Kernel"] = []
 _lock = threading.RLock()
 _cache_root = _ENGINE / "__pycache__" / "kernels"
+_pruned: Path | None = None
 
 
 def _source_digest() -> str:
@@ -53,21 +54,24 @@ _DIGEST = _source_digest()
 
 
 def use_kernel_cache(folder: str | Path) -> None:
-    """Cache the kernels compiled from now on in `folder`, under a folder
-    named by the engine's source digest."""
+    """Cache the kernels compiled from now on in `folder`, under folders
+    named by the engine's import name and source digest."""
     global _cache_root
     with _lock:
         _cache_root = Path(folder)
 
 
 def cache_folder() -> Path:
-    """The folder the kernels compiled now are cached in; the caches of
-    other sources of the engine under this name are removed."""
+    """The folder the kernels compiled now are cached in; the first time
+    a folder is asked for, the caches of other sources of the engine under
+    this name beside it are removed."""
+    global _pruned
     named = _cache_root / _ENGINE_NAME
-    if named.is_dir():
+    if named != _pruned and named.is_dir():
         for stale in named.iterdir():
             if stale.is_dir() and stale.name != _DIGEST:
                 shutil.rmtree(stale, ignore_errors=True)
+    _pruned = named
     return named / _DIGEST
 
 
