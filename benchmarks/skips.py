@@ -278,13 +278,14 @@ def eye_roulette(repeats: int) -> dict:
 
 
 def small_lamp_shadows(repeats: int) -> dict:
-    """A lamp under a degree casts 2 of its 8 shadow rays, the rest where a
-    pixel's disagree; without, all 8 from every point."""
+    """A lamp under a degree casts its first shadow rays, two a pixel at
+    least (one a point of 4), the rest of its 8 where a pixel's disagree;
+    without, all 8 from every point."""
     scene, settings = pool_scene(), RenderSettings(lamp_rays=20_000)
     on = timed(scene, settings, repeats)
     with patched(direct_light, "SMALL_LAMP", 0.0):
         off = timed(scene, settings, repeats)
-    return row("two shadow rays toward a small lamp where they agree", "wavy water slab, 0.5-degree sun",
+    return row("a small lamp's first shadow rays where a pixel's agree", "wavy water slab, 0.5-degree sun",
                "8 shadow rays a point", "eye", on, off, image_change(on[1], off[1]))
 
 

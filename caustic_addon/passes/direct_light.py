@@ -12,9 +12,9 @@ the layer leaves it) plus the layer's GGX lobe (optics/principled.py). A
 lamp of size 0 takes one sample; a lamp with a size takes `samples`,
 stratified over a pixel: eye sample s of a pixel uses points s K .. s K +
 K - 1 of the R2 sequence, rotated by a hash of the pixel. A lamp that
-looks smaller than a degree (a sun, a small lamp far off) casts two of
-them first and the rest only where a pixel's points disagree
-(`direct_radiance`). A sample behind the surface gets no shadow ray.
+looks smaller than a degree (a sun, a small lamp far off) casts a few of
+them first, at least two a pixel, and the rest only where a pixel's
+points disagree (`direct_radiance`). A sample behind the surface gets no shadow ray.
 Dielectrics and reflectors block shadow rays: the light they redirect
 arrives through the illumination maps.
 Rough casters show the lamps' highlights (`rough_specular_radiance`), as
@@ -51,7 +51,7 @@ from ..util.vectors import dot, max_channel
 _WORLD_STREAM = 1 << 16
 _ROUGH_STREAM = 1 << 18
 # A lamp that looks smaller than this (radians; the sun is 0.0093) casts
-# SHADOW_PROBES shadow rays first, the rest only where they disagree.
+# SHADOW_PROBES shadow rays a pixel first, the rest only where they disagree.
 SMALL_LAMP = math.radians(1.0)
 SHADOW_PROBES = 2
 
@@ -75,14 +75,17 @@ def _strata(out, ids, index, key_x, key_y):
 def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,
                     shading: np.ndarray, facing: np.ndarray, view: np.ndarray, diffuse: np.ndarray,
                     lobe: Lobe | None, far: float, pixel: np.ndarray, first_stratum: np.ndarray, samples: int,
-                    seed: int, adaptive: bool = True) -> np.ndarray:
+                    seed: int, adaptive: bool = True, per_pixel: int = 1) -> np.ndarray:
     """Radiance (n,3) toward the eye from all lamps' direct light.
 
     With `adaptive`, for a lamp that looks smaller than SMALL_LAMP, every
-    point casts the first SHADOW_PROBES of its `samples` shadow rays; where
-    all the probes of a pixel's points agree (all blocked, or all clear)
-    the other samples take their verdict without a ray, and elsewhere they
-    are cast (adaptive shadow sampling). Such a lamp's penumbra is narrow
+    point casts the first of its `samples` shadow rays, as many as make
+    SHADOW_PROBES in a pixel of `per_pixel` points (one each from 2 points
+    up); where all the probes of a pixel's points agree (all blocked, or
+    all clear) the other samples take their verdict without a ray, and
+    elsewhere they are cast (adaptive shadow sampling). The probes are
+    the first strata of each point's, spread over the lamp by the R2
+    sequence across the pixel's points. Such a lamp's penumbra is narrow
     (its angle times the occluder's distance): a pixel inside it sees its
     probes disagree but for a few points near its ends, where the penumbra
     comes out a little sharper; the eye pass's edge samples, which take the
@@ -124,7 +127,7 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
     everyone = np.arange(n, dtype=np.int64)
     for number, light in enumerate(lights):
         count = 1 if radiometry.is_delta(light) else samples
-        probes = min(count, SHADOW_PROBES)
+        probes = min(count, -(-SHADOW_PROBES // per_pixel))
         cast, seen = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
         for k in range(probes):
             at, dirs, dist, radiance = lamp_sample(light, number, k, count, everyone)

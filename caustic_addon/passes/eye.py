@@ -140,7 +140,7 @@ class EyeTracer:
         _, pixel, stratum = self._samples(rays.ids)
         direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view, diffuse,
                                  lobe, self.far, pixel, stratum, settings.lamp_samples, settings.seed,
-                                 self.adaptive_shadows)
+                                 self.adaptive_shadows, self.spp)
         self._add("direct", rays.ids, rays.weight, direct + np.take(m.emission, hits.obj, axis=0))
         ambient = self.scene.ambient * diffuse
         if not self.scene.world.is_black:
