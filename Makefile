@@ -50,18 +50,24 @@ $(addprefix test-,$(NEWEST) $(OLDER)): test-%: venv package
 
 # The extension: one zip per platform in dist/, each with the embreex, numba
 # and llvmlite wheels for Blender 4.2-5.0 (Python 3.11) and 5.1+ (Python 3.13).
-# The wheels blender_manifest.toml lists, and only those.
+# The wheels blender_manifest.toml lists, and only those; the zip of this
+# machine's platform also carries kernels/, its compiled kernels for both
+# Pythons (packaging/ship_kernels.py: numba compiles for the platform it
+# runs on).
 WHEELS := $(shell sed -n 's|^ *"\./\(wheels/[^"]*\.whl\)",*|\1|p' blender_manifest.toml)
 BLENDER_EXT = $(VENV)/bin/python $(firstword $(wildcard $(VENV)/lib/python3.13/site-packages/bpy/*/scripts/addons_core/bl_pkg/cli/blender_ext.py))
 
-package: $(VENV)/.installed
+package: venv
 	mkdir -p wheels dist
+	rm -rf kernels
+	$(foreach python,$(VENV)/bin/python $(call venv_of,$(firstword $(OLDER)))/bin/python,$(python) packaging/ship_kernels.py compile kernels &&) true
 	for wheel in $(WHEELS); do test -f $$wheel || { \
 	  tags=$${wheel%.whl}; python=$$(echo $$tags | cut -d- -f3); platform=$${tags##*-}; \
 	  $(VENV)/bin/python -m pip download -q $$(basename $$wheel | cut -d- -f1)==$$(basename $$wheel | cut -d- -f2) \
 	    --no-deps --only-binary=:all: --python-version $${python#cp} --platform $${platform%%.*} -d wheels || exit 1; }; \
 	done
 	$(BLENDER_EXT) build --split-platforms --source-dir . --output-dir dist
+	$(VENV)/bin/python packaging/ship_kernels.py strip dist/caustics-*.zip
 	for zip in dist/caustics-*.zip; do $(BLENDER_EXT) validate $$zip || exit 1; done
 
 bench: $(VENV)/.installed
@@ -70,4 +76,4 @@ bench: $(VENV)/.installed
 	$(VENV)/bin/python benchmarks/budget.py
 
 clean:
-	rm -rf $(VENV) $(foreach v,$(OLDER),.venv-$(v)) dist wheels out
+	rm -rf $(VENV) $(foreach v,$(OLDER),.venv-$(v)) dist wheels out kernels

@@ -13,7 +13,7 @@ from .render_with_caustics import CAUSTIC_OT_render_animation_with_caustics, CAU
 
 from . import bake_on_render
 from ..jobs import kernels
-from .engine_run import kernel_folder
+from .engine_run import kernel_folder, shipped_kernels
 
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory((
     CAUSTIC_OT_render,
@@ -32,7 +32,7 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory((
 def register() -> None:
     _register_classes()
     bake_on_render.register()
-    kernels.start(kernel_folder())
+    kernels.start(kernel_folder(), shipped_kernels())
 
 
 def unregister() -> None:

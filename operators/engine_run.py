@@ -3,6 +3,8 @@ the run itself through jobs.JobRunner. From a script or in the background
 execute() does it all before it returns; from a button, invoke() runs it on
 a timer, with the progress bar and the status text, and Esc stops it."""
 
+from pathlib import Path
+
 import bpy
 
 from ..jobs import JobRunner
@@ -15,6 +17,13 @@ def kernel_folder() -> str | None:
         return bpy.utils.extension_path_user(__package__.rpartition(".")[0], path="kernels", create=True)
     except ValueError:
         return None
+
+
+def shipped_kernels() -> Path:
+    """The folder of the compiled kernels the extension's zip carries
+    (absent in a source tree, and in zips of other platforms than the
+    packaging machine's)."""
+    return Path(__file__).resolve().parents[1] / "kernels"
 
 
 def no_render_running(operator) -> bool:

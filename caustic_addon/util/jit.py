@@ -12,14 +12,20 @@ signatures:
 It compiles on its first call, or ahead of it with `compile_kernels()`, and is
 cached on disk, so a process compiles it once per Python and engine source:
 in `use_kernel_cache()`'s folder (the add-on passes Blender's user folder for
-the extension) or, by default, in this package's `__pycache__`. The cache
-is kept apart by the name the engine is imported under (a cached kernel
-refers to its module by that name: `caustic_addon` for the CLI and the
-engine's tests, `bl_ext.<repo>.caustics.caustic_addon` in Blender), and by a
-digest of the engine's source as well as numba's own file stamps, since
-numba would not see an edit to a function that a kernel calls from another
-module. Arrays must match the signature exactly (`f8[:, ::1]` is
-C-contiguous float64): a kernel never compiles again for other types.
+the extension, seeded from the kernels its zip carries) or, by default, in
+this package's `__pycache__`. The cache is kept apart by the name the
+engine is imported under (a cached kernel refers to its module by that
+name: `caustic_addon` for the CLI and the engine's tests,
+`bl_ext.<repo>.caustics.caustic_addon` in Blender), and by a digest of the
+engine's source, since numba would not see an edit to a function that a
+kernel calls from another module. Inside, a kernel's files sit by its
+module's folder in the engine, so that a cache made in another place (the
+zip's) is found. Kernels are compiled for the platform's baseline CPU
+(numba's "generic", set for the whole process unless it was set before),
+not for this machine's, so one cache serves every machine of a platform; on this project's kernels, measured as fast as code
+for the host CPU (README, Compiled kernels). Arrays must match the
+signature exactly (`f8[:, ::1]` is C-contiguous float64): a kernel never
+compiles again for other types.
 
 Scalar helpers that kernels call (`@inline`) compile into each kernel."""
 
@@ -32,6 +38,7 @@ import threading
 from pathlib import Path
 
 import numba
+from numba.core import caching
 
 _ENGINE = Path(__file__).resolve().parents[1]
 _ENGINE_NAME = __name__.rpartition(".util.")[0]
@@ -53,12 +60,17 @@ def _source_digest() -> str:
 _DIGEST = _source_digest()
 
 
-def use_kernel_cache(folder: str | Path) -> None:
+def use_kernel_cache(folder: str | Path, seed: str | Path | None = None) -> None:
     """Cache the kernels compiled from now on in `folder`, under folders
-    named by the engine's import name and source digest."""
+    named by the engine's import name and source digest; where it has no
+    kernels of this engine yet, those compiled in the cache folder `seed`
+    (the zip's) are copied into it first."""
     global _cache_root
     with _lock:
         _cache_root = Path(folder)
+        shipped = None if seed is None else Path(seed) / _ENGINE_NAME / _DIGEST
+        if shipped is not None and shipped.is_dir() and not cache_folder().is_dir():
+            shutil.copytree(shipped, cache_folder())
 
 
 def cache_folder() -> Path:
@@ -97,15 +109,48 @@ class Kernel:
 
 
 def _njit_cached(func, signatures: tuple[str, ...]):
-    """numba.njit with a disk cache in cache_folder(): numba reads the folder
-    from its config when a cached function is made, so it is set only for
-    that moment."""
-    previous = numba.config.CACHE_DIR
-    numba.config.CACHE_DIR = str(cache_folder())
-    try:
-        return numba.njit(list(signatures), nogil=True, cache=True)(func)
-    finally:
-        numba.config.CACHE_DIR = previous
+    """numba.njit, cached by _EngineCacheLocator."""
+    return numba.njit(list(signatures), nogil=True, cache=True)(func)
+
+
+class _EngineCacheLocator(caching._CacheLocator):
+    """Where numba caches a kernel of this engine: in cache_folder(), in the
+    folder of the kernel's module inside the engine, its stamp the engine's
+    digest. numba's own locators name the folder by a hash of the module's
+    absolute path and stamp it with the file's contents (0.62: its time), so
+    a cache made in another place would never be found."""
+
+    def __init__(self, py_func, py_file: str):
+        self._lineno = py_func.__code__.co_firstlineno
+        self._path = cache_folder() / Path(py_file).resolve().parent.relative_to(_ENGINE)
+
+    def get_cache_path(self) -> str:
+        return str(self._path)
+
+    def get_source_stamp(self) -> str:
+        return _DIGEST
+
+    def get_disambiguator(self) -> str:
+        return str(self._lineno)
+
+    @classmethod
+    def from_function(cls, py_func, py_file: str):
+        """The locator of a kernel of this engine under this import name,
+        or None: numba then asks the next locator (an import of the engine
+        under another name has its own)."""
+        if not py_func.__module__.startswith(_ENGINE_NAME + "."):
+            return None
+        locator = cls(py_func, py_file)
+        try:
+            locator.ensure_cache_path()
+        except OSError:
+            return None
+        return locator
+
+
+caching.CacheImpl._locator_classes.insert(0, _EngineCacheLocator)
+if numba.config.CPU_NAME is None:
+    numba.config.CPU_NAME, numba.config.CPU_FEATURES = "generic", ""
 
 
 def kernel(*signatures: str):

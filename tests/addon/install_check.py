@@ -1,14 +1,16 @@
 """Run in a fresh interpreter with BLENDER_USER_RESOURCES set: install the
 extension zip given as argv[1] through Blender's own extension system, prove
 its embreex, numba and llvmlite wheels are the ones imported (the venv has
-its own copies) and that numba compiles with them, render a small caustic
-scene, and print one line of JSON for the test to read."""
+its own copies) and that numba compiles with them, count the engine's
+kernels loaded from the zip's compiled ones and those compiled here, render
+a small caustic scene, and print one line of JSON for the test to read."""
 
 import glob
 import importlib.machinery
 import json
 import os
 import sys
+import time
 
 site_packages = os.path.join(os.environ["BLENDER_USER_RESOURCES"], "extensions", ".local", "lib",
                              "python{}.{}".format(*sys.version_info[:2]), "site-packages")
@@ -24,8 +26,12 @@ import bpy  # noqa: E402
 MODULE = "bl_ext.user_default.caustics"
 
 bpy.ops.wm.read_factory_settings(use_empty=True)
+clock = time.perf_counter()
 installed = bpy.ops.extensions.package_install_files(filepath=sys.argv[1], repo="user_default",
                                                      enable_on_install=True)
+sys.modules[MODULE + ".jobs.kernels"].wait()
+kernels_ready = time.perf_counter() - clock
+kernel_stats = [declared.compiled().stats for declared in sys.modules[MODULE + ".caustic_addon.util.jit"]._KERNELS]
 import embreex  # noqa: E402
 import llvmlite.binding.ffi  # noqa: E402
 import numba  # noqa: E402
@@ -70,6 +76,9 @@ print(json.dumps({
     "python_tag": "cp{}{}".format(*sys.version_info[:2]),
     "wheel_tags": wheel_tags(),
     "kernel": _sum_of_squares(np.arange(4.0)),
+    "kernels_loaded": sum(sum(stats.cache_hits.values()) for stats in kernel_stats),
+    "kernels_compiled": sum(sum(stats.cache_misses.values()) for stats in kernel_stats),
+    "kernels_ready_seconds": kernels_ready,
     "site_packages": site_packages,
     "rendered": sorted(rendered),
     "size": list(image.size),

@@ -1,6 +1,7 @@
 """The extension as users get it: `make package` builds the zips, each with
-its platform's wheels, and Blender's extension system installs one into a
-throw-away user folder, where the engine runs on the zip's embreex and numba."""
+its platform's wheels and, for this platform, its compiled kernels, and
+Blender's extension system installs one into a throw-away user folder,
+where the engine runs on the zip's embreex and numba and compiles nothing."""
 
 import json
 import os
@@ -35,8 +36,11 @@ def zips() -> dict[str, Path]:
 def test_each_zip_carries_the_wheels_of_its_platform_and_no_other(zips):
     for platform, path in zips.items():
         with zipfile.ZipFile(path) as archive:
-            carried = {Path(name).name for name in archive.namelist() if name.endswith(".whl")}
-        assert carried == wheel_files(platform), platform
+            names = archive.namelist()
+        assert {Path(name).name for name in names if name.endswith(".whl")} == wheel_files(platform), platform
+        # compiled kernels for this machine's platform only, for both Pythons
+        kernels = {name.split(".")[-2] for name in names if name.startswith("kernels/") and name.endswith(".nbi")}
+        assert kernels == ({"py311", "py313"} if platform == "linux-x64" else set()), platform
 
 
 def test_zip_installs_with_its_wheels_and_renders(tmp_path, zips):
@@ -61,4 +65,6 @@ def test_zip_installs_with_its_wheels_and_renders(tmp_path, zips):
         assert tags and all(tag.startswith(f"{PYTHON_TAG}-{PYTHON_TAG}-") for tag in tags), (dist, tags)
     assert report["numba_extension"].endswith(report["extension_suffix"])
     assert report["kernel"] == 14.0
+    # every kernel of the engine, for this Python, came compiled in the zip
+    assert report["kernels_compiled"] == 0 and report["kernels_loaded"] >= 39
     assert report["rendered"] == ["FINISHED"] and report["size"] == [32, 24] and report["max"] > 1.0

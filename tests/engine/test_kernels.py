@@ -2,6 +2,7 @@
 compiles nothing; exact signatures, so no call compiles a kernel again."""
 
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -34,8 +35,8 @@ spec.loader.exec_module(module)
 """
 
 
-def compile_in_a_new_process(folder: Path, script: str = COMPILE, prelude: str = "") -> dict:
-    run = subprocess.run([sys.executable, "-c", prelude + script, str(folder)], cwd=REPO, capture_output=True,
+def compile_in_a_new_process(folder: Path, script: str = COMPILE, prelude: str = "", engine: Path = REPO) -> dict:
+    run = subprocess.run([sys.executable, "-c", prelude + script, str(folder)], cwd=engine, capture_output=True,
                          text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
     return json.loads(run.stdout.splitlines()[-1])
@@ -47,6 +48,22 @@ def test_the_second_process_loads_a_kernel_from_the_cache(tmp_path):
     assert (first["misses"], first["hits"]) == (1, 0)
     assert (second["misses"], second["hits"]) == (0, 1)
     assert Path(second["folder"]).parent == tmp_path / "caustic_addon"
+
+
+def test_a_cache_made_in_another_folder_seeds_this_one(tmp_path):
+    """The zip carries kernels compiled on the packaging machine; installed,
+    the engine sits in another folder, and Blender's user folder starts
+    empty. numba's own cache names its folder by a hash of the engine's
+    absolute path, where these were never found."""
+    for place in ("built", "installed"):
+        shutil.copytree(REPO / "caustic_addon", tmp_path / place / "caustic_addon",
+                        ignore=shutil.ignore_patterns("__pycache__"))
+    compile_in_a_new_process(tmp_path / "shipped", engine=tmp_path / "built")
+    seeded = compile_in_a_new_process(tmp_path / "user", COMPILE.replace(
+        "jit.use_kernel_cache(sys.argv[1])", f"jit.use_kernel_cache(sys.argv[1], seed={str(tmp_path / 'shipped')!r})"),
+        engine=tmp_path / "installed")
+    assert (seeded["misses"], seeded["hits"]) == (0, 1)
+    assert Path(seeded["folder"]).is_relative_to(tmp_path / "user")
 
 
 def test_each_name_the_engine_is_imported_under_has_a_cache_of_its_own(tmp_path):
