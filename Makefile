@@ -59,7 +59,6 @@ BLENDER_EXT = $(VENV)/bin/python $(firstword $(wildcard $(VENV)/lib/python3.13/s
 
 package: venv
 	mkdir -p wheels dist
-	rm -rf kernels
 	$(foreach python,$(VENV)/bin/python $(call venv_of,$(firstword $(OLDER)))/bin/python,$(python) packaging/ship_kernels.py compile kernels &&) true
 	for wheel in $(WHEELS); do test -f $$wheel || { \
 	  tags=$${wheel%.whl}; python=$$(echo $$tags | cut -d- -f3); platform=$${tags##*-}; \
