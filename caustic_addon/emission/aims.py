@@ -16,7 +16,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..sampling.warps import concentric_disc, cone_directions, frames, orthonormal_basis
+from ..sampling.warps import concentric_disc, cone_directions, cone_of_disc, frames, orthonormal_basis
 from ..scene import AreaLight, Light, Scene, SpotLight, SunLight
 from . import radiometry
 
@@ -162,18 +162,12 @@ class Aim:
         center + radius (x t + y b), along a direction of the sun's disc."""
         if self.is_disc:
             through = self.center + self.radius * (disc[:, :1] * self.tangent + disc[:, 1:] * self.bitangent)
-            dirs = np.broadcast_to(self.axis, through.shape).copy()
             if lamp is not None and self.light.angle > 0.0:
-                dirs = cone_directions(dirs, np.full(len(dirs), math.cos(0.5 * self.light.angle)), lamp)
+                dirs = cone_directions(self.axis, math.cos(0.5 * self.light.angle), lamp)
+            else:
+                dirs = np.broadcast_to(self.axis, through.shape).copy()
             return through - self.start_distance * dirs, dirs
-        rho2 = np.einsum("ij,ij->i", disc, disc)
-        cos_t = 1.0 - rho2 * (1.0 - self.cos_max)
-        sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t * cos_t))
-        rho = np.sqrt(rho2)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            c = np.where(rho > 0, disc[:, 0] / rho, 1.0)
-            s = np.where(rho > 0, disc[:, 1] / rho, 0.0)
-        dirs = (sin_t * c)[:, None] * self.tangent + (sin_t * s)[:, None] * self.bitangent + cos_t[:, None] * self.axis
+        dirs = cone_of_disc(self.axis, self.cos_max, disc)
         if lamp is None or reach(self.light) <= 0.0:
             return np.broadcast_to(self.light.position, dirs.shape).copy(), dirs
         return emitting_points(self.light, dirs, lamp), dirs

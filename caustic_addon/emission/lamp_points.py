@@ -71,7 +71,7 @@ def point_lamps(light: Light, per_axis: int, facing: np.ndarray) -> list[Light]:
         if light.angle <= 0.0:
             return [light]
         half = 0.5 * light.angle
-        dirs = cone_directions(np.tile(light.direction, (len(grid), 1)), np.full(len(grid), math.cos(half)), grid)
+        dirs = cone_directions(light.direction, math.cos(half), grid)
         # each carries L x the disc's solid angle / m^2, L = S / (pi sin^2 h)
         strength = light.strength * 2.0 * (1.0 - math.cos(half)) / math.sin(half) ** 2 * share
         return [replace(light, direction=d, strength=strength, angle=0.0) for d in dirs]

@@ -12,10 +12,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..sampling.warps import concentric_disc, cone_directions, frames
+from ..sampling.warps import concentric_disc1, cone_direction1, orthonormal_basis1
 from ..scene import AreaLight, Light, PointLight, SpotLight, SunLight
-from ..util.vectors import DIVISION_FLOOR, dot, length
+from ..util.jit import inline, kernel
+from ..util.rows import contiguous
+from ..util.vectors import DIVISION_FLOOR, dot1, set_row
 from . import radiometry
+from .radiometry import spot_attenuation1, spread_factor1
 
 
 @dataclass
@@ -36,19 +39,27 @@ class LampSample:
 def sample_lamp(light: Light, energy: float, points: np.ndarray, uv: np.ndarray, far: float) -> LampSample:
     """A sample of `light` for each of `points (n,3)` at `uv (n,2)` in the
     unit square (ignored by lamps of size 0)."""
+    points, uv = contiguous(points, np.float64), contiguous(uv, np.float64)
+    n = len(points)
+    out = LampSample(np.empty((n, 3)), np.empty(n), np.empty((n, 3)))
     if isinstance(light, SunLight):
-        return _sun(light, energy, points, uv, far)
-    if isinstance(light, AreaLight):
-        return _area(light, energy, points, uv, far)
-    if light.radius <= 0.0:
-        offset = light.position - points
-        dist = length(offset)
-        dirs = offset / np.maximum(dist, DIVISION_FLOOR)[:, None]
-        irradiance = radiometry.intensity(light, energy, -dirs) / np.maximum(dist * dist, DIVISION_FLOOR)[:, None]
-        return LampSample(dirs, dist, irradiance)
-    if light.soft_falloff:
-        return _facing_disc(light, energy, points, uv)
-    return _sphere(light, energy, points, uv)
+        _sun(light, energy, uv, far, out)
+    elif isinstance(light, AreaLight):
+        if light.spread <= 0.0:
+            _parallel_area_samples(out.dirs, out.dist, out.irradiance, points, *_area_frame(light),
+                                   light.shape == "ELLIPSE", light.color * (light.power * energy / light.area), far)
+        else:
+            _area_samples(out.dirs, out.dist, out.irradiance, points, uv, *_area_frame(light),
+                          light.shape == "ELLIPSE", float(light.spread), float(light.area),
+                          radiometry.lamp_radiance(light, energy))
+    elif light.radius <= 0.0:
+        _point_samples(out.dirs, out.dist, out.irradiance, points, _position(light),
+                       radiometry.point_intensity(light.power * energy, light.color), *_cone(light))
+    else:
+        sampler = _facing_disc_samples if light.soft_falloff else _sphere_samples
+        sampler(out.dirs, out.dist, out.irradiance, points, uv, _position(light), float(light.radius),
+                radiometry.lamp_radiance(light, energy), *_cone(light))
+    return out
 
 
 def apparent_size(light: Light, points: np.ndarray) -> np.ndarray:
@@ -62,95 +73,194 @@ def apparent_size(light: Light, points: np.ndarray) -> np.ndarray:
         center = light.center
     else:
         half, center = light.radius, light.position
-    return 2.0 * np.arctan(half / np.maximum(length(points - center), DIVISION_FLOOR))
+    out = np.empty(len(points))
+    _apparent_sizes(out, contiguous(points, np.float64), contiguous(center, np.float64), float(half))
+    return out
 
 
-def _spot_mask(light: Light, leaving: np.ndarray) -> np.ndarray:
-    """(n,) the spot's cone mask for rays `leaving (n,3)` its sample points
-    (Cycles evaluates it per point of the lamp); 1 for a point lamp."""
-    return radiometry.spot_attenuation(light, leaving) if isinstance(light, SpotLight) else np.ones(len(leaving))
+def _position(light: PointLight | SpotLight) -> np.ndarray:
+    return contiguous(light.position, np.float64)
 
 
-def _facing_disc(light: PointLight | SpotLight, energy: float, points: np.ndarray, uv: np.ndarray) -> LampSample:
-    """Soft Falloff: a disc of the lamp's radius through its centre, facing
-    the point, sampled uniformly by area: E = L cos_disc (pi r^2) / t^2."""
-    offset = points - light.position
-    axis = offset / np.maximum(length(offset), DIVISION_FLOOR)[:, None]
-    t, b = frames(axis)
-    disc = light.radius * concentric_disc(uv)
-    on_lamp = light.position + disc[:, :1] * t + disc[:, 1:] * b
-    to_lamp = on_lamp - points
-    dist = length(to_lamp)
-    dirs = to_lamp / np.maximum(dist, DIVISION_FLOOR)[:, None]
-    cos_disc = np.maximum(-dot(dirs, axis), 0.0)
-    scale = cos_disc * (math.pi * light.radius ** 2) / np.maximum(dist * dist, DIVISION_FLOOR) * _spot_mask(light, -dirs)
-    return LampSample(dirs, dist, radiometry.lamp_radiance(light, energy)[None, :] * scale[:, None])
+def _cone(light: PointLight | SpotLight) -> tuple:
+    """(masked, axis (3,), cos_half, blend): a spot's cone mask
+    (radiometry.spot_attenuation1), evaluated per point of the lamp as
+    Cycles does; masked False for a point lamp."""
+    if isinstance(light, SpotLight):
+        return True, contiguous(light.direction, np.float64), math.cos(0.5 * light.spot_size), float(light.blend)
+    return False, np.zeros(3), 1.0, 0.0
 
 
-def _sphere(light: PointLight | SpotLight, energy: float, points: np.ndarray, uv: np.ndarray) -> LampSample:
-    """Soft Falloff off: a sphere of uniform radiance, sampled uniformly over
-    the cap a point sees, E = L x the cap's solid angle; a point inside it
-    sees it everywhere (E = L 4 pi over the uniform sphere of directions)."""
-    to_center = light.position - points
-    d = length(to_center)
-    axis = to_center / np.maximum(d, DIVISION_FLOOR)[:, None]
-    inside = d <= light.radius
-    cos_max = np.where(inside, -1.0, np.sqrt(np.maximum(0.0, 1.0 - (light.radius / np.maximum(d, DIVISION_FLOOR)) ** 2)))
-    dirs = cone_directions(axis, cos_max, uv)
-    # the sphere along each direction: the near root outside it, the far one inside
-    along = dot(dirs, to_center)
-    root = np.sqrt(np.maximum(0.0, along * along - d * d + light.radius ** 2))
-    dist = np.where(inside, along + root, along - root)
-    solid_angle = 2.0 * math.pi * (1.0 - cos_max)
-    # Cycles applies no cone mask to a point inside a spot's sphere
-    mask = np.where(inside, 1.0, _spot_mask(light, -dirs))
-    return LampSample(dirs, dist, radiometry.lamp_radiance(light, energy)[None, :] * (solid_angle * mask)[:, None])
+def _area_frame(light: AreaLight) -> tuple:
+    """(center, axis_x, axis_y, direction), each (3,) C-contiguous float64."""
+    return tuple(contiguous(v, np.float64) for v in (light.center, light.axis_x, light.axis_y, light.direction))
 
 
-def _sun(light: SunLight, energy: float, points: np.ndarray, uv: np.ndarray, far: float) -> LampSample:
+def _sun(light: SunLight, energy: float, uv: np.ndarray, far: float, out: LampSample) -> None:
     """Directions uniform in solid angle over the sun's disc,
     E = L x its solid angle 2 pi (1 - cos h); one direction for angle 0."""
-    n = len(points)
     if light.angle <= 0.0:
-        return LampSample(np.broadcast_to(-light.direction, points.shape), np.full(n, far),
-                          np.broadcast_to(radiometry.sun_irradiance(light, energy), points.shape))
-    cos_half = math.cos(0.5 * light.angle)
-    dirs = cone_directions(np.broadcast_to(-light.direction, points.shape), np.full(n, cos_half), uv)
-    solid_angle = 2.0 * math.pi * (1.0 - cos_half)
-    return LampSample(dirs, np.full(n, far), np.broadcast_to(radiometry.sun_radiance(light, energy) * solid_angle,
-                                                             points.shape))
-
-
-def _area(light: AreaLight, energy: float, points: np.ndarray, uv: np.ndarray, far: float) -> LampSample:
-    """Points uniform over the lamp's rectangle or ellipse,
-    E = L(a) cos_lamp A / t^2, L(a) its radiance at angle a from its normal.
-    A spread of 0 is a parallel beam along the normal: E = P / A where the
-    point's shadow falls on the lamp."""
-    if light.spread <= 0.0:
-        return _parallel_area(light, energy, points, far)
-    if light.shape == "ELLIPSE":
-        xy = concentric_disc(uv)
+        cos_half, irradiance = 1.0, radiometry.sun_irradiance(light, energy)
     else:
-        xy = 2.0 * uv - 1.0
-    on_lamp = light.center + xy[:, :1] * light.axis_x + xy[:, 1:] * light.axis_y
-    to_lamp = on_lamp - points
-    dist = length(to_lamp)
-    dirs = to_lamp / np.maximum(dist, DIVISION_FLOOR)[:, None]
-    cos_lamp = -(dirs @ light.direction)
-    weight = (np.maximum(cos_lamp, 0.0) * radiometry.spread_factor(light.spread, cos_lamp) * light.area
-              / np.maximum(dist * dist, DIVISION_FLOOR))
-    return LampSample(dirs, dist, radiometry.lamp_radiance(light, energy)[None, :] * weight[:, None])
+        cos_half = math.cos(0.5 * light.angle)
+        irradiance = radiometry.sun_radiance(light, energy) * (2.0 * math.pi * (1.0 - cos_half))
+    _sun_samples(out.dirs, out.dist, out.irradiance, uv, contiguous(-light.direction, np.float64), cos_half,
+                 contiguous(irradiance, np.float64), far)
 
 
-def _parallel_area(light: AreaLight, energy: float, points: np.ndarray, far: float) -> LampSample:
-    """Spread 0: light along the lamp's normal, irradiance P / A on a surface
-    facing it, inside the lamp's footprint."""
-    rel = points - light.center
-    upstream = -(rel @ light.direction)
-    on_plane = rel + upstream[:, None] * light.direction
-    x = (on_plane @ light.axis_x) / max(float(light.axis_x @ light.axis_x), DIVISION_FLOOR)
-    y = (on_plane @ light.axis_y) / max(float(light.axis_y @ light.axis_y), DIVISION_FLOOR)
-    inside = (x * x + y * y <= 1.0) if light.shape == "ELLIPSE" else (np.abs(x) <= 1.0) & (np.abs(y) <= 1.0)
-    lit = inside & (upstream > 0.0)
-    irradiance = (light.color * (light.power * energy / light.area))[None, :] * lit[:, None]
-    return LampSample(np.broadcast_to(-light.direction, points.shape), np.where(lit, upstream, far), irradiance)
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8, f8[::1], f8)")
+def _sun_samples(dirs, dist, irradiance, uv, axis, cos_half, value, far):
+    """dirs (n,3): cone_direction1 of `uv (n,2)` within acos(cos_half) of
+    the unit `axis (3,)` toward the sun, whose frame is built once (the axis
+    itself at cos_half 1); the irradiance `value (3,)` and the distance
+    `far` for all."""
+    a = (axis[0], axis[1], axis[2])
+    t, b = orthonormal_basis1(a)
+    for i in range(len(uv)):
+        set_row(dirs, i, a if cos_half >= 1.0 else cone_direction1(a, t, b, cos_half, uv[i, 0], uv[i, 1]))
+        dist[i] = far
+        set_row(irradiance, i, (value[0], value[1], value[2]))
+
+
+@inline
+def _toward1(points, i, target):
+    """(unit 3-tuple direction, distance) from row i of `points (n,3)` to
+    the 3-tuple `target`."""
+    offset = (target[0] - points[i, 0], target[1] - points[i, 1], target[2] - points[i, 2])
+    dist = math.sqrt(dot1(offset, offset))
+    floor = max(dist, DIVISION_FLOOR)
+    return (offset[0] / floor, offset[1] / floor, offset[2] / floor), dist
+
+
+@inline
+def _mask1(masked, leaving, axis, cos_half, blend):
+    """The spot's cone mask for the unit 3-tuple `leaving` a point of it
+    (radiometry.spot_attenuation1); 1 where not `masked`."""
+    if not masked:
+        return 1.0
+    return spot_attenuation1(dot1(leaving, (axis[0], axis[1], axis[2])), cos_half, blend)
+
+
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], b1, f8[::1], f8, f8)")
+def _point_samples(dirs, dist, irradiance, points, position, intensity, masked, axis, cos_half, blend):
+    """A lamp of size 0 of radiant intensity `intensity (3,)` W/sr (a spot's
+    times its mask): E = I / d^2 at distance d."""
+    at = (position[0], position[1], position[2])
+    for i in range(len(points)):
+        l, d = _toward1(points, i, at)
+        set_row(dirs, i, l)
+        dist[i] = d
+        mask = _mask1(masked, (-l[0], -l[1], -l[2]), axis, cos_half, blend)
+        d2 = max(d * d, DIVISION_FLOOR)
+        for c in range(3):
+            irradiance[i, c] = intensity[c] * mask / d2
+
+
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8, f8[::1], b1, f8[::1], f8, f8)")
+def _facing_disc_samples(dirs, dist, irradiance, points, uv, position, radius, radiance, masked, axis, cos_half,
+                         blend):
+    """Soft Falloff: a disc of `radius` through the lamp's centre, facing
+    the point, of radiance `radiance (3,)`, sampled uniformly by area
+    (concentric_disc1): E = L cos_disc (pi r^2) / t^2 at distance t, cos_disc
+    the disc's cosine toward the point."""
+    at = (position[0], position[1], position[2])
+    area = math.pi * (radius * radius)
+    for i in range(len(points)):
+        away, _ = _toward1(points, i, at)
+        normal = (-away[0], -away[1], -away[2])
+        t, b = orthonormal_basis1(normal)
+        x, y = concentric_disc1(uv[i, 0], uv[i, 1])
+        x, y = radius * x, radius * y
+        on_lamp = (at[0] + x * t[0] + y * b[0], at[1] + x * t[1] + y * b[1], at[2] + x * t[2] + y * b[2])
+        l, d = _toward1(points, i, on_lamp)
+        set_row(dirs, i, l)
+        dist[i] = d
+        cos_disc = max(-dot1(l, normal), 0.0)
+        scale = cos_disc * area / max(d * d, DIVISION_FLOOR) * _mask1(masked, (-l[0], -l[1], -l[2]), axis,
+                                                                       cos_half, blend)
+        for c in range(3):
+            irradiance[i, c] = radiance[c] * scale
+
+
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8, f8[::1], b1, f8[::1], f8, f8)")
+def _sphere_samples(dirs, dist, irradiance, points, uv, position, radius, radiance, masked, axis, cos_half, blend):
+    """Soft Falloff off: a sphere of `radius` and uniform radiance `radiance
+    (3,)`, sampled uniformly over the cap a point sees (cone_direction1),
+    E = L x the cap's solid angle 2 pi (1 - cos_max), cos_max = sqrt(1 -
+    (r/d)^2); a point inside it sees it everywhere (E = L 4 pi over the
+    uniform sphere of directions). The distance to clear is the sphere's
+    near root along the direction, its far one from inside; Cycles applies
+    no cone mask to a point inside a spot's sphere."""
+    at = (position[0], position[1], position[2])
+    for i in range(len(points)):
+        toward, d = _toward1(points, i, at)
+        inside = d <= radius
+        q = radius / max(d, DIVISION_FLOOR)
+        cos_max = -1.0 if inside else math.sqrt(max(0.0, 1.0 - q * q))
+        t, b = orthonormal_basis1(toward)
+        l = cone_direction1(toward, t, b, cos_max, uv[i, 0], uv[i, 1])
+        set_row(dirs, i, l)
+        along = dot1(l, (at[0] - points[i, 0], at[1] - points[i, 1], at[2] - points[i, 2]))
+        root = math.sqrt(max(0.0, along * along - d * d + radius * radius))
+        dist[i] = along + root if inside else along - root
+        mask = 1.0 if inside else _mask1(masked, (-l[0], -l[1], -l[2]), axis, cos_half, blend)
+        weight = 2.0 * math.pi * (1.0 - cos_max) * mask
+        for c in range(3):
+            irradiance[i, c] = radiance[c] * weight
+
+
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1], b1, f8, f8,"
+        " f8[::1])")
+def _area_samples(dirs, dist, irradiance, points, uv, center, axis_x, axis_y, normal, ellipse, spread, area,
+                  radiance):
+    """Points uniform over an area lamp's rectangle, or its inscribed
+    ellipse (concentric_disc1), center + x axis_x + y axis_y:
+    E = L s(a) cos_lamp A / t^2 at distance t, L = `radiance (3,)` along the
+    `normal (3,)`, s(a) its spread weight (radiometry.spread_factor1) at the
+    angle a from it, A = `area`."""
+    n = (normal[0], normal[1], normal[2])
+    for i in range(len(points)):
+        if ellipse:
+            x, y = concentric_disc1(uv[i, 0], uv[i, 1])
+        else:
+            x, y = 2.0 * uv[i, 0] - 1.0, 2.0 * uv[i, 1] - 1.0
+        on_lamp = (center[0] + x * axis_x[0] + y * axis_y[0], center[1] + x * axis_x[1] + y * axis_y[1],
+                   center[2] + x * axis_x[2] + y * axis_y[2])
+        l, d = _toward1(points, i, on_lamp)
+        set_row(dirs, i, l)
+        dist[i] = d
+        cos_lamp = -dot1(l, n)
+        weight = max(cos_lamp, 0.0) * spread_factor1(spread, cos_lamp) * area / max(d * d, DIVISION_FLOOR)
+        for c in range(3):
+            irradiance[i, c] = radiance[c] * weight
+
+
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1], b1, f8[::1], f8)")
+def _parallel_area_samples(dirs, dist, irradiance, points, center, axis_x, axis_y, normal, ellipse, flux_density,
+                           far):
+    """Spread 0: light along the lamp's `normal (3,)`, irradiance P / A =
+    `flux_density (3,)` on a surface facing it, at the points whose shadow
+    along the normal falls on the lamp, upstream of them (the distance to
+    clear); 0 elsewhere."""
+    n = (normal[0], normal[1], normal[2])
+    ax, ay = (axis_x[0], axis_x[1], axis_x[2]), (axis_y[0], axis_y[1], axis_y[2])
+    ax2, ay2 = max(dot1(ax, ax), DIVISION_FLOOR), max(dot1(ay, ay), DIVISION_FLOOR)
+    for i in range(len(points)):
+        rel = (points[i, 0] - center[0], points[i, 1] - center[1], points[i, 2] - center[2])
+        upstream = -dot1(rel, n)
+        on_plane = (rel[0] + upstream * n[0], rel[1] + upstream * n[1], rel[2] + upstream * n[2])
+        x, y = dot1(on_plane, ax) / ax2, dot1(on_plane, ay) / ay2
+        inside = x * x + y * y <= 1.0 if ellipse else abs(x) <= 1.0 and abs(y) <= 1.0
+        lit = inside and upstream > 0.0
+        set_row(dirs, i, (-n[0], -n[1], -n[2]))
+        dist[i] = upstream if lit else far
+        for c in range(3):
+            irradiance[i, c] = flux_density[c] if lit else 0.0
+
+
+@kernel("void(f8[::1], f8[:, ::1], f8[::1], f8)")
+def _apparent_sizes(out, points, center, half):
+    """out (n,) = 2 atan(half / d), d the distance of each of `points (n,3)` from `center (3,)`."""
+    at = (center[0], center[1], center[2])
+    for i in range(len(points)):
+        out[i] = 2.0 * math.atan(half / max(_toward1(points, i, at)[1], DIVISION_FLOOR))

@@ -36,6 +36,9 @@ import math
 import numpy as np
 
 from ..scene import AreaLight, Light, SpotLight, SunLight
+from ..util.jit import inline, kernel
+from ..util.rows import contiguous
+from ..util.vectors import dot1, row
 
 
 def point_intensity(power: float, color: np.ndarray) -> np.ndarray:
@@ -43,35 +46,68 @@ def point_intensity(power: float, color: np.ndarray) -> np.ndarray:
     return np.asarray(color, dtype=np.float64) * (power / (4.0 * math.pi))
 
 
-def smoothstep(x: np.ndarray) -> np.ndarray:
+@inline
+def smoothstep1(x):
     """Cycles' smoothstepf: 0 below 0, 1 above 1, 3x^2 - 2x^3 between."""
-    x = np.clip(x, 0.0, 1.0)
+    x = min(max(x, 0.0), 1.0)
     return x * x * (3.0 - 2.0 * x)
 
 
+@inline
+def spot_attenuation1(cos_theta, cos_half, blend):
+    """A spot lamp's cone mask for a direction leaving it at cos_theta from
+    its axis, cos_half = cos(Spot Size / 2) (Cycles' `spot_attenuation`):
+    smoothstep((cos_theta - cos_half) / ((1 - cos_half) blend)), a hard
+    edge (cos_theta > cos_half) at Blend 0."""
+    if blend <= 0.0:
+        return 1.0 if cos_theta > cos_half else 0.0
+    return smoothstep1((cos_theta - cos_half) / ((1.0 - cos_half) * blend))
+
+
+@inline
+def spread_factor1(spread, cos_a):
+    """Cycles' spread weight of an area lamp's radiance at cos_a of the
+    angle a from its normal, for a Spread of `spread` radians (its soft-box
+    model): max((tan(s/2) - tan a) / (tan(s/2) - s/2), 0), with 3 / (s/2)^3
+    for 1 / (tan(s/2) - s/2) below s/2 = 0.05; 1 at a full spread of pi, 0
+    behind the lamp and, at a spread of 0 (a parallel beam along the
+    normal), everywhere: there is no finite radiance off the normal."""
+    half = 0.5 * spread
+    if half >= 0.5 * math.pi - 1e-9:
+        return 1.0
+    if half <= 0.0 or not cos_a > 0.0:
+        return 0.0
+    tan_half = math.tan(half)
+    normalise = 1.0 / (tan_half - half) if half > 0.05 else 3.0 / math.pow(half, 3.0)
+    tan_a = math.sqrt(max(0.0, 1.0 - cos_a * cos_a)) / cos_a
+    return max((tan_half - tan_a) * normalise, 0.0)
+
+
 def spot_attenuation(light: SpotLight, dirs: np.ndarray) -> np.ndarray:
-    """Cone mask (n,) of a spot lamp for unit directions `dirs (n,3)` leaving it."""
-    cos_theta = dirs @ light.direction
-    cos_half = math.cos(0.5 * light.spot_size)
-    if light.blend <= 0.0:
-        return (cos_theta > cos_half).astype(np.float64)
-    return smoothstep((cos_theta - cos_half) / ((1.0 - cos_half) * light.blend))
+    """(n,) spot_attenuation1 of a spot lamp for unit directions `dirs (n,3)` leaving it."""
+    out = np.empty(len(dirs))
+    _spot_values(out, contiguous(dirs, np.float64), contiguous(light.direction, np.float64),
+                 math.cos(0.5 * light.spot_size), float(light.blend))
+    return out
 
 
 def spread_factor(spread: float, cos_a: np.ndarray) -> np.ndarray:
-    """(n,) Cycles' spread weight of an area lamp's radiance at cos_a (n,)
-    of the angle from its normal: 1 for a full spread of pi."""
-    half = 0.5 * spread
-    if half >= 0.5 * math.pi - 1e-9:
-        return np.ones_like(cos_a)
-    if half <= 0.0:
-        # a parallel beam along the normal: no finite radiance off it
-        return np.zeros_like(cos_a)
-    tan_half = math.tan(half)
-    normalise = 1.0 / (tan_half - half) if half > 0.05 else 3.0 / half ** 3
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tan_a = np.sqrt(np.maximum(0.0, 1.0 - cos_a * cos_a)) / cos_a
-    return np.where(cos_a > 0.0, np.maximum((tan_half - tan_a) * normalise, 0.0), 0.0)
+    """(n,) spread_factor1 of an area lamp of `spread` at each of `cos_a (n,)`."""
+    out = np.empty(len(cos_a))
+    _spread_values(out, float(spread), contiguous(cos_a, np.float64))
+    return out
+
+
+@kernel("void(f8[::1], f8[:, ::1], f8[::1], f8, f8)")
+def _spot_values(out, dirs, axis, cos_half, blend):
+    for i in range(len(dirs)):
+        out[i] = spot_attenuation1(dot1(row(dirs, i), (axis[0], axis[1], axis[2])), cos_half, blend)
+
+
+@kernel("void(f8[::1], f8, f8[::1])")
+def _spread_values(out, spread, cos_a):
+    for i in range(len(cos_a)):
+        out[i] = spread_factor1(spread, cos_a[i])
 
 
 def intensity(light: Light, energy: float, dirs: np.ndarray) -> np.ndarray:
