@@ -1,4 +1,5 @@
-"""The GGX (Trowbridge-Reitz) microfacet model as Cycles samples it, vectorised over rays.
+"""The GGX (Trowbridge-Reitz) microfacet model as Cycles samples it: scalar
+forms for kernels (the `...1` functions) and array kernels over rays.
 
 Sources: Walter, Marschner, Li and Torrance 2007, "Microfacet models for
 refraction through rough surfaces" (the distribution, eq. 33); Heitz 2014,
@@ -19,8 +20,8 @@ import numpy as np
 
 from ..sampling.warps import concentric_disc, frames
 from ..util.jit import inline, kernel
-from ..util.vectors import cross_rows, dot, float_rows, normalize
-from .specular import fresnel_dielectric
+from ..util.vectors import dot1, float_rows, normalize1, row, scale1, set_row, sum1
+from .specular import fresnel_dielectric1
 
 
 # Cycles renders a closure with alpha_x alpha_y at or below this as a
@@ -37,13 +38,15 @@ def alpha_of(roughness) -> np.ndarray:
     return np.where(alpha * alpha <= SPECULAR_ALPHA2, 0.0, alpha)
 
 
-def ggx_d(cos_h: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+@inline
+def ggx_d1(cos_h, alpha):
     """GGX distribution of normals D(h) = a^2 / (pi ((1 - c^2) + a^2 c^2)^2),
     c = cos(theta_h) (Walter et al. 2007, eq. 33), per steradian of h; its
     projected area integrates to 1: int D(h) cos(theta_h) dw_h = 1."""
-    c2 = np.minimum(cos_h * cos_h, 1.0)
+    c2 = min(cos_h * cos_h, 1.0)
     a2 = alpha * alpha
-    return a2 / (math.pi * ((1.0 - c2) + a2 * c2) ** 2)
+    q = (1.0 - c2) + a2 * c2
+    return a2 / (math.pi * (q * q))
 
 
 @inline
@@ -64,6 +67,111 @@ def shadowing_weight1(cos_in, cos_out, alpha):
     factor applies: flux, not radiance, crosses the interface."""
     lam_in = ggx_lambda1(cos_in, alpha)
     return (1.0 + lam_in) / (1.0 + lam_in + ggx_lambda1(cos_out, alpha))
+
+
+@inline
+def reflection1(cos_nv, cos_nl, cos_nh, alpha):
+    """The microfacet BRDF times cos(theta_l), without Fresnel:
+
+        f cos_l = D(h) G2(v, l) / (4 cos_v),  G2 = 1 / (1 + Lambda(v) + Lambda(l))
+
+    (Heitz 2014, eq. 99, height-correlated; Cycles' bsdf_microfacet_eval,
+    which returns f cos_l). 0 where either direction is below the surface."""
+    if not (cos_nv > 0.0 and cos_nl > 0.0):
+        return 0.0
+    g2 = 1.0 / (1.0 + ggx_lambda1(cos_nv, alpha) + ggx_lambda1(cos_nl, alpha))
+    return ggx_d1(cos_nh, alpha) * g2 / (4.0 * cos_nv)
+
+
+@inline
+def reflection_pdf1(cos_nv, cos_nh, alpha):
+    """Solid-angle density of l = reflect(v, h) for h drawn from the visible
+    normals: D(h) G1(v) / (4 cos_v), G1 = 1 / (1 + Lambda(v)) (Heitz 2018,
+    eq. 17 with the reflection Jacobian 1 / (4 v.h))."""
+    g1 = 1.0 / (1.0 + ggx_lambda1(cos_nv, alpha))
+    return ggx_d1(cos_nh, alpha) * g1 / (4.0 * max(cos_nv, 1e-300))
+
+
+@inline
+def visible_normal1(wi, alpha, disc_x, disc_y):
+    """The microfacet normal (3-tuple, local, unit) of GGX's normals visible
+    from `wi` (unit, local, wi.z > 0), of density
+    D_wi(h) = G1(wi) max(0, wi.h) D(h) / wi.z, at the point (disc_x,
+    disc_y) of the unit disc: Heitz 2018, sec. 3-4, as Cycles'
+    `microfacet_ggx_sample_vndf`: stretch wi to the hemisphere
+    configuration, squeeze half the disc by (1 + wi_h.z) / 2, lift it onto
+    the hemisphere about wi_h, and unstretch."""
+    wh = normalize1((alpha * wi[0], alpha * wi[1], wi[2]))
+    lensq = wh[0] * wh[0] + wh[1] * wh[1]
+    if lensq > 1e-14:
+        inv = 1.0 / math.sqrt(lensq)
+        t1 = (-wh[1] * inv, wh[0] * inv, 0.0)
+    else:
+        t1 = (1.0, 0.0, 0.0)
+    t2 = (wh[1] * t1[2] - wh[2] * t1[1], wh[2] * t1[0] - wh[0] * t1[2], wh[0] * t1[1] - wh[1] * t1[0])
+    s = 0.5 * (1.0 + wh[2])
+    p1 = disc_x
+    p2 = (1.0 - s) * math.sqrt(max(0.0, 1.0 - p1 * p1)) + s * disc_y
+    lift = math.sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2))
+    nh = (p1 * t1[0] + p2 * t2[0] + lift * wh[0], p1 * t1[1] + p2 * t2[1] + lift * wh[1],
+          p1 * t1[2] + p2 * t2[2] + lift * wh[2])
+    return normalize1((alpha * nh[0], alpha * nh[1], max(nh[2], 0.0)))
+
+
+@inline
+def visible_normal_about1(wi, normal, tangent, bitangent, alpha, disc_x, disc_y):
+    """visible_normal1 in the frame (tangent, bitangent, normal): the world
+    microfacet normal about the macro `normal`, visible from the unit world
+    direction `wi` (on the normal's side)."""
+    local = normalize1((dot1(wi, tangent), dot1(wi, bitangent), max(dot1(wi, normal), 1e-12)))
+    h = visible_normal1(local, alpha, disc_x, disc_y)
+    return normalize1(sum1(1.0, sum1(h[0], tangent, h[1], bitangent), h[2], normal))
+
+
+@inline
+def bsdf_cosine1(view, light, normal, alpha, eta, mirror):
+    """f(view, light) |cos theta_light| of a rough GGX interface, the
+    radiance toward `view` per unit irradiance (at normal incidence)
+    arriving along `light` (both unit, away from the surface), about the
+    macro `normal` on the view's side: Walter et al. 2007, eq. 20 and 21,
+    as Cycles' `bsdf_microfacet_eval` writes them,
+
+        reflection    F D G2 / (4 cos_v),                h = normalize(v + l)
+        transmission  (1 - F) D G2 |v.h| |l.h| / (cos_v (eta v.h + l.h)^2),
+                                                         h = -normalize(eta v + l)
+
+    with Fresnel F at h for eta = eta_v / eta_l (1 at a `mirror`, which
+    transmits nothing) and no radiance factor eta^2 (Cycles has none), so
+    that its integral over the light's sphere is what the visible-normal
+    sampler keeps, the single-scattering albedo. 0 where the pair has no
+    such microfacet normal (and where eta v.h + l.h = 0, h's limit)."""
+    cos_v, cos_l = dot1(view, normal), dot1(light, normal)
+    through = cos_l < 0.0
+    if through:
+        half = normalize1(scale1(-1.0, sum1(eta, view, 1.0, light)))
+    else:
+        half = normalize1(sum1(1.0, view, 1.0, light))
+    if dot1(half, normal) < 0.0:
+        half = scale1(-1.0, half)
+    v_h, l_h = dot1(view, half), dot1(light, half)
+    if not (cos_v > 0.0 and v_h > 0.0 and ((l_h < 0.0 and not mirror) if through else l_h > 0.0)):
+        return 0.0
+    f = 1.0 if mirror else fresnel_dielectric1(v_h, eta)
+    a = max(alpha, 1e-12)
+    common = ggx_d1(dot1(half, normal), a) / (1.0 + ggx_lambda1(cos_v, a) + ggx_lambda1(abs(cos_l), a)) / max(
+        cos_v, 1e-12)
+    if not through:
+        return 0.25 * f * common
+    across = eta * v_h + l_h
+    if across == 0.0:
+        return 0.0
+    return (1.0 - f) * common * abs(v_h * l_h) / (across * across)
+
+
+@kernel("void(f8[::1], f8[::1], f8[::1])")
+def _d_values(cos_h, alpha, out):
+    for i in range(len(cos_h)):
+        out[i] = ggx_d1(cos_h[i], alpha[i])
 
 
 @kernel("void(f8[::1], f8[::1], f8[::1])")
@@ -94,94 +202,69 @@ def shadowing_weight(cos_in, cos_out, alpha) -> np.ndarray:
     return out
 
 
-def reflection(cos_nv: np.ndarray, cos_nl: np.ndarray, cos_nh: np.ndarray, alpha: np.ndarray) -> np.ndarray:
-    """The microfacet BRDF times cos(theta_l), without Fresnel:
-
-        f cos_l = D(h) G2(v, l) / (4 cos_v),  G2 = 1 / (1 + Lambda(v) + Lambda(l))
-
-    (Heitz 2014, eq. 99, height-correlated; Cycles' bsdf_microfacet_eval,
-    which returns f cos_l). 0 where either direction is below the surface."""
-    up = (cos_nv > 0.0) & (cos_nl > 0.0)
-    g2 = 1.0 / (1.0 + ggx_lambda(cos_nv, alpha) + ggx_lambda(cos_nl, alpha))
-    return np.where(up, ggx_d(cos_nh, alpha) * g2 / (4.0 * np.where(up, cos_nv, 1.0)), 0.0)
+def ggx_d(cos_h, alpha) -> np.ndarray:
+    """ggx_d1 of each element (arguments broadcast), in their shape."""
+    cos_h, alpha = float_rows(cos_h, alpha)
+    out = np.empty(cos_h.shape)
+    _d_values(cos_h.ravel(), alpha.ravel(), out.reshape(-1))
+    return out
 
 
-def reflection_pdf(cos_nv: np.ndarray, cos_nh: np.ndarray, alpha: np.ndarray) -> np.ndarray:
-    """Solid-angle density of l = reflect(v, h) for h drawn from the visible
-    normals: D(h) G1(v) / (4 cos_v), G1 = 1 / (1 + Lambda(v)) (Heitz 2018,
-    eq. 17 with the reflection Jacobian 1 / (4 v.h))."""
-    g1 = 1.0 / (1.0 + ggx_lambda(cos_nv, alpha))
-    return ggx_d(cos_nh, alpha) * g1 / (4.0 * np.maximum(cos_nv, 1e-300))
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1])")
+def _visible_normals(wi, alpha, disc, out):
+    for i in range(len(wi)):
+        set_row(out, i, visible_normal1(row(wi, i), alpha[i], disc[i, 0], disc[i, 1]))
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1])")
+def _visible_normals_about(wi, normal, tangent, bitangent, alpha, disc, out):
+    for i in range(len(wi)):
+        set_row(out, i, visible_normal_about1(row(wi, i), row(normal, i), row(tangent, i), row(bitangent, i),
+                                              alpha[i], disc[i, 0], disc[i, 1]))
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], b1[::1], f8[::1])")
+def _bsdf_cosines(view, light, normal, alpha, eta, mirror, out):
+    for i in range(len(view)):
+        out[i] = bsdf_cosine1(row(view, i), row(light, i), row(normal, i), alpha[i], eta[i], mirror[i])
+
+
+def visible_normals_of_disc(wi: np.ndarray, alpha: np.ndarray, disc: np.ndarray) -> np.ndarray:
+    """(n,3) visible_normal1 of each row: local unit directions `wi (n,3)`,
+    widths `alpha (n,)`, points `disc (n,2)` of the unit disc."""
+    (wi,), (alpha,), (disc,) = float_rows(wi), float_rows(alpha), float_rows(disc)
+    out = np.empty_like(wi)
+    _visible_normals(wi, alpha, disc, out)
+    return out
 
 
 def sample_visible_normals_local(wi: np.ndarray, alpha: np.ndarray, uv: np.ndarray) -> np.ndarray:
     """(n,3) microfacet normals drawn from GGX's distribution of normals
-    visible from `wi (n,3)` (unit, local, wi.z > 0), of density
-    D_wi(h) = G1(wi) max(0, wi.h) D(h) / wi.z, from `uv (n,2)` in [0,1)^2
-    through the concentric disc: visible_normals_of_disc."""
+    visible from `wi (n,3)` (unit, local, wi.z > 0) from `uv (n,2)` in
+    [0,1)^2 through the concentric disc: visible_normals_of_disc."""
     return visible_normals_of_disc(wi, alpha, concentric_disc(uv))
-
-
-def visible_normals_of_disc(wi: np.ndarray, alpha: np.ndarray, disc: np.ndarray) -> np.ndarray:
-    """(n,3) the visible normals (sample_visible_normals_local) of points
-    `disc (n,2)` of the unit disc: Heitz 2018, sec. 3-4, as Cycles'
-    `microfacet_ggx_sample_vndf`: stretch wi to the hemisphere
-    configuration, squeeze half the disc by (1 + wi_h.z) / 2, lift it onto
-    the hemisphere about wi_h, and unstretch."""
-    a = alpha[:, None]
-    wh = normalize(np.concatenate([a * wi[:, :2], wi[:, 2:]], axis=1))
-    lensq = wh[:, 0] ** 2 + wh[:, 1] ** 2
-    tilted = lensq > 1e-14
-    inv = np.where(tilted, 1.0 / np.sqrt(np.where(tilted, lensq, 1.0)), 0.0)
-    t1 = np.stack([np.where(tilted, -wh[:, 1] * inv, 1.0), np.where(tilted, wh[:, 0] * inv, 0.0),
-                   np.zeros(len(wh))], axis=1)
-    t2 = cross_rows(wh, t1)
-    s = 0.5 * (1.0 + wh[:, 2])
-    p1 = disc[:, 0]
-    p2 = (1.0 - s) * np.sqrt(np.maximum(0.0, 1.0 - p1 * p1)) + s * disc[:, 1]
-    lift = np.sqrt(np.maximum(0.0, 1.0 - p1 * p1 - p2 * p2))
-    nh = p1[:, None] * t1 + p2[:, None] * t2 + lift[:, None] * wh
-    return normalize(np.concatenate([a * nh[:, :2], np.maximum(nh[:, 2:], 0.0)], axis=1))
 
 
 def sample_visible_normals(wi: np.ndarray, normal: np.ndarray, alpha: np.ndarray, uv: np.ndarray) -> np.ndarray:
     """World microfacet normals (n,3) about the macro normals `normal (n,3)`,
     visible from the unit world directions `wi (n,3)` (on the normal's
-    side), from `uv (n,2)`: sample_visible_normals_local in the frame of
-    each normal."""
-    t, b = frames(normal)
-    local = np.stack([dot(wi, t), dot(wi, b), np.maximum(dot(wi, normal), 1e-12)], axis=1)
-    h = sample_visible_normals_local(normalize(local), alpha, uv)
-    return normalize(h[:, :1] * t + h[:, 1:2] * b + h[:, 2:] * normal)
+    side), from `uv (n,2)` through the concentric disc: visible_normal_about1
+    in the frame of each normal (sampling.warps.frames)."""
+    wi, normal = float_rows(wi, normal)
+    t, b = float_rows(*frames(normal))
+    (alpha,) = float_rows(alpha)
+    (disc,) = float_rows(concentric_disc(uv))
+    out = np.empty_like(wi)
+    _visible_normals_about(wi, normal, t, b, alpha, disc, out)
+    return out
 
 
 def bsdf_cosine(view: np.ndarray, light: np.ndarray, normal: np.ndarray, alpha: np.ndarray, eta: np.ndarray,
                 mirror: np.ndarray) -> np.ndarray:
-    """(n,) f(view, light) |cos theta_light| of a rough GGX interface, the
-    radiance toward `view (n,3)` per unit irradiance (at normal incidence)
-    arriving along `light (n,3)` (both unit, away from the surface), about
-    the macro normal `normal (n,3)` on the view's side: Walter et al. 2007,
-    eq. 20 and 21, as Cycles' `bsdf_microfacet_eval` writes them,
-
-        reflection    F D G2 / (4 cos_v),                h = normalize(v + l)
-        transmission  (1 - F) D G2 |v.h| |l.h| / (cos_v (eta v.h + l.h)^2),
-                                                         h = -normalize(eta v + l)
-
-    with Fresnel F at h for eta = eta_v / eta_l (1 at a mirror, `mirror (n,)`,
-    which transmits nothing) and no radiance factor eta^2 (Cycles has none),
-    so that its integral over the light's sphere is what the visible-normal
-    sampler keeps, the single-scattering albedo."""
-    cos_v, cos_l = dot(view, normal), dot(light, normal)
-    through = cos_l < 0.0
-    half = normalize(np.where(through[:, None], -(eta[:, None] * view + light), view + light))
-    half = np.where((dot(half, normal) < 0.0)[:, None], -half, half)
-    v_h, l_h = dot(view, half), dot(light, half)
-    f = np.where(mirror, 1.0, fresnel_dielectric(v_h, eta))
-    a = np.maximum(alpha, 1e-12)
-    common = ggx_d(dot(half, normal), a) / (1.0 + ggx_lambda(cos_v, a) + ggx_lambda(np.abs(cos_l), a)) / np.maximum(
-        cos_v, 1e-12)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        transmitted = (1.0 - f) * common * np.abs(v_h * l_h) / (eta * v_h + l_h) ** 2
-    reflected = 0.25 * f * common
-    valid = (cos_v > 0.0) & (v_h > 0.0) & np.where(through, (l_h < 0.0) & ~mirror, l_h > 0.0)
-    return np.where(valid, np.where(through, transmitted, reflected), 0.0)
+    """(n,) bsdf_cosine1 of each row: `view, light, normal (n,3)`, `alpha,
+    eta (n,)`, `mirror (n,)` bool."""
+    view, light, normal = float_rows(view, light, normal)
+    alpha, eta = float_rows(alpha, eta)
+    out = np.empty(len(view))
+    _bsdf_cosines(view, light, normal, alpha, eta, np.ascontiguousarray(mirror, dtype=bool), out)
+    return out

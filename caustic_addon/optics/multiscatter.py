@@ -29,7 +29,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..util.vectors import DIVISION_FLOOR
+from ..util.jit import inline, kernel
+from ..util.vectors import DIVISION_FLOOR, float_rows, row, set_row
 from .microfacet import sample_visible_normals_local, shadowing_weight
 from .specular import fresnel_dielectric, reflect, refract
 
@@ -91,22 +92,59 @@ def average_albedo(albedo: np.ndarray) -> np.ndarray:
     return 2.0 * (albedo * mu).mean(axis=-1)
 
 
-def albedo_at(table: np.ndarray, mu: np.ndarray) -> np.ndarray:
-    """(n,) E at cosines `mu (n,)`, linear between the tabulated cosines of
-    `table (n,k)` (each row its own surface), clamped at the ends."""
-    k = table.shape[1]
-    x = np.clip(mu * k - 0.5, 0.0, k - 1.0)
-    lo = np.minimum(x.astype(np.int64), k - 2)
+@inline
+def albedo_at1(table, mu):
+    """E at the cosine `mu` from `table (k,)` (E at albedo_cosines()),
+    linear between the tabulated cosines, clamped at the ends."""
+    k = len(table)
+    x = min(max(mu * k - 0.5, 0.0), k - 1.0)
+    lo = min(int(x), k - 2)
     frac = x - lo
-    rows = np.arange(len(mu))
-    return table[rows, lo] * (1.0 - frac) + table[rows, lo + 1] * frac
+    return table[lo] * (1.0 - frac) + table[lo + 1] * frac
+
+
+@inline
+def multiscatter_factor1(albedo, albedo_avg, color):
+    """(3-tuple) Cycles' Multiscatter GGX weight 1 + F_ms (1 - E) / E with
+    F_ms = F E_avg / (1 - F (1 - E_avg)), for `albedo` E at the incoming
+    cosine, `albedo_avg` E_avg and `color` (3-tuple) F, the surface's
+    colour (Kulla and Conty 2017; Cycles' `microfacet_ggx_preserve_energy`);
+    both divisors floored at DIVISION_FLOOR."""
+    return (_factor1(albedo, albedo_avg, color[0]), _factor1(albedo, albedo_avg, color[1]),
+            _factor1(albedo, albedo_avg, color[2]))
+
+
+@inline
+def _factor1(e, e_avg, f):
+    """multiscatter_factor1 of one channel of colour `f`."""
+    f_ms = f * e_avg / max(1.0 - f * (1.0 - e_avg), DIVISION_FLOOR)
+    return 1.0 + f_ms * (1.0 - e) / max(e, DIVISION_FLOOR)
+
+
+@kernel("void(f8[:, ::1], f8[::1], f8[::1])")
+def _albedos(table, mu, out):
+    for i in range(len(mu)):
+        out[i] = albedo_at1(table[i], mu[i])
+
+
+@kernel("void(f8[::1], f8[::1], f8[:, ::1], f8[:, ::1])")
+def _factors(albedo, albedo_avg, color, out):
+    for i in range(len(albedo)):
+        set_row(out, i, multiscatter_factor1(albedo[i], albedo_avg[i], row(color, i)))
+
+
+def albedo_at(table: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    """(n,) albedo_at1 at cosines `mu (n,)` of the rows of `table (n,k)`
+    (each row its own surface)."""
+    (table,), (mu,) = float_rows(table), float_rows(mu)
+    out = np.empty(len(mu))
+    _albedos(table, mu, out)
+    return out
 
 
 def multiscatter_factor(albedo: np.ndarray, albedo_avg: np.ndarray, color: np.ndarray) -> np.ndarray:
-    """(n,3) Cycles' Multiscatter GGX weight 1 + F_ms (1 - E) / E with
-    F_ms = F E_avg / (1 - F (1 - E_avg)), for `albedo (n,)` E at the
-    incoming cosine, `albedo_avg (n,)` E_avg and `color (n,3)` F, the
-    surface's colour (Kulla and Conty 2017; Cycles' `microfacet_ggx_preserve_energy`)."""
-    e, e_avg = albedo[:, None], albedo_avg[:, None]
-    f_ms = color * e_avg / np.maximum(1.0 - color * (1.0 - e_avg), DIVISION_FLOOR)
-    return 1.0 + f_ms * (1.0 - e) / np.maximum(e, DIVISION_FLOOR)
+    """(n,3) multiscatter_factor1 of each row: `albedo, albedo_avg (n,)`, `color (n,3)`."""
+    albedo, albedo_avg = float_rows(albedo, albedo_avg)
+    out = np.empty((len(albedo), 3))
+    _factors(albedo, albedo_avg, *float_rows(color), out)
+    return out

@@ -40,8 +40,12 @@ from functools import lru_cache
 import numpy as np
 
 from . import microfacet
-from ..util.vectors import dot, max_channel, normalize
-from .specular import fresnel_dielectric
+from ..sampling.warps import concentric_disc
+from ..util.jit import inline, kernel
+from ..util.rows import contiguous
+from ..util.vectors import (DIVISION_FLOOR, dot, dot1, float_rows, max_channel1, normalize1, row, set_row,
+                            sum1)
+from .specular import fresnel_dielectric1
 
 E_NODES = 32
 S_NODES = 16
@@ -54,9 +58,11 @@ QUADRATURE = 48
 MIN_ALPHA = 1e-5
 
 
+@inline
 def f0_from_ior(ior):
     """Reflectance at normal incidence ((n - 1) / (n + 1))^2 (Cycles' F0_from_ior)."""
-    return ((ior - 1.0) / (ior + 1.0)) ** 2
+    r = (ior - 1.0) / (ior + 1.0)
+    return r * r
 
 
 def ior_from_f0(f0):
@@ -86,13 +92,78 @@ def dielectric_fss(eta: float) -> float:
     return (eta - 1.0) / (4.08567 + 1.00071 * eta)
 
 
-def fresnel(cos_hv: np.ndarray, eta: np.ndarray, f0: np.ndarray) -> np.ndarray:
-    """(n,3) F0 tint + (1 - F0 tint) s with s = (F_d - F0(eta)) / (1 - F0(eta))
-    clamped to 0..1: the dielectric Fresnel curve of IOR `eta (n,)`
-    remapped onto `f0 (n,3)` .. 1 (generalized_schlick_fresnel)."""
+@inline
+def fresnel_interpolant1(cos_hv, eta):
+    """s = (F_d(cos_hv) - F0(eta)) / (1 - F0(eta)) clamped to 0..1: where the
+    dielectric Fresnel curve of IOR `eta` stands between its value at normal
+    incidence and 1 (generalized_schlick_fresnel's interpolant)."""
     real = f0_from_ior(eta)
-    s = np.clip((fresnel_dielectric(cos_hv, 1.0 / eta) - real) / (1.0 - real), 0.0, 1.0)
-    return f0 + (1.0 - f0) * s[:, None]
+    return min(max((fresnel_dielectric1(cos_hv, 1.0 / eta) - real) / (1.0 - real), 0.0), 1.0)
+
+
+@inline
+def fresnel1(cos_hv, eta, f0):
+    """(3-tuple) F0 tint + (1 - F0 tint) s, s = fresnel_interpolant1: the
+    dielectric Fresnel curve of IOR `eta` remapped onto `f0` (3-tuple) .. 1
+    (generalized_schlick_fresnel, exponent < 0)."""
+    s = fresnel_interpolant1(cos_hv, eta)
+    return (f0[0] + (1.0 - f0[0]) * s, f0[1] + (1.0 - f0[1]) * s, f0[2] + (1.0 - f0[2]) * s)
+
+
+@inline
+def lobe_weight1(normal, view, light, f0, eta, alpha, gain):
+    """(3-tuple) f cos(theta_l) of a specular layer: its BRDF toward the eye
+    `view` for light from the unit direction `light`, times the cosine at
+    `normal`: F(h.v) D G2 / (4 cos_v) gain, h = normalize(v + l)
+    (bsdf_microfacet_eval x energy_scale x the darkening in the closure's
+    weight; microfacet.reflection1, fresnel1)."""
+    half = normalize1(sum1(1.0, view, 1.0, light))
+    lobe = microfacet.reflection1(dot1(normal, view), dot1(normal, light), dot1(normal, half), alpha)
+    f = fresnel1(dot1(half, view), eta, f0)
+    return (f[0] * gain[0] * lobe, f[1] * gain[1] * lobe, f[2] * gain[2] * lobe)
+
+
+@inline
+def lobe_pdf1(normal, view, light, alpha):
+    """Solid-angle density of lobe_sample1 drawing `light`:
+    microfacet.reflection_pdf1 at h = normalize(v + l), 0 where h is below
+    the surface."""
+    cos_h = dot1(normal, normalize1(sum1(1.0, view, 1.0, light)))
+    return microfacet.reflection_pdf1(dot1(normal, view), cos_h, alpha) if cos_h > 0.0 else 0.0
+
+
+@inline
+def lobe_sample1(normal, tangent, bitangent, view, alpha, disc_x, disc_y):
+    """The unit direction reflect(v, h) = 2 (v.h) h - v about the microfacet
+    normal h that microfacet.visible_normal1 draws from the view's visible
+    normals in the frame (tangent, bitangent, normal) at the disc point
+    (disc_x, disc_y); it may fall below the surface."""
+    local = normalize1((dot1(tangent, view), dot1(bitangent, view), max(dot1(normal, view), 1e-9)))
+    m = microfacet.visible_normal1(local, alpha, disc_x, disc_y)
+    h = sum1(1.0, sum1(m[0], tangent, m[1], bitangent), m[2], normal)
+    return sum1(2.0 * dot1(view, h), h, -1.0, view)
+
+
+@inline
+def curve_at1(curve, x):
+    """np.interp(x, nodes, curve) over the nodes i / (k - 1) of a table of
+    k values, 0 <= x <= 1 (Cycles' lookup_table_read), the same arithmetic
+    as numpy's: slope (x - x_j) + y_j between the nodes x_j <= x < x_j+1."""
+    k = len(curve)
+    if x >= 1.0:
+        return curve[k - 1]
+    if x <= 0.0:
+        return curve[0]
+    j = min(int(x * (k - 1)), k - 2)
+    while j > 0 and j / (k - 1) > x:
+        j -= 1
+    while j < k - 2 and (j + 1) / (k - 1) <= x:
+        j += 1
+    lo = j / (k - 1)
+    if lo == x:
+        return curve[j]
+    slope = (curve[j + 1] - curve[j]) / ((j + 1) / (k - 1) - lo)
+    return slope * (x - lo) + curve[j]
 
 
 def _node(value: float, count: int) -> tuple[int, float]:
@@ -106,6 +177,12 @@ def _node(value: float, count: int) -> tuple[int, float]:
 def _nodes(count: int, lo: float, hi: float) -> np.ndarray:
     """A table axis as cycles_precompute.cpp spans it: i / (count - 1), clamped to lo..hi."""
     return np.clip(np.arange(count) / (count - 1), lo, hi)
+
+
+@kernel("void(f8[::1], f8, f8[::1])")
+def _interpolants(cos_hv, eta, out):
+    for i in range(len(cos_hv)):
+        out[i] = fresnel_interpolant1(cos_hv[i], eta)
 
 
 def directional(rough: float, mu: np.ndarray, eta: float) -> tuple[np.ndarray, np.ndarray]:
@@ -129,11 +206,11 @@ def directional(rough: float, mu: np.ndarray, eta: float) -> tuple[np.ndarray, n
     h = microfacet.visible_normals_of_disc(view, np.full(q * k, alpha), np.tile(disc, (k, 1)))
     cos_hv = dot(view, h)
     cos_l = 2.0 * cos_hv * h[:, 2] - mu_rows
-    lambda_v = microfacet.ggx_lambda(mu_rows, alpha)
     up = cos_l > 0.0
-    g2_over_g1 = np.where(up, (1.0 + lambda_v) / (1.0 + lambda_v + microfacet.ggx_lambda(cos_l, alpha)), 0.0)
-    real = f0_from_ior(eta)
-    s = np.where(up, np.clip((fresnel_dielectric(cos_hv, 1.0 / eta) - real) / (1.0 - real), 0.0, 1.0), 0.0)
+    g2_over_g1 = np.where(up, microfacet.shadowing_weight(mu_rows, cos_l, alpha), 0.0)
+    s = np.empty(len(cos_hv))
+    _interpolants(cos_hv, eta, s)
+    s = np.where(up, s, 0.0)
     weights = np.tile(weight, k)
     return (g2_over_g1 * weights).reshape(k, q).mean(axis=1), (s * weights).reshape(k, q).mean(axis=1)
 
@@ -198,20 +275,49 @@ class Layer:
                      f0_tint + (1.0 - f0_tint) * s, e_curve, s_curve, e_avg)
 
     def toward(self, cos_v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(gain (n,3), diffuse (n,)) seen from cosines `cos_v (n,)`: the
-        multiple-scattering gain 1 + F_ms (1 - E) / E of the lobe (1 without
-        multiscatter) and the share of the diffuse base the layer leaves."""
-        mu = np.clip(cos_v, 0.0, 1.0)
-        s = np.interp(mu, _nodes(S_NODES, 0.0, 1.0), self.s_curve)
-        albedo = self.f0[None, :] + (1.0 - self.f0[None, :]) * s[:, None]
-        if not self.multiscatter:
-            return np.ones((len(mu), 3)), np.clip(1.0 - max_channel(albedo), 0.0, 1.0)
-        e = np.interp(mu, _nodes(E_NODES, 0.0, 1.0), self.e_curve)
-        missing = (1.0 - e) / e
-        fms = self.fss * self.e_avg / (1.0 - self.fss * (1.0 - self.e_avg))
-        gain = 1.0 + fms[None, :] * missing[:, None]
-        darkening = gain / (1.0 + missing)[:, None]
-        return gain, np.clip(1.0 - max_channel(darkening * albedo), 0.0, 1.0)
+        """(gain (n,3), diffuse (n,)) seen from cosines `cos_v (n,)`: toward1 of each."""
+        n = len(cos_v)
+        gain, diffuse = np.empty((n, 3)), np.empty(n)
+        _toward(contiguous(cos_v, np.float64), self.s_curve, self.e_curve, self.f0, self.fss, self.e_avg,
+                self.multiscatter, gain, diffuse)
+        return gain, diffuse
+
+
+@inline
+def _gain1(fss, e_avg, missing):
+    """1 + F_ms missing, F_ms = F_ss E_avg / (1 - F_ss (1 - E_avg)), of one channel."""
+    return 1.0 + fss * e_avg / (1.0 - fss * (1.0 - e_avg)) * missing
+
+
+@inline
+def toward1(cos_v, s_curve, e_curve, f0, fss, e_avg, multiscatter):
+    """(gain (3-tuple), diffuse) of a layer seen from the cosine `cos_v`:
+    the multiple-scattering gain 1 + F_ms (1 - E) / E of the lobe,
+    F_ms = F_ss E_avg / (1 - F_ss (1 - E_avg)), (1 without `multiscatter`)
+    and the share of the diffuse base the layer leaves,
+    1 - max over channels of the layer's albedo F0 + (1 - F0) s times its
+    darkening gain / (1 + (1 - E) / E), clamped to 0..1
+    (closure_layering_weight); E and s read from their curves at mu =
+    cos_v (curve_at1), E floored at DIVISION_FLOOR. `f0`, `fss` 3-tuples."""
+    mu = min(max(cos_v, 0.0), 1.0)
+    s = curve_at1(s_curve, mu)
+    albedo = (f0[0] + (1.0 - f0[0]) * s, f0[1] + (1.0 - f0[1]) * s, f0[2] + (1.0 - f0[2]) * s)
+    if not multiscatter:
+        return (1.0, 1.0, 1.0), min(max(1.0 - max_channel1(albedo), 0.0), 1.0)
+    e = curve_at1(e_curve, mu)
+    missing = (1.0 - e) / max(e, DIVISION_FLOOR)
+    gain = (_gain1(fss[0], e_avg, missing), _gain1(fss[1], e_avg, missing), _gain1(fss[2], e_avg, missing))
+    darkening = 1.0 + missing
+    shared = (gain[0] / darkening * albedo[0], gain[1] / darkening * albedo[1], gain[2] / darkening * albedo[2])
+    return gain, min(max(1.0 - max_channel1(shared), 0.0), 1.0)
+
+
+@kernel("void(f8[::1], f8[::1], f8[::1], f8[::1], f8[::1], f8, b1, f8[:, ::1], f8[::1])")
+def _toward(cos_v, s_curve, e_curve, f0, fss, e_avg, multiscatter, gain, diffuse):
+    f0_t, fss_t = (f0[0], f0[1], f0[2]), (fss[0], fss[1], fss[2])
+    for i in range(len(cos_v)):
+        g, diffuse[i] = toward1(cos_v[i], s_curve, e_curve, f0_t, fss_t, e_avg, multiscatter)
+        gain[i, 0], gain[i, 1], gain[i, 2] = g
 
 
 @dataclass
@@ -230,9 +336,10 @@ class Lobe:
     alpha: np.ndarray
     gain: np.ndarray
 
-    def take(self, idx: np.ndarray) -> "Lobe":
-        return Lobe(self.active[idx], np.take(self.f0, idx, axis=0), self.eta[idx], self.alpha[idx],
-                    np.take(self.gain, idx, axis=0))
+    def __post_init__(self):
+        self.active = contiguous(self.active, bool)
+        self.f0, self.eta, self.alpha, self.gain = (contiguous(a, np.float64) for a in
+                                                    (self.f0, self.eta, self.alpha, self.gain))
 
     @property
     def lamp_lit(self) -> np.ndarray:
@@ -240,27 +347,44 @@ class Lobe:
         return self.active & (self.alpha * self.alpha > microfacet.SPECULAR_ALPHA2)
 
     def weight(self, normal: np.ndarray, view: np.ndarray, dirs: np.ndarray) -> np.ndarray:
-        """(n,3) f cos(theta_l): the lobe's BRDF toward the eye `view (n,3)`
-        for light from unit `dirs (n,3)`, times the cosine at `normal (n,3)`:
-        F(h.v) D G2 / (4 cos_v) x gain (bsdf_microfacet_eval x energy_scale
-        x the darkening in the closure's weight)."""
-        half = normalize(view + dirs)
-        lobe = microfacet.reflection(dot(normal, view), dot(normal, dirs), dot(normal, half), self.alpha)
-        return fresnel(dot(half, view), self.eta, self.f0) * self.gain * lobe[:, None]
+        """(n,3) lobe_weight1 of each point: f cos(theta_l) toward the eye
+        `view (n,3)` for light from unit `dirs (n,3)`, at `normal (n,3)`."""
+        out = np.empty((len(normal), 3))
+        _lobe_weights(*float_rows(normal, view, dirs), self.f0, self.eta, self.alpha, self.gain, out)
+        return out
 
     def pdf(self, normal: np.ndarray, view: np.ndarray, dirs: np.ndarray) -> np.ndarray:
-        """(n,) solid-angle density of `sample` drawing `dirs (n,3)`; 0 where inactive."""
-        cos_h = dot(normal, normalize(view + dirs))
-        pdf = microfacet.reflection_pdf(dot(normal, view), cos_h, self.alpha)
-        return np.where(self.active & (cos_h > 0.0), pdf, 0.0)
+        """(n,) lobe_pdf1 of each point, the density of `sample` drawing `dirs (n,3)`; 0 where inactive."""
+        out = np.empty(len(normal))
+        _lobe_pdfs(*float_rows(normal, view, dirs), self.active, self.alpha, out)
+        return out
 
     def sample(self, normal: np.ndarray, tangent: np.ndarray, bitangent: np.ndarray, view: np.ndarray,
                uv: np.ndarray) -> np.ndarray:
-        """(n,3) unit directions reflect(v, h) about microfacet normals h drawn
-        from the visible normals (microfacet.sample_visible_normals_local) of the frame
-        (tangent, bitangent, normal), from `uv (n,2)`; some fall below the surface."""
-        local = normalize(np.stack([dot(tangent, view), dot(bitangent, view), np.maximum(dot(normal, view), 1e-9)],
-                                   axis=1))
-        h = microfacet.sample_visible_normals_local(local, self.alpha, uv)
-        h = h[:, 0:1] * tangent + h[:, 1:2] * bitangent + h[:, 2:3] * normal
-        return 2.0 * dot(view, h)[:, None] * h - view
+        """(n,3) lobe_sample1 of each point in the frame (tangent, bitangent,
+        normal), at the concentric disc's points of `uv (n,2)`; some fall
+        below the surface."""
+        out = np.empty((len(normal), 3))
+        _lobe_samples(*float_rows(normal, tangent, bitangent, view), self.alpha,
+                      *float_rows(concentric_disc(uv)), out)
+        return out
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[:, ::1], f8[:, ::1])")
+def _lobe_weights(normal, view, dirs, f0, eta, alpha, gain, out):
+    for i in range(len(normal)):
+        set_row(out, i, lobe_weight1(row(normal, i), row(view, i), row(dirs, i), row(f0, i), eta[i], alpha[i],
+                                     row(gain, i)))
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1])")
+def _lobe_pdfs(normal, view, dirs, active, alpha, out):
+    for i in range(len(normal)):
+        out[i] = lobe_pdf1(row(normal, i), row(view, i), row(dirs, i), alpha[i]) if active[i] else 0.0
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1])")
+def _lobe_samples(normal, tangent, bitangent, view, alpha, disc, out):
+    for i in range(len(normal)):
+        set_row(out, i, lobe_sample1(row(normal, i), row(tangent, i), row(bitangent, i), row(view, i), alpha[i],
+                                     disc[i, 0], disc[i, 1]))

@@ -17,8 +17,9 @@ macro surface ends.
 Between Embree's casts a bounce runs a few kernels (util.jit) over its
 rows: Embree's output decoded into Hits (tracing.accelerator), each path's
 fate and Beer-Lambert (`_arrivals`), the normals and Fresnel (`_oriented`),
-and both branches with their origins (`_branches`); only a rough surface's
-microfacet normals and multiscatter factors are numpy."""
+both branches with their origins (`_branches`), and at a rough surface its
+microfacet normals (`_facets`) and multiscatter factors
+(`_multiscatter_factors`)."""
 
 from __future__ import annotations
 
@@ -28,15 +29,16 @@ from typing import Protocol
 import numpy as np
 
 from ..optics.media import beer_lambert1
-from ..optics.microfacet import sample_visible_normals, shadowing_weight1
-from ..optics.multiscatter import albedo_at, multiscatter_factor
-from ..optics.specular import fresnel_dielectric, fresnel_dielectric1, reflect1, refract1
+from ..optics.microfacet import shadowing_weight1, visible_normal_about1
+from ..optics.multiscatter import albedo_at1, multiscatter_factor1
+from ..optics.specular import fresnel_dielectric1, reflect1, refract1
+from ..sampling.warps import concentric_disc, frames
 from ..scene.material_table import Materials
 from ..tracing.accelerator import REFLECTED, REFRACTED, Accelerator, inside1, offset1, shading_normal1
 from ..tracing.hits import MISS, Hits
 from ..util.jit import inline, kernel
 from ..util.rows import contiguous, take_rows
-from ..util.vectors import dot, dot1, max_channel1, normalize1, row, scale1, set_row
+from ..util.vectors import dot1, max_channel1, normalize1, row, scale1, set_row
 from .paths import Paths
 
 _FAMILY_PRIME = np.uint64(0x100000001B3)
@@ -141,18 +143,35 @@ def facets(surface: Interface, dirs: np.ndarray, materials: Materials, obj: np.n
            uv: np.ndarray) -> Interface:
     """`surface` with each rough row's scattering normal drawn from the GGX
     normals visible from the ray `dirs (n,3)` at objects `obj (n,)`, by
-    `uv (n,2)` in [0,1)^2 (optics.microfacet), and its Fresnel there.
-    Smooth rows are left as they are."""
+    `uv (n,2)` in [0,1)^2 through the concentric disc, in the frame
+    (sampling.warps.frames) of the shading normal
+    (optics.microfacet.visible_normal_about1), and its Fresnel there (1 at
+    reflectors). Smooth rows are left as they are."""
     rough = np.flatnonzero(surface.rough)
     if len(rough) == 0:
         return surface
-    d, normal = np.take(dirs, rough, axis=0), np.take(surface.shading, rough, axis=0)
-    h = sample_visible_normals(-d, normal, surface.alpha[rough], uv[rough])
-    scattering, fresnel = surface.scattering.copy(), surface.fresnel.copy()
-    scattering[rough] = h
-    fresnel[rough] = np.where(materials.reflector[obj[rough]], 1.0, fresnel_dielectric(-dot(d, h), surface.eta[rough]))
+    tangent, bitangent = frames(np.take(surface.shading, rough, axis=0))
+    disc = concentric_disc(np.take(uv, rough, axis=0))
+    scattering, fresnel = contiguous(surface.scattering, np.float64).copy(), surface.fresnel.copy()
+    _facets(rough, contiguous(dirs, np.float64), contiguous(surface.shading, np.float64),
+            contiguous(tangent, np.float64), contiguous(bitangent, np.float64), contiguous(disc, np.float64),
+            contiguous(surface.alpha, np.float64), contiguous(surface.eta, np.float64), materials.reflector,
+            contiguous(obj, np.int64), scattering, fresnel)
     return Interface(surface.points, surface.facing, surface.shading, surface.entering, surface.eta, fresnel,
                      surface.alpha, scattering)
+
+
+@kernel("void(i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], b1[::1], "
+        "i8[::1], f8[:, ::1], f8[::1])")
+def _facets(rough, dirs, shading, tangent, bitangent, disc, alpha, eta, reflector, obj, scattering, fresnel):
+    """facets' rough rows `rough (m,)`, with the frames and disc points (m,...) of each."""
+    for j in range(len(rough)):
+        i = rough[j]
+        d = row(dirs, i)
+        h = visible_normal_about1(scale1(-1.0, d), row(shading, i), row(tangent, j), row(bitangent, j), alpha[i],
+                                  disc[j, 0], disc[j, 1])
+        set_row(scattering, i, h)
+        fresnel[i] = 1.0 if reflector[obj[i]] else fresnel_dielectric1(-dot1(d, h), eta[i])
 
 
 def multiscatter(surface: Interface, materials: Materials, obj: np.ndarray, dirs: np.ndarray, out: np.ndarray,
@@ -175,17 +194,27 @@ def multiscatter(surface: Interface, materials: Materials, obj: np.ndarray, dirs
     rough = np.flatnonzero(surface.rough)
     if len(rough) == 0:
         return factor
-    o = obj[rough]
-    side = np.where(surface.entering[rough], 0, 1)
-    if carries_light:
-        toward_eye = np.take(out, rough, axis=0)
-        side = np.where(crossed[rough], 1 - side, side)
-    else:
-        toward_eye = -np.take(dirs, rough, axis=0)
-    mu = np.abs(dot(toward_eye, np.take(surface.shading, rough, axis=0)))
-    albedo = albedo_at(materials.facet_albedo[o, side], mu)
-    factor[rough] = multiscatter_factor(albedo, materials.facet_albedo_avg[o, side], np.take(materials.color, o, axis=0))
+    _multiscatter_factors(rough, contiguous(obj, np.int64), contiguous(surface.entering, bool),
+                          contiguous(crossed, bool), contiguous(out if carries_light else dirs, np.float64),
+                          contiguous(surface.shading, np.float64), carries_light, materials.facet_albedo,
+                          materials.facet_albedo_avg, materials.color, factor)
     return factor
+
+
+@kernel("void(i8[::1], i8[::1], b1[::1], b1[::1], f8[:, ::1], f8[:, ::1], b1, f8[:, :, ::1], f8[:, ::1], "
+        "f8[:, ::1], f8[:, ::1])")
+def _multiscatter_factors(rough, obj, entering, crossed, toward, shading, carries_light, albedo, albedo_avg, color,
+                          factor):
+    """multiscatter's rough rows: `toward (n,3)` the rays' directions
+    toward the eye, or away from it (only |cos| counts); the tables
+    `albedo (objects,2,k)` and `albedo_avg (objects,2)` by side (0 outside)."""
+    for i in rough:
+        o = obj[i]
+        side = 0 if entering[i] else 1
+        if carries_light and crossed[i]:
+            side = 1 - side
+        mu = abs(dot1(row(toward, i), row(shading, i)))
+        set_row(factor, i, multiscatter_factor1(albedo_at1(albedo[o, side], mu), albedo_avg[o, side], row(color, o)))
 
 
 @inline

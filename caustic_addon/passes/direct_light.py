@@ -36,15 +36,16 @@ import numpy as np
 from ..emission import radiometry
 from ..emission.environment import Environment
 from ..emission.lamp_samples import apparent_size, sample_lamp
-from ..optics.microfacet import bsdf_cosine
-from ..optics.principled import Lobe
+from ..optics.microfacet import bsdf_cosine1
+from ..optics.principled import Lobe, lobe_pdf1, lobe_weight1
 from ..sampling.hash import hash_uniform1, stream_key
 from ..sampling.sequences import r2_point1
 from ..sampling.warps import cosine_hemisphere, frames
 from ..scene import Light
 from ..tracing.accelerator import Accelerator
 from ..util.jit import kernel
-from ..util.vectors import dot, max_channel
+from ..util.rows import contiguous
+from ..util.vectors import dot1, max_channel1, row, set_row
 
 # Hash streams of the strata's rotations: two per lamp, two for each of the
 # world's strategies, two per lamp seen in rough casters.
@@ -101,7 +102,8 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
     n = len(points)
     out = np.zeros((n, 3))
     shading, facing = np.ascontiguousarray(shading, dtype=np.float64), np.ascontiguousarray(facing, dtype=np.float64)
-    diffuse = np.ascontiguousarray(diffuse, dtype=np.float64)
+    diffuse, view = np.ascontiguousarray(diffuse, dtype=np.float64), contiguous(view, np.float64)
+    lamp_lit = None if lobe is None else lobe.lamp_lit
 
     def lamp_sample(light: Light, number: int, k: int, count: int, rows: np.ndarray):
         """Sample k of `count` for the points `rows (m,)`: the rows lit from
@@ -115,9 +117,8 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
         idx, radiance = _lambert_lit(rows, shading, facing, diffuse, lamp_dirs, irradiance, count)
         at, dirs = rows[idx], np.take(lamp_dirs, idx, axis=0)
         if lobe is not None:
-            glossy = np.flatnonzero(lobe.lamp_lit[at])
-            radiance[glossy] += np.take(irradiance, idx[glossy], axis=0) / count * lobe.take(at[glossy]).weight(
-                np.take(shading, at[glossy], axis=0), np.take(view, at[glossy], axis=0), np.take(dirs, glossy, axis=0))
+            _add_glossy(radiance, at, dirs, np.take(irradiance, idx, axis=0), shading, view, lamp_lit, lobe.f0,
+                        lobe.eta, lobe.alpha, lobe.gain, count)
         return at, dirs, np.take(lamp.dist, idx), radiance
 
     def clear(at: np.ndarray, dirs: np.ndarray, dist: np.ndarray) -> np.ndarray:
@@ -174,6 +175,22 @@ def _lambert_lit(rows, shading, facing, diffuse, dirs, irradiance, count):
     return idx[:lit].copy(), radiance[:lit].copy()
 
 
+@kernel("void(f8[:, ::1], i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[:, ::1], f8[::1], "
+        "f8[::1], f8[:, ::1], i8)")
+def _add_glossy(radiance, at, dirs, irradiance, shading, view, lamp_lit, f0, eta, alpha, gain, count):
+    """radiance[j] += (E_j / count) f cos(theta_l) of the specular layer at
+    point `at[j]` (principled.lobe_weight1) where its lobe is `lamp_lit`,
+    for the lamp samples `dirs, irradiance (l,3)`; `shading, view, f0,
+    gain (n,3)` and `eta, alpha (n,)` per point."""
+    for j in range(len(at)):
+        r = at[j]
+        if not lamp_lit[r]:
+            continue
+        w = lobe_weight1(row(shading, r), row(view, r), row(dirs, j), row(f0, r), eta[r], alpha[r], row(gain, r))
+        for c in range(3):
+            radiance[j, c] += irradiance[j, c] / count * w[c]
+
+
 @kernel("void(f8[:, ::1], i8[::1], b1[::1], f8[:, ::1])")
 def _add_visible(out, at, visible, radiance):
     """out[at[j]] += radiance[j] where `visible (l,)`."""
@@ -197,38 +214,95 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
     """(irradiance (n,3) W/m^2, glossy (n,3) W/(m^2 sr)) the world brings
     the points, shadows included, and the radiance their specular layers
     (`lobe`, or None) reflect of it toward `view (n,3)`, from `samples`
-    directions of each strategy per point."""
+    directions of each strategy per point: `_world_directions` weighs them,
+    `_add_world` adds what the shadow rays let through."""
     n = len(points)
     irradiance, glossy = np.zeros((n, 3)), np.zeros((n, 3))
     image = environment.world.environment is not None
-    tangent, bitangent = frames(shading) if lobe is not None else (None, None)
+    shading, facing = contiguous(shading, np.float64), contiguous(facing, np.float64)
+    view = contiguous(view, np.float64)
+    if lobe is None:
+        none, flat = np.zeros(0, dtype=bool), np.zeros(0)
+        active, alpha, f0, eta, gain = none, flat, np.zeros((0, 3)), flat, np.zeros((0, 3))
+    else:
+        active, alpha, f0, eta, gain = lobe.active, lobe.alpha, lobe.f0, lobe.eta, lobe.gain
+        tangent, bitangent = frames(shading)
     for k in range(samples):
         index = first_stratum * samples + k
-        drawn = [(cosine_hemisphere(shading, strata(pixel, index, _WORLD_STREAM, seed)), None)]
+        drawn = [(cosine_hemisphere(shading, strata(pixel, index, _WORLD_STREAM, seed)), False)]
         if image:
-            drawn.append((environment.sample(strata(pixel, index, _WORLD_STREAM + 2, seed))[0], None))
+            drawn.append((environment.sample(strata(pixel, index, _WORLD_STREAM + 2, seed))[0], False))
         if lobe is not None:
             drawn.append((lobe.sample(shading, tangent, bitangent, view, strata(pixel, index, _WORLD_STREAM + 4, seed)),
-                          lobe.active))
-        for dirs, among in drawn:
-            cos = dot(shading, dirs)
-            density = np.maximum(cos, 0.0) / math.pi + (environment.density(dirs) if image else 0.0)
-            if lobe is not None:
-                density = density + lobe.pdf(shading, view, dirs)
-            valid = (cos > 0.0) & (dot(facing, dirs) > 0.0) & (density > 0.0)
-            idx = np.flatnonzero(valid if among is None else valid & among)
+                          True))
+        for dirs, among_active in drawn:
+            dirs = contiguous(dirs, np.float64)
+            env_density = contiguous(environment.density(dirs), np.float64) if image else np.zeros(0)
+            idx, density, cos = _world_directions(shading, facing, view, dirs, env_density, active, alpha,
+                                                  among_active)
             if len(idx) == 0:
                 continue
             toward = np.take(dirs, idx, axis=0)
             seen = ~accel.occluded(accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), toward),
                                    toward, np.full(len(idx), far))
-            idx, toward = idx[seen], toward[seen]
-            radiance = environment.light(toward) / (density[idx] * samples)[:, None]
-            irradiance[idx] += radiance * cos[idx][:, None]
-            if lobe is not None:
-                glossy[idx] += radiance * lobe.take(idx).weight(np.take(shading, idx, axis=0),
-                                                                 np.take(view, idx, axis=0), toward)
+            light = contiguous(environment.light(np.take(toward, np.flatnonzero(seen), axis=0)), np.float64)
+            _add_world(irradiance, glossy, idx, seen, toward, light, density, cos, samples, shading, view, f0, eta,
+                       alpha, gain)
     return irradiance, glossy
+
+
+@kernel("Tuple((i8[::1], f8[::1], f8[::1]))(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], b1[::1], "
+        "f8[::1], b1)")
+def _world_directions(shading, facing, view, dirs, env_density, active, alpha, among_active):
+    """The world's sample directions `dirs (n,3)` at the points that take
+    them, idx (l,), with the density (l,) all strategies draw each by and
+    its cosine (l,) at the shading normal: the balance heuristic's sum
+    (Veach 1997) of cos(theta) / pi, the image's `env_density (n,)` ((0,)
+    for a plain world) and where there is a lobe (`alpha (n,)`, (0,)
+    without) its visible normals' pdf (principled.lobe_pdf1) at the points
+    `active (n,)`. A direction counts above both normals with a density,
+    and with `among_active` at active points only (the lobe's own)."""
+    n = len(dirs)
+    idx, density, cos = np.empty(n, dtype=np.int64), np.empty(n), np.empty(n)
+    lit = 0
+    for i in range(n):
+        d, normal = row(dirs, i), row(shading, i)
+        c = dot1(normal, d)
+        p = max(c, 0.0) / math.pi + (env_density[i] if len(env_density) else 0.0)
+        if len(alpha):
+            p = p + (lobe_pdf1(normal, row(view, i), d, alpha[i]) if active[i] else 0.0)
+        if not (c > 0.0 and dot1(row(facing, i), d) > 0.0 and p > 0.0) or (among_active and not active[i]):
+            continue
+        idx[lit], density[lit], cos[lit] = i, p, c
+        lit += 1
+    return idx[:lit].copy(), density[:lit].copy(), cos[:lit].copy()
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], i8[::1], b1[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], i8, f8[:, ::1], "
+        "f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[:, ::1])")
+def _add_world(irradiance, glossy, idx, seen, toward, light, density, cos, samples, shading, view, f0, eta, alpha,
+               gain):
+    """For each of the directions `toward (l,3)` at points `idx (l,)` that
+    the shadow rays found `seen`, the world's radiance `light (s,3)` (the
+    seen ones in order) over its `density (l,)` and the `samples`:
+    irradiance[i] += L cos / (p samples), and with a lobe (`alpha (n,)`,
+    (0,) without) glossy[i] += L f cos(theta_l) / (p samples)
+    (principled.lobe_weight1)."""
+    m = 0
+    for j in range(len(idx)):
+        if not seen[j]:
+            continue
+        i = idx[j]
+        radiance = (light[m, 0] / (density[j] * samples), light[m, 1] / (density[j] * samples),
+                    light[m, 2] / (density[j] * samples))
+        m += 1
+        for c in range(3):
+            irradiance[i, c] += radiance[c] * cos[j]
+        if len(alpha):
+            w = lobe_weight1(row(shading, i), row(view, i), row(toward, j), row(f0, i), eta[i], alpha[i],
+                             row(gain, i))
+            for c in range(3):
+                glossy[i, c] += radiance[c] * w[c]
 
 
 def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,
@@ -237,7 +311,7 @@ def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: flo
                             first_stratum: np.ndarray, samples: int, seed: int) -> np.ndarray:
     """Radiance (n,3) toward the eye from all lamps' direct light at points
     of rough casters, before their tint: each lamp sample's irradiance
-    times the GGX interface's f |cos| (optics.microfacet.bsdf_cosine), what
+    times the GGX interface's f |cos| (optics.microfacet.bsdf_cosine1), what
     Cycles adds at a glossy or glass closure by next-event estimation. A
     lamp on the far side of glass (`eta (n,)` eta_view / eta_lamp, not a
     `mirror (n,)`) shines through it; shadow rays as in direct_radiance.
@@ -247,22 +321,47 @@ def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: flo
     alpha             (n,) GGX width, > 0
     """
     out = np.zeros((len(points), 3))
+    shading, facing, view = (contiguous(a, np.float64) for a in (shading, facing, view))
+    alpha, eta, mirror = contiguous(alpha, np.float64), contiguous(eta, np.float64), contiguous(mirror, bool)
     for number, light in enumerate(lights):
         count = 1 if radiometry.is_delta(light) else samples
         for k in range(count):
             uv = strata(pixel, first_stratum * count + k, _ROUGH_STREAM + 2 * number, seed)
             lamp = sample_lamp(light, energy, points, uv, far)
-            above, along = dot(facing, lamp.dirs), dot(shading, lamp.dirs)
-            sides = ((above > 0.0) & (along > 0.0)) | ((above < 0.0) & (along < 0.0) & ~mirror)
-            idx = np.flatnonzero(sides & (max_channel(lamp.irradiance) > 0.0))
-            dirs = np.take(lamp.dirs, idx, axis=0)
-            f = bsdf_cosine(np.take(view, idx, axis=0), dirs, np.take(shading, idx, axis=0), alpha[idx], eta[idx],
-                            mirror[idx])
-            idx, dirs, f = idx[f > 0.0], dirs[f > 0.0], f[f > 0.0]
+            idx, dirs, radiance = _rough_lit(facing, shading, view, contiguous(lamp.dirs, np.float64),
+                                             contiguous(lamp.irradiance, np.float64), alpha, eta, mirror, count)
             if len(idx) == 0:
                 continue
             origins = accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), dirs)
             blocked = accel.occluded(origins, dirs, np.take(lamp.dist, idx) - 2.0 * accel.epsilon)
-            idx, f = idx[~blocked], f[~blocked]
-            out[idx] += np.take(lamp.irradiance, idx, axis=0) * (f / count)[:, None]
+            _add_visible(out, idx, contiguous(~blocked, bool), radiance)
     return out
+
+
+@kernel("Tuple((i8[::1], f8[:, ::1], f8[:, ::1]))(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], "
+        "f8[::1], f8[::1], b1[::1], i8)")
+def _rough_lit(facing, shading, view, dirs, irradiance, alpha, eta, mirror, count):
+    """The lamp samples `dirs, irradiance (n,3)` that light the rough points
+    through their GGX interface (idx (l,)), their directions (l,3) and the
+    radiance (l,3) each brings toward the eye, one of `count` samples:
+    E f |cos| / count (optics.microfacet.bsdf_cosine1), where f |cos| > 0.
+    A sample counts on the eye's side of both normals, or, but at a
+    `mirror`, behind both, and where E > 0."""
+    n = len(dirs)
+    idx, toward, radiance = np.empty(n, dtype=np.int64), np.empty((n, 3)), np.empty((n, 3))
+    lit = 0
+    for i in range(n):
+        d = row(dirs, i)
+        above, along = dot1(row(facing, i), d), dot1(row(shading, i), d)
+        sides = (above > 0.0 and along > 0.0) or (above < 0.0 and along < 0.0 and not mirror[i])
+        if not (sides and max_channel1(row(irradiance, i)) > 0.0):
+            continue
+        f = bsdf_cosine1(row(view, i), d, row(shading, i), alpha[i], eta[i], mirror[i])
+        if not f > 0.0:
+            continue
+        idx[lit] = i
+        set_row(toward, lit, d)
+        for c in range(3):
+            radiance[lit, c] = irradiance[i, c] * (f / count)
+        lit += 1
+    return idx[:lit].copy(), toward[:lit].copy(), radiance[:lit].copy()

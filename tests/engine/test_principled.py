@@ -12,8 +12,8 @@ import pytest
 
 from caustic_addon import Diffuse, MapCache, Object, PointLight, Scene, SceneError, Specular, render, shapes
 from caustic_addon.optics.microfacet import ggx_d, ggx_lambda
-from caustic_addon.optics.principled import (Layer, Lobe, albedo_curves, dielectric_fss, f0_from_ior, ior_from_f0,
-                                             specular_f0)
+from caustic_addon.optics.principled import (E_NODES, S_NODES, Layer, Lobe, albedo_curves, dielectric_fss,
+                                             f0_from_ior, ior_from_f0, specular_f0)
 from caustic_addon.optics.specular import fresnel_dielectric
 from caustic_addon.sampling.warps import frames
 from scenes import LAMP_Z, POWER, ball_lens, floor_points, quick, top_camera
@@ -119,6 +119,27 @@ def test_the_smooth_limit_is_a_dielectrics_fresnel_reflection(ior, cos_v):
     layer = Layer.of(0.05, ior, 0.5, np.ones(3), multiscatter=False)
     assert lobe_albedo(layer, cos_v) == pytest.approx(exact, rel=2e-3)
     assert layer.toward(np.array([cos_v]))[1][0] == pytest.approx(1.0 - exact, abs=0.005)
+
+
+def test_the_layer_reads_its_curves_linearly_between_cycles_nodes():
+    """Layer.toward reads s and E as Cycles' lookup_table_read does: the
+    tabulated values at the nodes i / (k - 1), straight lines between them,
+    the end values past 0 and 1. Without multiscatter the share is
+    1 - (F0 + (1 - F0) s(mu)), with it the closed form of toward1."""
+    layer = Layer.of(0.3, 1.5, 0.5, np.ones(3), multiscatter=False)
+    nodes = np.arange(S_NODES) / (S_NODES - 1)
+    mid = 0.5 * (nodes[:-1] + nodes[1:])
+    cos_v = np.concatenate([nodes, mid, [-0.5, 1.5]])
+    s = np.concatenate([layer.s_curve, 0.5 * (layer.s_curve[:-1] + layer.s_curve[1:]),
+                        layer.s_curve[[0, -1]]])
+    _, share = layer.toward(cos_v)
+    assert share == pytest.approx(1.0 - (layer.f0[0] + (1.0 - layer.f0[0]) * s), rel=1e-12, abs=1e-15)
+    rich = Layer.of(0.3, 1.5, 0.5, np.ones(3), multiscatter=True)
+    e_nodes = np.arange(E_NODES) / (E_NODES - 1)
+    gain, _ = rich.toward(0.5 * (e_nodes[:-1] + e_nodes[1:]))
+    e = 0.5 * (rich.e_curve[:-1] + rich.e_curve[1:])
+    fms = rich.fss[0] * rich.e_avg / (1.0 - rich.fss[0] * (1.0 - rich.e_avg))
+    assert gain[:, 0] == pytest.approx(1.0 + fms * (1.0 - e) / e, rel=1e-12)
 
 
 def test_specular_ior_level_scales_f0_and_its_ior_follows():
