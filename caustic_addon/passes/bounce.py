@@ -32,7 +32,7 @@ from ..optics.media import beer_lambert1
 from ..optics.microfacet import shadowing_weight1, visible_normal_about1
 from ..optics.multiscatter import albedo_at1, multiscatter_factor1
 from ..optics.specular import fresnel_dielectric1, reflect1, refract1
-from ..sampling.warps import concentric_disc, frames
+from ..sampling.warps import concentric_disc1, orthonormal_basis1
 from ..scene.material_table import Materials
 from ..tracing.accelerator import REFLECTED, REFRACTED, Accelerator, inside1, offset1, shading_normal1
 from ..tracing.hits import MISS, Hits
@@ -144,32 +144,29 @@ def facets(surface: Interface, dirs: np.ndarray, materials: Materials, obj: np.n
     """`surface` with each rough row's scattering normal drawn from the GGX
     normals visible from the ray `dirs (n,3)` at objects `obj (n,)`, by
     `uv (n,2)` in [0,1)^2 through the concentric disc, in the frame
-    (sampling.warps.frames) of the shading normal
+    (sampling.warps.orthonormal_basis1) of the shading normal
     (optics.microfacet.visible_normal_about1), and its Fresnel there (1 at
     reflectors). Smooth rows are left as they are."""
     rough = np.flatnonzero(surface.rough)
     if len(rough) == 0:
         return surface
-    tangent, bitangent = frames(np.take(surface.shading, rough, axis=0))
-    disc = concentric_disc(np.take(uv, rough, axis=0))
     scattering, fresnel = contiguous(surface.scattering, np.float64).copy(), surface.fresnel.copy()
-    _facets(rough, contiguous(dirs, np.float64), contiguous(surface.shading, np.float64),
-            contiguous(tangent, np.float64), contiguous(bitangent, np.float64), contiguous(disc, np.float64),
+    _facets(rough, contiguous(dirs, np.float64), contiguous(surface.shading, np.float64), contiguous(uv, np.float64),
             contiguous(surface.alpha, np.float64), contiguous(surface.eta, np.float64), materials.reflector,
             contiguous(obj, np.int64), scattering, fresnel)
     return Interface(surface.points, surface.facing, surface.shading, surface.entering, surface.eta, fresnel,
                      surface.alpha, scattering)
 
 
-@kernel("void(i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], b1[::1], "
-        "i8[::1], f8[:, ::1], f8[::1])")
-def _facets(rough, dirs, shading, tangent, bitangent, disc, alpha, eta, reflector, obj, scattering, fresnel):
-    """facets' rough rows `rough (m,)`, with the frames and disc points (m,...) of each."""
+@kernel("void(i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], b1[::1], i8[::1], f8[:, ::1], f8[::1])")
+def _facets(rough, dirs, shading, uv, alpha, eta, reflector, obj, scattering, fresnel):
+    """facets' rough rows `rough (m,)`."""
     for j in range(len(rough)):
         i = rough[j]
-        d = row(dirs, i)
-        h = visible_normal_about1(scale1(-1.0, d), row(shading, i), row(tangent, j), row(bitangent, j), alpha[i],
-                                  disc[j, 0], disc[j, 1])
+        d, normal = row(dirs, i), row(shading, i)
+        tangent, bitangent = orthonormal_basis1(normal)
+        x, y = concentric_disc1(uv[i, 0], uv[i, 1])
+        h = visible_normal_about1(scale1(-1.0, d), normal, tangent, bitangent, alpha[i], x, y)
         set_row(scattering, i, h)
         fresnel[i] = 1.0 if reflector[obj[i]] else fresnel_dielectric1(-dot1(d, h), eta[i])
 

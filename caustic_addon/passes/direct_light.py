@@ -111,9 +111,7 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
         and the radiance (l,3) each brings where nothing blocks it."""
         uv = strata(np.take(pixel, rows), np.take(first_stratum, rows) * count + k, 2 * number, seed)
         lamp = sample_lamp(light, energy, np.take(points, rows, axis=0), uv, far)
-        # a lamp's samples may be read-only broadcasts of one direction or irradiance
-        lamp_dirs = np.require(lamp.dirs, np.float64, ["C", "W"])
-        irradiance = np.require(lamp.irradiance, np.float64, ["C", "W"])
+        lamp_dirs, irradiance = lamp.dirs, lamp.irradiance
         idx, radiance = _lambert_lit(rows, shading, facing, diffuse, lamp_dirs, irradiance, count)
         at, dirs = rows[idx], np.take(lamp_dirs, idx, axis=0)
         if lobe is not None:
