@@ -53,8 +53,8 @@ from ..tracing.accelerator import Accelerator
 from ..tracing.hits import MISS, Hits
 from ..util.parallel import Monitor, run_chunks
 from ..util.jit import inline, kernel
-from ..util.rows import take_rows
-from ..util.vectors import DIVISION_FLOOR, max_channel
+from ..util.rows import take, take_rows
+from ..util.vectors import DIVISION_FLOOR, max_channel1, row
 from .beam_grid import Cells, LandingIndex, coherent_triangles, crack_free_triangles, diverging, fallback_shares
 from .bounce import Interface, facets, on_maps, split, trace
 from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
@@ -127,18 +127,27 @@ class BeamTracer:
 
     def arrived(self, paths: Paths, hits: Hits) -> None:
         for obj, rows, xy, scale, island in on_maps(self.accel, self.maps, paths, hits):
-            weight, floor = np.take(paths.weight, rows, axis=0), np.take(paths.floor, rows)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                throughput = np.where(floor > 0, max_channel(weight) * MIN_BRANCH_WEIGHT / floor, 0.0)
-            self.landed.append(Landings(np.take(paths.ids, rows), np.take(paths.family, rows),
-                                        np.full(len(rows), obj), island, np.take(hits.points, rows, axis=0), xy,
-                                        scale, weight, throughput))
+            weight, floor = take(paths.weight, rows), take(paths.floor, rows)
+            throughput = np.empty(len(rows))
+            _throughputs(weight, floor, throughput)
+            self.landed.append(Landings(take(paths.ids, rows), take(paths.family, rows), np.full(len(rows), obj),
+                                        island, take(hits.points, rows), xy, scale, weight, throughput))
 
     def scattered(self, paths: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
         if surface.rough.any():
             uv = np.stack([hash_uniform(paths.ids, FACET_STREAM + 2 * depth + k, self.seed) for k in (0, 1)], axis=1)
             surface = facets(surface, paths.dirs, self.materials, hits.obj, uv)
         return split(self.accel, self.materials, paths, hits, surface, carries_light=True)
+
+
+@kernel("void(f8[:, ::1], f8[::1], f8[::1])")
+def _throughputs(weight, floor, out):
+    """Landings.throughput of paths of `weight (n,3)` and `floor (n,)`: the
+    product of their factors, max channel(weight) * MIN_BRANCH_WEIGHT /
+    floor (the floor is MIN_BRANCH_WEIGHT of the starting weight); 0 where
+    the floor is."""
+    for i in range(len(floor)):
+        out[i] = max_channel1(row(weight, i)) * MIN_BRANCH_WEIGHT / floor[i] if floor[i] > 0.0 else 0.0
 
 
 def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap], origins: np.ndarray,

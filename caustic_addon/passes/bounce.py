@@ -37,7 +37,7 @@ from ..scene.material_table import Materials
 from ..tracing.accelerator import REFLECTED, REFRACTED, Accelerator, inside1, offset1, shading_normal1
 from ..tracing.hits import MISS, Hits
 from ..util.jit import inline, kernel
-from ..util.rows import contiguous, take_rows
+from ..util.rows import contiguous, partition, take_rows
 from ..util.vectors import dot1, max_channel1, normalize1, row, scale1, set_row
 from .paths import Paths
 
@@ -279,20 +279,6 @@ def crossed_medium1(crossed, entering, obj, medium):
     return obj if entering else MISS
 
 
-@kernel("void(b1[::1], b1[::1], i8[::1], i8[::1], i8[::1])")
-def _crossed_media(crossed, entering, obj, medium, out):
-    for i in range(len(crossed)):
-        out[i] = crossed_medium1(crossed[i], entering[i], obj[i], medium[i])
-
-
-def crossed_medium(surface: Interface, crossed: np.ndarray, obj: np.ndarray, medium: np.ndarray) -> np.ndarray:
-    """(n,) crossed_medium1 of each row: the medium after the bounce."""
-    out = np.empty(len(crossed), dtype=np.int64)
-    _crossed_media(contiguous(crossed, bool), contiguous(surface.entering, bool), contiguous(obj, np.int64),
-                   contiguous(medium, np.int64), out)
-    return out
-
-
 @inline
 def next_family1(family, surface, event, ident, own):
     """The uint64 signature of a path that adds (surface, event) to
@@ -421,20 +407,28 @@ class Tracer(Protocol):
 
 def trace(accel: Accelerator, materials: Materials, paths: Paths, max_depth: int, tracer: Tracer) -> None:
     """Follow `paths` through up to `max_depth` specular bounces, handing
-    `tracer` what each bounce leaves to it."""
+    `tracer` what each bounce leaves to it. Each bounce groups its paths by
+    fate once (util.rows.partition: those that escaped, arrived, met a
+    specular surface, each in their order) and hands on views of the groups."""
     for depth in range(max_depth + 1):
-        if len(paths) == 0:
+        n = len(paths)
+        if n == 0:
             return
         hits = accel.intersect(paths.origins, paths.dirs, paths.medium, paths.kind, paths.surface)
-        weight, fate = np.empty((len(paths), 3)), np.empty(len(paths), dtype=np.int8)
+        weight, fate = np.empty((n, 3)), np.empty(n, dtype=np.int8)
         _arrivals(contiguous(paths.weight, np.float64), contiguous(paths.medium, np.int64), hits.t, hits.obj,
                   materials.absorption, materials.specular_surface, weight, fate)
-        tracer.escaped(paths.select(fate == _ESCAPED))
+        order, ends = np.empty(n, dtype=np.int64), np.empty(3, dtype=np.int64)
+        partition(fate, order, ends)
+        escaped, arrived = int(ends[_ESCAPED]), int(ends[_ARRIVED])
         paths = replace(paths, weight=weight)
-        tracer.arrived(paths.select(fate == _ARRIVED), hits.select(fate == _ARRIVED))
-        specular = fate == _SPECULAR
-        if not specular.all():
-            paths, hits = paths.select(specular), hits.select(specular)
+        if max(escaped, arrived - escaped, n - arrived) < n:
+            paths, hits = paths.take(order), hits.take(order[escaped:])
+        else:
+            hits = hits.span(escaped, n)
+        tracer.escaped(paths.span(0, escaped))
+        tracer.arrived(paths.span(escaped, arrived), hits.span(0, arrived - escaped))
+        paths, hits = paths.span(arrived, n), hits.span(arrived - escaped, n - escaped)
         if len(paths) == 0:
             return
         surface = orient(accel, hits, paths.dirs, materials, paths.medium, paths.band)

@@ -190,7 +190,7 @@ class EyeTracer:
         survive = _roulette_survivors(rays.weight, np.ascontiguousarray(rays.floor, dtype=np.float64),
                                       np.ascontiguousarray(rays.ids, dtype=np.int64), rays.kind, self.pixels,
                                       self.spp, np.uint64(stream_key(_ROULETTE_STREAM + depth, self.settings.seed)))
-        return rays if survive.all() else rays.select(survive)
+        return rays if len(survive) == len(rays) else rays.take(survive)
 
     def _highlights(self, rays: Paths, hits: Hits, surface: Interface) -> None:
         """The lamps' direct light on the rough rows of `surface`, into the
@@ -236,24 +236,30 @@ def _turn_toward(normals, view):
     return cos
 
 
-@kernel("b1[::1](f8[:, ::1], f8[::1], i8[::1], i1[::1], i8[::1], i8, u8)")
+@kernel("i8[::1](f8[:, ::1], f8[::1], i8[::1], i1[::1], i8[::1], i8, u8)")
 def _roulette_survivors(weight, floor, ids, kind, pixels, spp, key):
-    """(n,) bool: the branches that survive the roulette (EyeTracer._roulette),
-    `weight (n,3)` divided in place by the chance p of each faint one.
-    Branch i's draw hashes 2 s + (it was refracted), s = pixel * spp +
-    stratum its eye sample in the image (`pixels (m,)` the chunk's), with
-    `key` (sampling.hash.stream_key of its bounce's stream)."""
-    survive = np.ones(len(ids), dtype=np.bool_)
+    """(k,) int64 the branches that survive the roulette
+    (EyeTracer._roulette), ascending, `weight (n,3)` divided in place by
+    the chance p of each faint one. Branch i's draw hashes 2 s + (it was
+    refracted), s = pixel * spp + stratum its eye sample in the image
+    (`pixels (m,)` the chunk's), with `key` (sampling.hash.stream_key of its
+    bounce's stream)."""
+    survive = np.empty(len(ids), dtype=np.int64)
+    count = 0
     for i in range(len(ids)):
         level = ROULETTE_WEIGHT * floor[i] / MIN_BRANCH_WEIGHT
         chance = min(max(weight[i, 0], weight[i, 1], weight[i, 2]) / level, 1.0)
+        alive = True
         if chance < 1.0:
             sample = pixels[ids[i] // spp] * spp + ids[i] % spp
             refracted = 1 if kind[i] == REFRACTED else 0
-            survive[i] = hash_uniform1(2 * sample + refracted, key) < chance
+            alive = hash_uniform1(2 * sample + refracted, key) < chance
             for c in range(3):
                 weight[i, c] /= chance
-    return survive
+        if alive:
+            survive[count] = i
+            count += 1
+    return survive[:count]
 
 
 def edge_pixels(first: np.ndarray, shown: np.ndarray, contrast: float = EDGE_CONTRAST) -> np.ndarray:

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..tracing.accelerator import CAMERA
 from ..tracing.hits import MISS
-from ..util.rows import take_rows
+from ..util.rows import take, true_rows
 from ..util.vectors import max_channel
 
 # A branch of a beam vertex or an eye ray whose weight (max channel) falls
@@ -73,8 +73,15 @@ class Paths:
 
     def select(self, mask: np.ndarray) -> "Paths":
         """The paths where `mask (n,)` is True."""
-        names = self._columns()
-        return Paths(**dict(zip(names, take_rows(mask, *(getattr(self, name) for name in names)))))
+        return self.take(true_rows(np.ascontiguousarray(mask, dtype=bool)))
+
+    def take(self, index: np.ndarray) -> "Paths":
+        """The paths `index (k,)` int64, in that order."""
+        return Paths(**{name: take(getattr(self, name), index) for name in self._columns()})
+
+    def span(self, start: int, stop: int) -> "Paths":
+        """The paths start .. stop - 1, views of these."""
+        return Paths(**{name: getattr(self, name)[start:stop] for name in self._columns()})
 
     @staticmethod
     def concat(parts: list["Paths"]) -> "Paths":

@@ -32,14 +32,16 @@ from ..emission.aims import casters_and_bounds
 from ..emission.photons import Emitter, Photons, make_emitters
 from ..maps.deposits import Deposits
 from ..optics.spectrum import photon_band
-from ..sampling.hash import hash_uniform
+from ..sampling.hash import hash_uniform, hash_uniform1, stream_key
 from ..scene import RenderSettings, Scene
 from ..scene.material_table import Materials
-from ..tracing.accelerator import Accelerator
+from ..tracing.accelerator import Accelerator, offset1
 from ..tracing.hits import MISS, Hits
 from ..util.parallel import Monitor, chunk_size, run_chunks
-from ..util.vectors import DIVISION_FLOOR, max_channel
-from .bounce import Interface, crossed_medium, facets, multiscatter, on_maps, scatter, trace
+from ..util.jit import inline, kernel
+from ..util.rows import contiguous, take
+from ..util.vectors import DIVISION_FLOOR, max_channel, max_channel1, row, set_row
+from .bounce import Interface, crossed_medium1, facets, multiscatter, on_maps, scatter, scatter1, trace
 from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
 from .paths import Paths
 
@@ -71,19 +73,77 @@ class PhotonTracer:
             self.landed += len(rows)
 
     def scattered(self, paths: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
-        if surface.rough.any():
+        rough = surface.rough.any()
+        if rough:
             uv = np.stack([hash_uniform(paths.ids, FACET_STREAM + 2 * depth + k, self.seed) for k in (0, 1)], axis=1)
             surface = facets(surface, paths.dirs, self.materials, hits.obj, uv)
-        reflect = hash_uniform(paths.ids, 2 * depth, self.seed) < surface.fresnel
-        dirs, crossed, kept = scatter(surface, paths.dirs, reflect)
-        weight = paths.weight * np.take(self.materials.color, hits.obj, axis=0)
-        if surface.rough.any():
-            weight *= kept[:, None] * multiscatter(surface, self.materials, hits.obj, paths.dirs, dirs, crossed, True)
-        weight, alive = roulette(weight, paths.floor, hash_uniform(paths.ids, 2 * depth + 1, self.seed))
-        paths = Paths(self.accel.offset(surface.points, surface.facing, dirs), dirs, weight,
-                      crossed_medium(surface, crossed, hits.obj, paths.medium), paths.ids, paths.floor,
-                      np.ones(len(paths), dtype=bool), paths.band, surface=hits.prim)
-        return paths.select(alive)
+        reflect_key, roulette_key = (np.uint64(stream_key(2 * depth + k, self.seed)) for k in (0, 1))
+        factor = np.zeros((0, 3))
+        if rough:
+            reflect = hash_uniform(paths.ids, 2 * depth, self.seed) < surface.fresnel
+            dirs, crossed, _ = scatter(surface, paths.dirs, reflect)
+            factor = multiscatter(surface, self.materials, hits.obj, paths.dirs, dirs, crossed, True)
+        n, f8, i8 = len(paths), np.float64, np.int64
+        out = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty(n, dtype=i8), np.empty(n, dtype=i8))
+        count = _photon_bounces(
+            contiguous(paths.dirs, f8), contiguous(paths.weight, f8), contiguous(paths.medium, i8),
+            contiguous(paths.floor, f8), contiguous(paths.ids, i8), contiguous(hits.obj, i8),
+            contiguous(surface.points, f8), contiguous(surface.facing, f8), contiguous(surface.shading, f8),
+            contiguous(surface.scattering, f8), contiguous(surface.entering, bool), contiguous(surface.eta, f8),
+            contiguous(surface.fresnel, f8), contiguous(surface.alpha, f8), self.materials.color,
+            contiguous(factor, f8), self.accel.epsilon, reflect_key, roulette_key, *out)
+        origins, dirs, weight, medium, source = (a[:count] for a in out)
+        return Paths(origins, dirs, weight, medium, take(paths.ids, source), take(paths.floor, source),
+                     np.ones(count, dtype=bool), None if paths.band is None else take(paths.band, source),
+                     surface=take(hits.prim, source))
+
+
+@inline
+def roulette1(peak, threshold, xi):
+    """(divisor, alive) of Russian roulette on a photon whose flux (max
+    channel) `peak` is below `threshold`: it survives with probability q =
+    peak / threshold, its flux divided by q (at least DIVISION_FLOOR), for
+    the uniform random number `xi`; above the threshold it goes on as it
+    is. A photon without flux stops."""
+    if not peak < threshold:
+        return 1.0, peak > 0.0
+    q = peak / threshold
+    alive = xi < q
+    return (max(q, DIVISION_FLOOR) if alive else 1.0), alive and peak > 0.0
+
+
+@kernel("i8(f8[:, ::1], f8[:, ::1], i8[::1], f8[::1], i8[::1], i8[::1], "
+        "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1], f8[::1], f8[:, ::1], "
+        "f8[:, ::1], f8, u8, u8, f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], i8[::1])")
+def _photon_bounces(dirs, weight, medium, floor, ids, obj, points, facing, shading, scattering, entering, eta,
+                    fresnel, alpha, color, factor, epsilon, reflect_key, roulette_key,
+                    out_origins, out_dirs, out_weight, out_medium, source):
+    """PhotonTracer.scattered's rows: each photon reflects where
+    hash_uniform1(id, reflect_key) < its Fresnel reflectance, else refracts
+    (bounce.scatter1), its flux times the surface's tint, what scatter1
+    keeps and, where `factor (n,3)` is given (else (0,3)), the multiscatter
+    factor; then roulette1 with hash_uniform1(id, roulette_key). The
+    survivors go into the out_ arrays, in order, epsilon off the surface
+    (offset1), `source` the row each comes from; returns how many."""
+    count = 0
+    for i in range(len(dirs)):
+        o, d = obj[i], row(dirs, i)
+        mirror = hash_uniform1(ids[i], reflect_key) < fresnel[i]
+        out, crossed, kept = scatter1(d, row(scattering, i), row(facing, i), row(shading, i), eta[i], alpha[i],
+                                      mirror)
+        w = (weight[i, 0] * color[o, 0], weight[i, 1] * color[o, 1], weight[i, 2] * color[o, 2])
+        if len(factor):
+            w = (w[0] * (kept * factor[i, 0]), w[1] * (kept * factor[i, 1]), w[2] * (kept * factor[i, 2]))
+        divisor, alive = roulette1(max_channel1(w), floor[i], hash_uniform1(ids[i], roulette_key))
+        if not alive:
+            continue
+        set_row(out_origins, count, offset1(row(points, i), row(facing, i), out, epsilon))
+        set_row(out_dirs, count, out)
+        set_row(out_weight, count, (w[0] / divisor, w[1] / divisor, w[2] / divisor))
+        out_medium[count] = crossed_medium1(crossed, entering[i], o, medium[i])
+        source[count] = i
+        count += 1
+    return count
 
 
 def trace_photons(accel: Accelerator, materials: Materials, maps: dict, photons: Photons, max_depth: int,
@@ -130,20 +190,3 @@ def photon_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, mate
     run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass", deliver)
     stats.lamp_rays = sum(e.count for e in emitters)
     return stats
-
-
-def roulette(flux: np.ndarray, threshold: np.ndarray, xi: np.ndarray):
-    """Russian roulette on photons whose flux (max channel) is below
-    `threshold (n,)`: survive with probability q = flux / threshold, flux
-    /= q. `xi (n,)` are uniform random numbers. Returns (flux (n,3), alive
-    (n,) bool)."""
-    peak = max_channel(flux)
-    low = peak < threshold
-    if not low.any():
-        return flux, np.ones(len(flux), dtype=bool)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        q = np.where(low, peak / threshold, 1.0)
-    alive = ~low | (xi < q)
-    flux = flux / np.where(alive, np.maximum(q, DIVISION_FLOOR), 1.0)[:, None]
-    return flux, alive & (peak > 0.0)
-

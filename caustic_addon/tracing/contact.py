@@ -32,8 +32,9 @@ from typing import Optional
 
 import numpy as np
 
-from ..util.rows import take_rows
-from ..util.vectors import dot
+from ..util.jit import inline, kernel
+from ..util.rows import contiguous, take, take_rows, true_rows
+from ..util.vectors import dot, dot1, row, set_row, sum1
 from .hits import MISS, Hits
 
 # Faces closer than this many epsilons touch.
@@ -95,6 +96,11 @@ class Contacts:
                     self.boxes[index] = _union(self.boxes.get(index), box)
         for index, others in touching.items():
             self.partners[index] = _Subscene(accel, sorted(others))
+        # the boxes as (objects,3) corners, empty (inf, -inf) where an object has none
+        self.lo, self.hi = np.full((len(accel.objects), 3), np.inf), np.full((len(accel.objects), 3), -np.inf)
+        for index, (lo, hi) in self.boxes.items():
+            self.lo[index], self.hi[index] = lo, hi
+        self.caster = np.array([o.is_caster for o in accel.objects], dtype=bool)
 
     def _probe(self, a: int, near: list[int], bounds) -> dict[int, np.ndarray]:
         """{object b: the faces of caster `a` (global indices) that touch it}
@@ -122,28 +128,19 @@ class Contacts:
             found[int(b)] = np.unique(face[hits.obj == b])
         return found
 
-    def inside_box(self, obj: np.ndarray, points: np.ndarray) -> np.ndarray:
-        """(n,) bool: `points (n,3)` lie in the contact box of their object `obj (n,)`."""
-        inside = np.zeros(len(obj), dtype=bool)
-        for index, (lo, hi) in self.boxes.items():
-            mine = obj == index
-            inside[mine] = np.all((points[mine] >= lo) & (points[mine] <= hi), axis=1)
-        return inside
-
     def _recast(self, obj: np.ndarray, points: np.ndarray, dirs: np.ndarray, normals: np.ndarray) -> tuple[Hits, np.ndarray]:
         """The surfaces of the objects that `obj (n,)` touches that rays
         `dirs (n,3)` meet within CONTACT_EPSILONS epsilons (across faces of
         normals `normals (n,3)`) before or after `points (n,3)`: (hits, and
         the signed distance (n,) of each past the point along the ray)."""
-        accel = self.accel
-        half = CONTACT_EPSILONS * accel.epsilon / np.maximum(np.abs(dot(dirs, normals)), _MIN_COSINE)
-        start = points - half[:, None] * dirs
-        found = Hits(np.full(len(obj), np.inf), np.full(len(obj), MISS), np.full(len(obj), MISS),
-                     np.zeros(len(obj)), np.zeros(len(obj)), points.copy())
+        n = len(obj)
+        half, start = np.empty(n), np.empty((n, 3))
+        _recast_rays(points, dirs, normals, CONTACT_EPSILONS * self.accel.epsilon, half, start)
+        found = Hits(np.full(n, np.inf), np.full(n, MISS), np.full(n, MISS), np.zeros(n), np.zeros(n), points.copy())
         for index, scene in self.partners.items():
             mine = obj == index
             if mine.any():
-                found.replace(np.flatnonzero(mine), scene.closest(*take_rows(mine, start, dirs, 2.0 * half)))
+                found.replace(true_rows(mine), scene.closest(*take_rows(mine, start, dirs, 2.0 * half)))
         return found, found.t - half
 
     def resolve(self, hits: Hits, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray,
@@ -152,72 +149,147 @@ class Contacts:
         `origins, dirs (n,3)` inside `medium (n,)`, which scattered at the
         faces `leaving (n,)` (MISS: they started at a lamp or the camera).
         Changes `hits` in place."""
-        accel = self.accel
-        done = np.zeros(len(hits.t), dtype=bool)
+        accel, n, f8, i8 = self.accel, len(hits.t), np.float64, np.int64
+        dirs, medium = contiguous(dirs, f8), contiguous(medium, i8)
+        done = np.zeros(n, dtype=bool)
         if leaving is not None:
-            rows = np.flatnonzero(leaving != MISS)
-            face = np.take(leaving, rows)
-            normal, d = np.take(accel.face_normal, face, axis=0), np.take(dirs, rows, axis=0)
-            side = np.where(dot(d, normal) < 0.0, -1.0, 1.0)
-            points = np.take(origins, rows, axis=0) - (accel.epsilon * side)[:, None] * normal
-            owner = np.take(accel.owner, face)
-            near = self.inside_box(owner, points)
-            rows, owner, points, d, normal = (a[near] for a in (rows, owner, points, d, normal))
+            rows, owner, points, normal = np.empty(n, dtype=i8), np.empty(n, dtype=i8), np.empty((n, 3)), np.empty((n, 3))
+            count = _left_in_boxes(contiguous(leaving, i8), contiguous(origins, f8), dirs, accel.face_normal,
+                                   accel.owner, accel.epsilon, self.lo, self.hi, rows, owner, points, normal)
+            rows, owner, points, normal = rows[:count], owner[:count], points[:count], normal[:count]
+            d = take(dirs, rows)
             found, _ = self._recast(owner, points, d, normal)
-            meets = found.hit & self._meets(found, owner, d, normal)
-            rows = rows[meets]
-            found = found.select(meets)
+            meets = true_rows(_meeting(found.obj, found.prim, owner, d, normal, accel.face_normal, accel.closed))
+            rows, found = take(rows, meets), found.take(meets)
             found.t[:] = 0.0
             hits.replace(rows, found)
             done[rows] = True
-        near = hits.hit & ~done
-        near[near] = self.inside_box(hits.obj[near], hits.points[near])
-        rows = np.flatnonzero(near)
+        rows = np.empty(n, dtype=i8)
+        rows = rows[:_hits_in_boxes(contiguous(hits.obj, i8), contiguous(hits.points, f8), done, self.lo, self.hi, rows)]
         if len(rows) == 0:
             return
-        mine = hits.select(near)
-        d, ray_medium = np.take(dirs, rows, axis=0), np.take(medium, rows)
-        found, past = self._recast(mine.obj, mine.points, d, np.take(accel.face_normal, mine.prim, axis=0))
-        first = found.hit & self._other_first(mine, found, d, ray_medium)
+        mine = hits.take(rows)
+        d = take(dirs, rows)
+        found, past = self._recast(mine.obj, mine.points, d, take(accel.face_normal, mine.prim))
+        first = true_rows(_other_first(mine.obj, mine.prim, found.obj, found.prim, d, take(medium, rows),
+                                       accel.face_normal, accel.closed, self.caster))
         found.t = mine.t + past
-        hits.replace(rows[first], found.select(first))
+        hits.replace(take(rows, first), found.take(first))
 
-    def _meets(self, found: Hits, left: np.ndarray, dirs: np.ndarray, left_normal: np.ndarray) -> np.ndarray:
-        """(n,) bool: a ray `dirs (n,3)` that leaves a face of object `left
-        (n,)`, of normal `left_normal (n,3)`, meets the coincident surface
-        `found`: if that is closed glass, when it enters it; else, if it
-        leaves closed glass, when it goes to the side where the other
-        surface lies (outside, where the two face each other; inside, where
-        the other lies inside the glass, against its wall); else when it
-        meets the other's front."""
-        closed = self.accel.closed
-        found_normal = np.take(self.accel.face_normal, np.maximum(found.prim, 0), axis=0)
-        entering = dot(dirs, found_normal) < 0.0
-        outward = dot(dirs, left_normal) > 0.0
-        toward = outward == (dot(left_normal, found_normal) < 0.0)
-        return np.where(closed[np.maximum(found.obj, 0)], entering, np.where(closed[left], toward, entering))
 
-    def _other_first(self, mine: Hits, other: Hits, dirs: np.ndarray, medium: np.ndarray) -> np.ndarray:
-        """(n,) bool: of two coincident surfaces, the ray `dirs (n,3)` in
-        `medium (n,)` meets `other` before `mine`. Against closed glass, a
-        surface facing it (a table under it) comes after the glass for a ray
-        inside the glass and before it for one outside; a surface turned as
-        its wall lies inside it (a pebble on its bottom) and comes first.
-        Between two closed glasses, the one the ray is in comes first;
-        between two open surfaces, a specular one before one that is not. A
-        closed surface that the ray's medium contradicts is never chosen."""
-        accel = self.accel
-        o = np.maximum(other.obj, 0)
-        other_normal = np.take(accel.face_normal, np.maximum(other.prim, 0), axis=0)
-        apart = dot(np.take(accel.face_normal, mine.prim, axis=0), other_normal) < 0.0
-        closed_mine, closed_other = accel.closed[mine.obj], accel.closed[o]
-        in_mine, in_other = medium == mine.obj, medium == o
-        specular = np.array([obj.is_caster for obj in accel.objects])
-        choice = np.where(closed_mine & closed_other, in_other & ~in_mine,
-                          np.where(closed_mine, ~apart | ~in_mine,
-                                   np.where(closed_other, apart & in_other, specular[o] & ~specular[mine.obj])))
-        consistent = ~closed_other | ((dot(dirs, other_normal) > 0.0) == in_other)
-        return consistent & choice
+@inline
+def in_box1(lo, hi, o, p):
+    """The point `p` lies in the box `lo[o]`..`hi[o]` ((objects,3)) of object `o`."""
+    return (lo[o, 0] <= p[0] <= hi[o, 0]) and (lo[o, 1] <= p[1] <= hi[o, 1]) and (lo[o, 2] <= p[2] <= hi[o, 2])
+
+
+@kernel("i8(i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], f8, f8[:, ::1], f8[:, ::1], "
+        "i8[::1], i8[::1], f8[:, ::1], f8[:, ::1])")
+def _left_in_boxes(leaving, origins, dirs, face_normal, owner, epsilon, lo, hi, rows, owners, points, normals):
+    """The rays that scattered at a face `leaving[i]` (not MISS) whose
+    point on it, `origins[i]` less the epsilon offset1 put it off, lies in
+    the contact box of the face's object: into `rows`, `owners`, `points`
+    and `normals` (the face's); returns how many."""
+    count = 0
+    for i in range(len(leaving)):
+        face = leaving[i]
+        if face == MISS:
+            continue
+        normal = row(face_normal, face)
+        side = -1.0 if dot1(row(dirs, i), normal) < 0.0 else 1.0
+        point = sum1(1.0, row(origins, i), -(epsilon * side), normal)
+        if in_box1(lo, hi, owner[face], point):
+            rows[count], owners[count] = i, owner[face]
+            set_row(points, count, point)
+            set_row(normals, count, normal)
+            count += 1
+    return count
+
+
+@kernel("i8(i8[::1], f8[:, ::1], b1[::1], f8[:, ::1], f8[:, ::1], i8[::1])")
+def _hits_in_boxes(obj, points, done, lo, hi, rows):
+    """The hits not `done` that lie in their object's contact box, into `rows`; returns how many."""
+    count = 0
+    for i in range(len(obj)):
+        if obj[i] != MISS and not done[i] and in_box1(lo, hi, obj[i], row(points, i)):
+            rows[count] = i
+            count += 1
+    return count
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8, f8[::1], f8[:, ::1])")
+def _recast_rays(points, dirs, normals, reach, half, start):
+    """The re-cast of each ray: `half (n,)` its half-length, `reach` (the
+    CONTACT_EPSILONS epsilons) over |d.n|, at least _MIN_COSINE, and
+    `start (n,3)` that far back along the ray from its point."""
+    for i in range(len(points)):
+        half[i] = reach / max(abs(dot1(row(dirs, i), row(normals, i))), _MIN_COSINE)
+        set_row(start, i, sum1(1.0, row(points, i), -half[i], row(dirs, i)))
+
+
+@inline
+def meets1(d, found_normal, left_normal, found_closed, left_closed):
+    """A ray `d` that leaves a face of normal `left_normal` meets the
+    coincident surface of normal `found_normal`: if that is closed glass,
+    when it enters it; else, if it leaves closed glass, when it goes to the
+    side where the other surface lies (outside, where the two face each
+    other; inside, where the other lies inside the glass, against its wall);
+    else when it meets the other's front."""
+    entering = dot1(d, found_normal) < 0.0
+    if found_closed or not left_closed:
+        return entering
+    return (dot1(d, left_normal) > 0.0) == (dot1(left_normal, found_normal) < 0.0)
+
+
+@kernel("b1[::1](i8[::1], i8[::1], i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1])")
+def _meeting(found_obj, found_prim, left, dirs, left_normal, face_normal, closed):
+    """(n,) bool: the re-cast found a surface that the ray leaving object `left (n,)` meets (meets1)."""
+    out = np.zeros(len(left), dtype=np.bool_)
+    for i in range(len(left)):
+        o = found_obj[i]
+        if o != MISS:
+            out[i] = meets1(row(dirs, i), row(face_normal, found_prim[i]), row(left_normal, i), closed[o],
+                            closed[left[i]])
+    return out
+
+
+@inline
+def other_first1(d, medium, mine, other, mine_normal, other_normal, closed_mine, closed_other, caster_mine,
+                 caster_other):
+    """Of two coincident surfaces of objects `mine` and `other`, the ray
+    `d` in `medium` meets `other` before `mine`. Against closed glass, a
+    surface facing it (a table under it) comes after the glass for a ray
+    inside the glass and before it for one outside; a surface turned as
+    its wall lies inside it (a pebble on its bottom) and comes first.
+    Between two closed glasses, the one the ray is in comes first; between
+    two open surfaces, a specular one (a caster) before one that is not. A
+    closed surface that the ray's medium contradicts is never chosen."""
+    apart = dot1(mine_normal, other_normal) < 0.0
+    in_mine, in_other = medium == mine, medium == other
+    if closed_mine and closed_other:
+        choice = in_other and not in_mine
+    elif closed_mine:
+        choice = (not apart) or (not in_mine)
+    elif closed_other:
+        choice = apart and in_other
+    else:
+        choice = caster_other and not caster_mine
+    consistent = (not closed_other) or ((dot1(d, other_normal) > 0.0) == in_other)
+    return consistent and choice
+
+
+@kernel("b1[::1](i8[::1], i8[::1], i8[::1], i8[::1], f8[:, ::1], i8[::1], f8[:, ::1], b1[::1], b1[::1])")
+def _other_first(mine_obj, mine_prim, other_obj, other_prim, dirs, medium, face_normal, closed, caster):
+    """(n,) bool: the re-cast found another surface that the ray meets first (other_first1)."""
+    out = np.zeros(len(mine_obj), dtype=np.bool_)
+    for i in range(len(mine_obj)):
+        m, o = mine_obj[i], other_obj[i]
+        if o != MISS:
+            out[i] = other_first1(row(dirs, i), medium[i], m, o, row(face_normal, mine_prim[i]),
+                                  row(face_normal, other_prim[i]), closed[m], closed[o], caster[m], caster[o])
+    return out
+
+
 def _overlap(a, b) -> bool:
     return bool(np.all(a[0] <= b[1]) and np.all(b[0] <= a[1]))
 

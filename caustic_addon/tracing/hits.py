@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..util.rows import take_rows
+from ..util.rows import take, true_rows
 
 # The object and triangle index of a ray that hit nothing.
 MISS = -1
@@ -48,7 +48,15 @@ class Hits:
         return self.obj != MISS
 
     def select(self, mask: np.ndarray) -> "Hits":
-        return Hits(*take_rows(mask, self.t, self.obj, self.prim, self.u, self.v, self.points))
+        return self.take(true_rows(np.ascontiguousarray(mask, dtype=bool)))
+
+    def take(self, index: np.ndarray) -> "Hits":
+        """The hits `index (k,)` int64, in that order."""
+        return Hits(*(take(a, index) for a in (self.t, self.obj, self.prim, self.u, self.v, self.points)))
+
+    def span(self, start: int, stop: int) -> "Hits":
+        """The hits start .. stop - 1, views of these."""
+        return Hits(*(a[start:stop] for a in (self.t, self.obj, self.prim, self.u, self.v, self.points)))
 
     def replace(self, index: np.ndarray, other: "Hits") -> None:
         """Overwrite the hits at `index (k,)` with `other`'s k hits."""
