@@ -24,28 +24,127 @@ import numpy as np
 
 from ..scene import World
 from ..util.image_lookup import lookup
-from ..util.vectors import DIVISION_FLOOR
+from ..util.jit import inline, kernel
+from ..util.rows import contiguous
+from ..util.vectors import DIVISION_FLOOR, row, set_row
+
+
+@inline
+def direction_to_uv1(d):
+    """(u, v) in [0,1)^2 of the unit 3-tuple `d`, Cycles'
+    direction_to_equirectangular: u = (0.5 - atan2(y, x) / (2 pi)) mod 1,
+    v = acos(z) / pi, from the top row."""
+    u = (0.5 - math.atan2(d[1], d[0]) / (2.0 * math.pi)) % 1.0
+    return u, math.acos(min(max(d[2], -1.0), 1.0)) / math.pi
+
+
+@inline
+def uv_to_direction1(u, v):
+    """The unit 3-tuple of image coordinates (u, v): phi = (0.5 - u) 2 pi,
+    theta = v pi, (sin theta cos phi, sin theta sin phi, cos theta)."""
+    phi, theta = (0.5 - u) * 2.0 * math.pi, v * math.pi
+    sin_t = math.sin(theta)
+    return sin_t * math.cos(phi), sin_t * math.sin(phi), math.cos(theta)
+
+
+@inline
+def pixel_of1(d, h, w):
+    """(row, col) of the pixel of an h x w lat-long image that the unit
+    3-tuple `d` falls in."""
+    u, v = direction_to_uv1(d)
+    return min(max(int(v * h), 0), h - 1), min(max(int(u * w), 0), w - 1)
+
+
+@inline
+def image_density1(d, row_pdf, col_pdf):
+    """The solid-angle density at which an image is sampled toward the
+    unit 3-tuple `d`: p_pixel w h / (2 pi^2 sin(theta)), p_pixel =
+    row_pdf[row] col_pdf[row, col] (each pixel's solid angle is
+    2 pi^2 sin(theta) / (w h))."""
+    h, w = col_pdf.shape
+    r, c = pixel_of1(d, h, w)
+    sin_t = math.sqrt(max(0.0, 1.0 - d[2] * d[2]))
+    return row_pdf[r] * col_pdf[r, c] * w * h / (2.0 * math.pi ** 2 * max(sin_t, DIVISION_FLOOR))
+
+
+@inline
+def last_at_or_below1(cdf, x):
+    """The last index i of the ascending `cdf` with cdf[i] <= x, -1 if none
+    (np.searchsorted(cdf, x, side="right") - 1)."""
+    lo, hi = 0, len(cdf)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if cdf[mid] <= x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo - 1
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1])")
+def _uv_rows(dirs, out):
+    for i in range(len(dirs)):
+        out[i, 0], out[i, 1] = direction_to_uv1(row(dirs, i))
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1])")
+def _direction_rows(uv, out):
+    for i in range(len(uv)):
+        set_row(out, i, uv_to_direction1(uv[i, 0], uv[i, 1]))
+
+
+@kernel("void(f8[:, ::1], f8[:, :, ::1], f8[::1], f8[:, ::1])")
+def _light_rows(dirs, image, color, out):
+    h, w = image.shape[0], image.shape[1]
+    for i in range(len(dirs)):
+        r, c = pixel_of1(row(dirs, i), h, w)
+        for k in range(3):
+            out[i, k] = image[r, c, k] * color[k]
+
+
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[::1])")
+def _densities(dirs, row_pdf, col_pdf, out):
+    for i in range(len(dirs)):
+        out[i] = image_density1(row(dirs, i), row_pdf, col_pdf)
+
+
+@kernel("void(f8[:, ::1], f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1])")
+def _image_samples(uv, cdf_rows, row_pdf, cdf_cols, col_pdf, dirs, density):
+    """Environment.sample of an image: a row by its CDF at uv[:, 1], a
+    column by that row's at uv[:, 0], uniform within the pixel."""
+    h, w = col_pdf.shape
+    for i in range(len(uv)):
+        r = min(max(last_at_or_below1(cdf_rows, uv[i, 1]), 0), h - 1)
+        v = (r + (uv[i, 1] - cdf_rows[r]) / max(row_pdf[r], DIVISION_FLOOR)) / h
+        c = min(max(last_at_or_below1(cdf_cols[r], uv[i, 0]), 0), w - 1)
+        u = (c + (uv[i, 0] - cdf_cols[r, c]) / max(col_pdf[r, c], DIVISION_FLOOR)) / w
+        d = uv_to_direction1(u, min(max(v, 0.0), 1.0))
+        set_row(dirs, i, d)
+        density[i] = image_density1(d, row_pdf, col_pdf)
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1])")
+def _sphere_samples(uv, dirs):
+    """Directions uniform over the sphere: z = 1 - 2 u, phi = 2 pi v."""
+    for i in range(len(uv)):
+        z = 1.0 - 2.0 * uv[i, 0]
+        r = math.sqrt(max(0.0, 1.0 - z * z))
+        phi = 2.0 * math.pi * uv[i, 1]
+        dirs[i, 0], dirs[i, 1], dirs[i, 2] = r * math.cos(phi), r * math.sin(phi), z
 
 
 def directions_to_uv(dirs: np.ndarray) -> np.ndarray:
-    """(n,2) image coordinates in [0,1)^2 (u across, v down from the top) of unit `dirs (n,3)`."""
-    u = np.mod(0.5 - np.arctan2(dirs[:, 1], dirs[:, 0]) / (2.0 * math.pi), 1.0)
-    v = np.arccos(np.clip(dirs[:, 2], -1.0, 1.0)) / math.pi
-    return np.stack([u, v], axis=1)
+    """(n,2) direction_to_uv1 of each of the unit `dirs (n,3)`."""
+    out = np.empty((len(dirs), 2))
+    _uv_rows(contiguous(dirs, np.float64), out)
+    return out
 
 
 def uv_to_directions(uv: np.ndarray) -> np.ndarray:
-    """(n,3) unit directions of image coordinates `uv (n,2)`."""
-    phi = (0.5 - uv[:, 0]) * 2.0 * math.pi
-    theta = uv[:, 1] * math.pi
-    sin_t = np.sin(theta)
-    return np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), np.cos(theta)], axis=1)
-
-
-def _pixels(dirs: np.ndarray, h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
-    """(row (n,), col (n,)) of the pixel of an h x w lat-long image each of `dirs (n,3)` falls in."""
-    uv = directions_to_uv(dirs)
-    return (np.clip((uv[:, 1] * h).astype(np.int64), 0, h - 1), np.clip((uv[:, 0] * w).astype(np.int64), 0, w - 1))
+    """(n,3) uv_to_direction1 of each of `uv (n,2)`."""
+    out = np.empty((len(uv), 3))
+    _direction_rows(contiguous(uv, np.float64), out)
+    return out
 
 
 def luminance(rgb: np.ndarray) -> np.ndarray:
@@ -74,10 +173,8 @@ class Environment:
         rows = weight.sum(axis=1)
         self.row_pdf = rows / rows.sum()
         self.cdf_rows = np.concatenate([[0.0], np.cumsum(self.row_pdf)])
-        self.col_pdf = weight / np.maximum(rows[:, None], DIVISION_FLOOR)
+        self.col_pdf = np.ascontiguousarray(weight / np.maximum(rows[:, None], DIVISION_FLOOR))
         self.cdf_cols = np.concatenate([np.zeros((h, 1)), np.cumsum(self.col_pdf, axis=1)], axis=1)
-        # every row's column CDF, offset by its row number: one sorted array to search
-        self._stacked_cdf = (self.cdf_cols + np.arange(h)[:, None]).ravel()
 
     def light(self, dirs: np.ndarray) -> np.ndarray:
         """(n,3) W/(m^2 sr) that lights the scene from `dirs (n,3)`: the
@@ -85,8 +182,9 @@ class Environment:
         image = self.world.environment
         if image is None:
             return np.broadcast_to(self.world.color, (len(dirs), 3)).copy()
-        row, col = _pixels(dirs, *image.shape[:2])
-        return image[row, col] * self.world.color
+        out = np.empty((len(dirs), 3))
+        _light_rows(contiguous(dirs, np.float64), image, contiguous(self.world.color, np.float64), out)
+        return out
 
     def radiance(self, dirs: np.ndarray) -> np.ndarray:
         """(n,3) W/(m^2 sr) the eye sees toward `dirs (n,3)`: the image
@@ -101,20 +199,14 @@ class Environment:
         """(dirs (n,3), density (n,) per steradian) at `uv (n,2)` in the unit
         square: uniform over the sphere for a plain colour, else in
         proportion to the image."""
+        uv = contiguous(uv, np.float64)
+        dirs = np.empty((len(uv), 3))
         if self.cdf_rows is None:
-            z = 1.0 - 2.0 * uv[:, 0]
-            r = np.sqrt(np.maximum(0.0, 1.0 - z * z))
-            phi = 2.0 * math.pi * uv[:, 1]
-            dirs = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
+            _sphere_samples(uv, dirs)
             return dirs, np.full(len(uv), 1.0 / (4.0 * math.pi))
-        h, w = self.col_pdf.shape
-        row = np.clip(np.searchsorted(self.cdf_rows, uv[:, 1], side="right") - 1, 0, h - 1)
-        v = (row + (uv[:, 1] - self.cdf_rows[row]) / np.maximum(self.row_pdf[row], DIVISION_FLOOR)) / h
-        col = np.clip(np.searchsorted(self._stacked_cdf, row + uv[:, 0], side="right") - 1 - row * (w + 1), 0, w - 1)
-        within = (uv[:, 0] - self.cdf_cols[row, col]) / np.maximum(self.col_pdf[row, col], DIVISION_FLOOR)
-        u = (col + within) / w
-        dirs = uv_to_directions(np.stack([u, np.clip(v, 0.0, 1.0)], axis=1))
-        return dirs, self.density(dirs)
+        density = np.empty(len(uv))
+        _image_samples(uv, self.cdf_rows, self.row_pdf, self.cdf_cols, self.col_pdf, dirs, density)
+        return dirs, density
 
     def total(self) -> np.ndarray:
         """(3,) int L dw over the sphere, W/(m^2): the world's flux through a
@@ -131,8 +223,6 @@ class Environment:
         """(n,) the solid-angle density at which `sample` draws `dirs (n,3)`."""
         if self.cdf_rows is None:
             return np.full(len(dirs), 1.0 / (4.0 * math.pi))
-        h, w = self.col_pdf.shape
-        row, col = _pixels(dirs, h, w)
-        sin_t = np.sqrt(np.maximum(0.0, 1.0 - dirs[:, 2] ** 2))
-        pixel = self.row_pdf[row] * self.col_pdf[row, col]
-        return pixel * w * h / (2.0 * math.pi ** 2 * np.maximum(sin_t, DIVISION_FLOOR))
+        out = np.empty(len(dirs))
+        _densities(contiguous(dirs, np.float64), self.row_pdf, self.col_pdf, out)
+        return out
