@@ -16,8 +16,11 @@ from typing import Optional
 
 import numpy as np
 
-from ..sampling.warps import concentric_disc, cone_directions, cone_of_disc, frames, orthonormal_basis
+from ..sampling.warps import concentric_disc1, cone_directions, cone_of_disc, orthonormal_basis, orthonormal_basis1
 from ..scene import AreaLight, Light, Scene, SpotLight, SunLight
+from ..util.jit import kernel
+from ..util.rows import contiguous
+from ..util.vectors import row
 from . import radiometry
 
 # Rays at an aim's edge count as inside it: cos(theta) this far below the
@@ -193,12 +196,37 @@ def emitting_points(light: Light, dirs: np.ndarray, lamp: np.ndarray) -> np.ndar
     that faces each direction, the lines that a sphere of its radius sends
     that way (its Soft Falloff disc, which Cycles turns toward each point it
     lights, has that far field too)."""
+    out = np.empty((len(lamp), 3))
+    lamp = contiguous(lamp, np.float64)
     if isinstance(light, AreaLight):
-        xy = concentric_disc(lamp) if light.shape == "ELLIPSE" else 2.0 * lamp - 1.0
-        return light.center + xy[:, :1] * light.axis_x + xy[:, 1:] * light.axis_y
-    t, b = frames(dirs)
-    disc = concentric_disc(lamp)
-    return light.position + light.radius * (disc[:, :1] * t + disc[:, 1:] * b)
+        _area_points(lamp, light.shape == "ELLIPSE", contiguous(light.center, np.float64),
+                     contiguous(light.axis_x, np.float64), contiguous(light.axis_y, np.float64), out)
+    else:
+        _facing_disc_points(lamp, contiguous(dirs, np.float64), contiguous(light.position, np.float64),
+                            float(light.radius), out)
+    return out
+
+
+@kernel("void(f8[:, ::1], b1, f8[::1], f8[::1], f8[::1], f8[:, ::1])")
+def _area_points(lamp, ellipse, center, axis_x, axis_y, out):
+    """center + x axis_x + y axis_y, (x, y) the concentric disc's point of
+    each of `lamp (n,2)` for an ellipse, else 2 lamp - 1 (the rectangle)."""
+    for i in range(len(lamp)):
+        x, y = concentric_disc1(lamp[i, 0], lamp[i, 1]) if ellipse else (2.0 * lamp[i, 0] - 1.0,
+                                                                          2.0 * lamp[i, 1] - 1.0)
+        for k in range(3):
+            out[i, k] = center[k] + x * axis_x[k] + y * axis_y[k]
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[::1], f8, f8[:, ::1])")
+def _facing_disc_points(lamp, dirs, position, radius, out):
+    """position + radius (x t + y b): the concentric disc's point (x, y) of
+    each of `lamp (n,2)` on the disc square to `dirs (n,3)` (frame t, b)."""
+    for i in range(len(lamp)):
+        t, b = orthonormal_basis1(row(dirs, i))
+        x, y = concentric_disc1(lamp[i, 0], lamp[i, 1])
+        for k in range(3):
+            out[i, k] = position[k] + radius * (x * t[k] + y * b[k])
 
 
 def aims(light: Light, targets: list[Sphere], scene_sphere: Sphere) -> list[Aim]:

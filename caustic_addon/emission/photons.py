@@ -21,8 +21,10 @@ import numpy as np
 
 from ..sampling.hash import hash_uniform
 from ..sampling.sequences import r2_sequence
-from ..sampling.warps import frames, sample_disc
+from ..sampling.warps import orthonormal_basis1, sample_disc, uniform_disc1
 from ..scene import Light, SunLight, World
+from ..util.jit import kernel
+from ..util.vectors import dot1, row
 from . import radiometry
 from .aims import Aim, Sphere, aims, balance_density, share, upstream_distance
 from .environment import Environment
@@ -137,8 +139,8 @@ class WorldEmitter(Emitter):
         self.shift, self.seed = shift, seed
         self.starts = np.concatenate([[0], np.cumsum(counts)])
         self.count = int(self.starts[-1])
-        self.centers = np.array([t.center for t in targets])
-        self.radii = np.array([t.radius for t in targets])
+        self.centers = np.array([t.center for t in targets], dtype=np.float64)
+        self.radii = np.array([t.radius for t in targets], dtype=np.float64)
         self.density = counts / (math.pi * self.radii ** 2)
 
     def emit(self, start: int, stop: int) -> Photons:
@@ -148,19 +150,36 @@ class WorldEmitter(Emitter):
         toward_sky, pdf = self.environment.sample(r2_sequence(i - self.starts[which], self.shift))
         uv = np.stack([hash_uniform(ids, _LAMP_STREAM, self.seed), hash_uniform(ids, _LAMP_STREAM + 1, self.seed)],
                       axis=1)
-        disc = sample_disc(1.0, uv) * self.radii[which][:, None]
-        t, b = frames(toward_sky)
-        origins = (self.centers[which] + disc[:, :1] * t + disc[:, 1:] * b
-                   + self.start_distance * toward_sky)
-        crossing = np.zeros(len(i))
-        for center, radius, rate in zip(self.centers, self.radii, self.density):
-            rel = origins - center
-            perp = rel - np.einsum("ij,ij->i", rel, toward_sky)[:, None] * toward_sky
-            crossing += rate * (np.einsum("ij,ij->i", perp, perp) <= radius ** 2 * (1.0 + 1e-12))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            flux = self.environment.light(toward_sky) / (pdf * crossing)[:, None]
-        flux = np.where(np.isfinite(flux), flux, 0.0)
+        origins, flux = np.empty((len(i), 3)), np.empty((len(i), 3))
+        _world_photons(toward_sky, pdf, self.environment.light(toward_sky), uv, which.astype(np.int64),
+                       self.centers, self.radii, self.density, float(self.start_distance), origins, flux)
         return _kept(origins, -toward_sky, flux, ids)
+
+
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], i8[::1], f8[:, ::1], f8[::1], f8[::1], f8, "
+        "f8[:, ::1], f8[:, ::1])")
+def _world_photons(toward_sky, pdf, light, uv, which, centers, radii, density, start_distance, origins, flux):
+    """WorldEmitter's photons: from the disc point (uniform_disc1 of `uv`)
+    across target `which`, square to `toward_sky (n,3)`, `start_distance`
+    upstream; flux L(w) / (p(w) sum_j rate_j [the line crosses disc j]),
+    0 where that is not finite."""
+    for i in range(len(uv)):
+        d = row(toward_sky, i)
+        t, b = orthonormal_basis1(d)
+        x, y = uniform_disc1(1.0, uv[i, 0], uv[i, 1])
+        x, y = x * radii[which[i]], y * radii[which[i]]
+        for k in range(3):
+            origins[i, k] = centers[which[i], k] + x * t[k] + y * b[k] + start_distance * d[k]
+        crossing = 0.0
+        for j in range(len(radii)):
+            rel = (origins[i, 0] - centers[j, 0], origins[i, 1] - centers[j, 1], origins[i, 2] - centers[j, 2])
+            along = dot1(rel, d)
+            perp = (rel[0] - along * d[0], rel[1] - along * d[1], rel[2] - along * d[2])
+            if dot1(perp, perp) <= radii[j] ** 2 * (1.0 + 1e-12):
+                crossing += density[j]
+        for k in range(3):
+            value = light[i, k] / (pdf[i] * crossing) if pdf[i] * crossing != 0.0 else math.inf
+            flux[i, k] = value if math.isfinite(value) else 0.0
 
 
 def world_flux(environment: Environment, targets: list[Sphere]) -> float:
