@@ -118,6 +118,7 @@ class ImageTexture:
 
 
 _COORDINATES = ("UV", "OBJECT", "GENERATED")
+_UV, _OBJECT, _GENERATED = range(3)
 _NO_UVS = np.zeros((0, 3, 2))
 
 
@@ -136,14 +137,14 @@ def _mapped_vectors(out, points, triangle, u, v, corner_uvs, to_object, location
     corners' UVs at barycentrics (1-u-v, u, v), z = 0; Object the point
     in object space, to_object p; Generated (p_object - location) / (2 size) + 1/2."""
     for n in range(len(out)):
-        if coordinates == 0:
+        if coordinates == _UV:
             corners = corner_uvs[triangle[n]]
             w0 = 1.0 - u[n] - v[n]
             vector = (w0 * corners[0, 0] + u[n] * corners[1, 0] + v[n] * corners[2, 0],
                       w0 * corners[0, 1] + u[n] * corners[1, 1] + v[n] * corners[2, 1], 0.0)
         else:
             vector = affine1(to_object, (points[n, 0], points[n, 1], points[n, 2]))
-            if coordinates == 2:
+            if coordinates == _GENERATED:
                 vector = ((vector[0] - location[0]) / (2.0 * size[0]) + 0.5,
                           (vector[1] - location[1]) / (2.0 * size[1]) + 0.5,
                           (vector[2] - location[2]) / (2.0 * size[2]) + 0.5)
