@@ -14,6 +14,8 @@ from typing import Optional, Union
 import numpy as np
 
 from ..util.image_lookup import EXTENSIONS, INTERPOLATIONS, lookup
+from ..util.jit import inline, kernel
+from ..util.rows import contiguous
 
 __all__ = ["EXTENSIONS", "INTERPOLATIONS", "MATH", "MIX_BLENDS", "ColorRamp", "Constant", "ImageTexture", "MathNode",
            "MixColor", "Node", "SurfacePoints", "as_color", "as_value", "srgb_to_linear"]
@@ -92,26 +94,62 @@ class ImageTexture:
     alpha: bool = False
     srgb: bool = False
 
+    def __post_init__(self):
+        self.pixels = np.ascontiguousarray(self.pixels)
+
     def vectors(self, at: SurfacePoints) -> np.ndarray:
-        """(n,3) the texture coordinates the node looks up, before mapping."""
-        if self.coordinates == "UV":
-            corners = np.take(self.corner_uvs, at.triangle, axis=0)
-            uv = ((1.0 - at.u - at.v)[:, None] * corners[:, 0] + at.u[:, None] * corners[:, 1]
-                  + at.v[:, None] * corners[:, 2])
-            return np.concatenate([uv, np.zeros((len(uv), 1))], axis=1)
-        local = at.points @ self.to_object[:3, :3].T + self.to_object[:3, 3]
-        if self.coordinates == "OBJECT":
-            return local
-        return (local - self.texspace_location) / (2.0 * self.texspace_size) + 0.5
+        """(n,3) the texture coordinates the node looks up, after mapping."""
+        out = np.empty((len(at.points), 3))
+        uvs = contiguous(self.corner_uvs, np.float64) if self.coordinates == "UV" else _NO_UVS
+        _mapped_vectors(out, contiguous(at.points, np.float64), contiguous(at.triangle, np.int64),
+                        contiguous(at.u, np.float64), contiguous(at.v, np.float64), uvs,
+                        contiguous(self.to_object, np.float64), contiguous(self.texspace_location, np.float64),
+                        contiguous(self.texspace_size, np.float64), contiguous(self.mapping, np.float64),
+                        _COORDINATES.index(self.coordinates))
+        return out
 
     def evaluate(self, at: SurfacePoints) -> np.ndarray:
-        vectors = self.vectors(at) @ self.mapping[:3, :3].T + self.mapping[:3, 3]
-        texel = lookup(self.pixels, vectors[:, :2], self.interpolation, self.extension)
+        texel = lookup(self.pixels, self.vectors(at)[:, :2], self.interpolation, self.extension)
         if self.pixels.dtype == np.uint8:
             texel = texel / 255.0
         if self.alpha:
             return texel[:, 3] if self.pixels.shape[2] == 4 else np.ones(len(texel))
         return srgb_to_linear(texel[:, :3]) if self.srgb else texel[:, :3]
+
+
+_COORDINATES = ("UV", "OBJECT", "GENERATED")
+_UV, _OBJECT, _GENERATED = range(3)
+_NO_UVS = np.zeros((0, 3, 2))
+
+
+@inline
+def affine1(m, p):
+    """The 3-tuple m[:3, :3] p + m[:3, 3] of the (4,4) affine map `m` at the 3-tuple `p`."""
+    return (m[0, 0] * p[0] + m[0, 1] * p[1] + m[0, 2] * p[2] + m[0, 3],
+            m[1, 0] * p[0] + m[1, 1] * p[1] + m[1, 2] * p[2] + m[1, 3],
+            m[2, 0] * p[0] + m[2, 1] * p[1] + m[2, 2] * p[2] + m[2, 3])
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], i8[::1], f8[::1], f8[::1], f8[:, :, ::1], f8[:, ::1], f8[::1], f8[::1], "
+        "f8[:, ::1], i8)")
+def _mapped_vectors(out, points, triangle, u, v, corner_uvs, to_object, location, size, mapping, coordinates):
+    """out (n,3) the Mapping node's `mapping` of each point's vector: UV the
+    corners' UVs at barycentrics (1-u-v, u, v), z = 0; Object the point
+    in object space, to_object p; Generated (p_object - location) / (2 size) + 1/2."""
+    for n in range(len(out)):
+        if coordinates == _UV:
+            corners = corner_uvs[triangle[n]]
+            w0 = 1.0 - u[n] - v[n]
+            vector = (w0 * corners[0, 0] + u[n] * corners[1, 0] + v[n] * corners[2, 0],
+                      w0 * corners[0, 1] + u[n] * corners[1, 1] + v[n] * corners[2, 1], 0.0)
+        else:
+            vector = affine1(to_object, (points[n, 0], points[n, 1], points[n, 2]))
+            if coordinates == _GENERATED:
+                vector = ((vector[0] - location[0]) / (2.0 * size[0]) + 0.5,
+                          (vector[1] - location[1]) / (2.0 * size[1]) + 0.5,
+                          (vector[2] - location[2]) / (2.0 * size[2]) + 0.5)
+        mapped = affine1(mapping, vector)
+        out[n, 0], out[n, 1], out[n, 2] = mapped
 
 
 def _mix(blend: str, t: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

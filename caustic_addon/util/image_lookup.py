@@ -3,61 +3,100 @@ are (`kernel/device/cpu/image.h`): pixel centres at ((i + 0.5) / w,
 (j + 0.5) / h), row j = 0 at v = 0; Closest, Linear (bilinear) or Cubic (the
 uniform cubic B-spline, which Smart also uses on the CPU) interpolation;
 and, along each axis, Repeat (wrap), Extend (the edge pixel), Clip (black
-outside the image) or Mirror extension."""
+outside the image) or Mirror extension. The scalar cores (`..1`) and the
+kernel over rows of coordinates, for float32, float64 and uint8 images."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+from .jit import inline, kernel
+from .rows import contiguous
 
 EXTENSIONS = ("REPEAT", "EXTEND", "CLIP", "MIRROR")
 INTERPOLATIONS = ("Closest", "Linear", "Cubic", "Smart")
+_REPEAT, _EXTEND, _CLIP, _MIRROR = range(4)
+_CLOSEST, _LINEAR, _CUBIC = range(3)
 
 
-def _indices(index: np.ndarray, size: int, extension: str) -> tuple[np.ndarray, np.ndarray]:
-    """(the pixel indices (...) that integer `index` reads, whether each
-    lies inside the image: False only where Clip puts black)."""
-    if extension == "REPEAT":
-        return np.mod(index, size), np.ones(index.shape, dtype=bool)
-    if extension == "MIRROR":
-        period = np.mod(index, 2 * size)
-        return np.where(period < size, period, 2 * size - 1 - period), np.ones(index.shape, dtype=bool)
-    inside = (index >= 0) & (index < size)
-    return np.clip(index, 0, size - 1), inside if extension == "CLIP" else np.ones(index.shape, dtype=bool)
+@inline
+def pixel_index1(index, size, extension):
+    """(the pixel index that integer `index` reads along an axis of `size`
+    pixels, 1.0 where it lies inside the image or 0.0 where Clip puts
+    black), as Cycles' wrap_periodic / wrap_clamp / wrap_mirror
+    (kernel/device/cpu/image.h): Repeat index mod size; Mirror p = index mod
+    2 size, p if p < size else 2 size - 1 - p; Extend and Clip the index
+    clamped to 0 .. size - 1."""
+    if extension == _REPEAT:
+        return index % size, 1.0
+    if extension == _MIRROR:
+        period = index % (2 * size)
+        return (period if period < size else 2 * size - 1 - period), 1.0
+    inside = 1.0 if extension != _CLIP or (0 <= index < size) else 0.0
+    return min(max(index, 0), size - 1), inside
 
 
-def _bspline_weights(t: np.ndarray) -> np.ndarray:
-    """(n,4) weights of the uniform cubic B-spline at fraction `t (n,)` for
-    the pixels at offsets -1, 0, 1, 2: (1-t)^3/6, (3t^3 - 6t^2 + 4)/6,
-    (-3t^3 + 3t^2 + 3t + 1)/6, t^3/6."""
+@inline
+def bspline_weights1(t):
+    """The weights of the uniform cubic B-spline at fraction `t` for the
+    pixels at offsets -1, 0, 1, 2 (Cycles' cubic interpolation,
+    kernel/device/cpu/image.h; de Boor, "A Practical Guide to Splines"):
+    (1-t)^3/6, (3t^3 - 6t^2 + 4)/6, (-3t^3 + 3t^2 + 3t + 1)/6, t^3/6."""
     t2, t3 = t * t, t * t * t
-    return np.stack([(1 - t) ** 3, 3 * t3 - 6 * t2 + 4, -3 * t3 + 3 * t2 + 3 * t + 1, t3], axis=1) / 6.0
+    return (math.pow(1.0 - t, 3.0) / 6.0, (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0,
+            (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0, t3 / 6.0)
+
+
+@inline
+def axis_taps1(coordinate, size, interpolation):
+    """(the first pixel offset's integer index, the weights of the 1, 2 or
+    4 pixels read along an axis of `size` pixels at `coordinate` in 0..1,
+    as a 4-tuple padded with zeros): Closest the pixel floor(coordinate
+    size); Linear and Cubic about x = coordinate size - 1/2, fraction
+    t = x - floor(x): (1-t, t) from floor(x), the B-spline's from floor(x) - 1."""
+    if interpolation == _CLOSEST:
+        return math.floor(coordinate * size), (1.0, 0.0, 0.0, 0.0)
+    x = coordinate * size - 0.5
+    x0 = math.floor(x)
+    t = x - x0
+    if interpolation == _LINEAR:
+        return x0, (1.0 - t, t, 0.0, 0.0)
+    return x0 - 1, bspline_weights1(t)
+
+
+@kernel("void(f8[:, ::1], f4[:, :, ::1], f8[:, ::1], i8, i8, i8)",
+        "void(f8[:, ::1], f8[:, :, ::1], f8[:, ::1], i8, i8, i8)",
+        "void(f8[:, ::1], u1[:, :, ::1], f8[:, ::1], i8, i8, i8)")
+def _lookup_rows(out, image, uv, interpolation, along_u, along_v):
+    """out (n,c) = the sum over the taps of pixel x its two axes' weights,
+    row taps outer, column taps inner."""
+    h, w, channels = image.shape
+    taps = 1 if interpolation == _CLOSEST else (2 if interpolation == _LINEAR else 4)
+    for n in range(len(uv)):
+        x0, wx = axis_taps1(uv[n, 0], w, interpolation)
+        y0, wy = axis_taps1(uv[n, 1], h, interpolation)
+        for c in range(channels):
+            out[n, c] = 0.0
+        for j in range(taps):
+            row, in_v = pixel_index1(y0 + j, h, along_v)
+            weight_v = wy[j] * in_v
+            for i in range(taps):
+                col, in_u = pixel_index1(x0 + i, w, along_u)
+                weight = weight_v * (wx[i] * in_u)
+                for c in range(channels):
+                    out[n, c] += image[row, col, c] * weight
 
 
 def lookup(image: np.ndarray, uv: np.ndarray, interpolation: str = "Linear",
            extension: str | tuple[str, str] = "REPEAT") -> np.ndarray:
-    """(n,c) values of `image (h,w,c)` at `uv (n,2)` (u across the columns,
-    v along the rows); `extension` one mode, or one for u and one for v."""
-    h, w = image.shape[:2]
+    """(n,c) float64 values of `image (h,w,c)` (float32, float64 or uint8,
+    C-contiguous to be read without a copy) at `uv (n,2)` (u across the
+    columns, v along the rows); `extension` one mode, or one for u and one for v."""
     along_u, along_v = (extension, extension) if isinstance(extension, str) else extension
-    if interpolation == "Closest":
-        x, y = np.floor(uv[:, 0] * w).astype(np.int64), np.floor(uv[:, 1] * h).astype(np.int64)
-        (col, in_u), (row, in_v) = _indices(x, w, along_u), _indices(y, h, along_v)
-        return image[row, col] * (in_u & in_v)[:, None]
-    x, y = uv[:, 0] * w - 0.5, uv[:, 1] * h - 0.5
-    x0, y0 = np.floor(x).astype(np.int64), np.floor(y).astype(np.int64)
-    fx, fy = x - x0, y - y0
-    if interpolation == "Linear":
-        offsets = np.arange(2)
-        wx, wy = np.stack([1 - fx, fx], axis=1), np.stack([1 - fy, fy], axis=1)
-    else:
-        offsets = np.arange(-1, 3)
-        wx, wy = _bspline_weights(fx), _bspline_weights(fy)
-    cols, in_u = _indices(x0[:, None] + offsets, w, along_u)
-    rows, in_v = _indices(y0[:, None] + offsets, h, along_v)
-    wx, wy = wx * in_u, wy * in_v
-    out = np.zeros((len(uv), image.shape[2]))
-    for j in range(len(offsets)):
-        row = rows[:, j]
-        for i in range(len(offsets)):
-            out += image[row, cols[:, i]] * (wy[:, j] * wx[:, i])[:, None]
+    mode = min(INTERPOLATIONS.index(interpolation), _CUBIC)
+    image = np.ascontiguousarray(image)
+    out = np.empty((len(uv), image.shape[2]))
+    _lookup_rows(out, image, contiguous(uv, np.float64), mode, EXTENSIONS.index(along_u), EXTENSIONS.index(along_v))
     return out

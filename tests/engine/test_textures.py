@@ -41,6 +41,22 @@ def test_closest_and_the_extension_modes():
                                lookup(image, np.array([[0.3, 0.6]]), "Linear", "REPEAT"))
 
 
+@pytest.mark.parametrize("interpolation", ["Closest", "Linear", "Cubic"])
+def test_byte_float32_and_float64_images_look_up_alike(interpolation):
+    """The look-up reads each pixel type as its value (bytes 0..255, not
+    scaled), the same for every extension pair; a constant image stays
+    constant wherever every tap lies inside it (the weights sum to one)."""
+    values = np.random.default_rng(3).integers(0, 256, (5, 7, 4))
+    uv = np.random.default_rng(4).uniform(-2.0, 3.0, (200, 2))
+    for along_u in ("REPEAT", "EXTEND", "CLIP", "MIRROR"):
+        for along_v in ("REPEAT", "EXTEND", "CLIP", "MIRROR"):
+            looked_up = [lookup(values.astype(dtype), uv, interpolation, (along_u, along_v))
+                         for dtype in (np.uint8, np.float32, np.float64)]
+            np.testing.assert_array_equal(looked_up[0], looked_up[2])
+            np.testing.assert_array_equal(looked_up[1], looked_up[2])
+    np.testing.assert_allclose(lookup(np.full((5, 7, 3), 0.25), uv, interpolation, "MIRROR"), 0.25, rtol=1e-14)
+
+
 def points_on_unit_square(uv: np.ndarray) -> SurfacePoints:
     """Points of the two-triangle square [0,1]^2 at z = 0 (shapes.plane(1.0)
     moved by +1/2), where u, v are barycentrics of triangle 0."""
