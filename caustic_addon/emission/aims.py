@@ -16,12 +16,13 @@ from typing import Optional
 
 import numpy as np
 
-from ..sampling.warps import concentric_disc1, cone_directions, cone_of_disc, orthonormal_basis, orthonormal_basis1
+from ..sampling.warps import cone_directions, cone_of_disc, orthonormal_basis
 from ..scene import AreaLight, Light, Scene, SpotLight, SunLight
 from ..util.jit import kernel
 from ..util.rows import contiguous
-from ..util.vectors import row
+from ..util.vectors import row, set_row
 from . import radiometry
+from .lamp_samples import area_point1, facing_disc_point1
 
 # Rays at an aim's edge count as inside it: cos(theta) this far below the
 # cone's cos_max, or radius^2 this fraction beyond the disc's.
@@ -209,24 +210,18 @@ def emitting_points(light: Light, dirs: np.ndarray, lamp: np.ndarray) -> np.ndar
 
 @kernel("void(f8[:, ::1], b1, f8[::1], f8[::1], f8[::1], f8[:, ::1])")
 def _area_points(lamp, ellipse, center, axis_x, axis_y, out):
-    """center + x axis_x + y axis_y, (x, y) the concentric disc's point of
-    each of `lamp (n,2)` for an ellipse, else 2 lamp - 1 (the rectangle)."""
+    """out (n,3): lamp_samples.area_point1 of each of `lamp (n,2)`."""
     for i in range(len(lamp)):
-        x, y = concentric_disc1(lamp[i, 0], lamp[i, 1]) if ellipse else (2.0 * lamp[i, 0] - 1.0,
-                                                                          2.0 * lamp[i, 1] - 1.0)
-        for k in range(3):
-            out[i, k] = center[k] + x * axis_x[k] + y * axis_y[k]
+        set_row(out, i, area_point1(lamp[i, 0], lamp[i, 1], ellipse, center, axis_x, axis_y))
 
 
 @kernel("void(f8[:, ::1], f8[:, ::1], f8[::1], f8, f8[:, ::1])")
 def _facing_disc_points(lamp, dirs, position, radius, out):
-    """position + radius (x t + y b): the concentric disc's point (x, y) of
-    each of `lamp (n,2)` on the disc square to `dirs (n,3)` (frame t, b)."""
+    """out (n,3): lamp_samples.facing_disc_point1 of each of `lamp (n,2)`,
+    on the disc square to `dirs (n,3)`."""
+    at = (position[0], position[1], position[2])
     for i in range(len(lamp)):
-        t, b = orthonormal_basis1(row(dirs, i))
-        x, y = concentric_disc1(lamp[i, 0], lamp[i, 1])
-        for k in range(3):
-            out[i, k] = position[k] + radius * (x * t[k] + y * b[k])
+        set_row(out, i, facing_disc_point1(lamp[i, 0], lamp[i, 1], at, radius, row(dirs, i)))
 
 
 def aims(light: Light, targets: list[Sphere], scene_sphere: Sphere) -> list[Aim]:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..sampling.warps import concentric_disc1, cone_direction1, orthonormal_basis1
+from ..sampling.warps import concentric_disc1, cone_direction1, cone_directions, orthonormal_basis1
 from ..scene import AreaLight, Light, PointLight, SpotLight, SunLight
 from ..util.jit import inline, kernel
 from ..util.rows import contiguous
@@ -100,26 +100,37 @@ def _sun(light: SunLight, energy: float, uv: np.ndarray, far: float, out: LampSa
     """Directions uniform in solid angle over the sun's disc,
     E = L x its solid angle 2 pi (1 - cos h); one direction for angle 0."""
     if light.angle <= 0.0:
-        cos_half, irradiance = 1.0, radiometry.sun_irradiance(light, energy)
+        out.dirs[:], out.irradiance[:] = -light.direction, radiometry.sun_irradiance(light, energy)
     else:
         cos_half = math.cos(0.5 * light.angle)
-        irradiance = radiometry.sun_radiance(light, energy) * (2.0 * math.pi * (1.0 - cos_half))
-    _sun_samples(out.dirs, out.dist, out.irradiance, uv, contiguous(-light.direction, np.float64), cos_half,
-                 contiguous(irradiance, np.float64), far)
+        out.dirs[:] = cone_directions(-light.direction, cos_half, uv)
+        out.irradiance[:] = radiometry.sun_radiance(light, energy) * (2.0 * math.pi * (1.0 - cos_half))
+    out.dist[:] = far
 
 
-@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8, f8[::1], f8)")
-def _sun_samples(dirs, dist, irradiance, uv, axis, cos_half, value, far):
-    """dirs (n,3): cone_direction1 of `uv (n,2)` within acos(cos_half) of
-    the unit `axis (3,)` toward the sun, whose frame is built once (the axis
-    itself at cos_half 1); the irradiance `value (3,)` and the distance
-    `far` for all."""
-    a = (axis[0], axis[1], axis[2])
-    t, b = orthonormal_basis1(a)
-    for i in range(len(uv)):
-        set_row(dirs, i, a if cos_half >= 1.0 else cone_direction1(a, t, b, cos_half, uv[i, 0], uv[i, 1]))
-        dist[i] = far
-        set_row(irradiance, i, (value[0], value[1], value[2]))
+@inline
+def area_point1(u, v, ellipse, center, axis_x, axis_y):
+    """The 3-tuple point (u, v) of the unit square on an area lamp:
+    center + x axis_x + y axis_y, (x, y) = concentric_disc1(u, v) on its
+    `ellipse`, else (2u - 1, 2v - 1) on its rectangle (uniform by area)."""
+    if ellipse:
+        x, y = concentric_disc1(u, v)
+    else:
+        x, y = 2.0 * u - 1.0, 2.0 * v - 1.0
+    return (center[0] + x * axis_x[0] + y * axis_y[0], center[1] + x * axis_x[1] + y * axis_y[1],
+            center[2] + x * axis_x[2] + y * axis_y[2])
+
+
+@inline
+def facing_disc_point1(u, v, at, radius, normal):
+    """The 3-tuple point (u, v) of the unit square on the disc of `radius`
+    about the 3-tuple `at` square to the unit `normal`: at + r (x t + y b),
+    (x, y) = concentric_disc1(u, v), (t, b) orthonormal_basis1(normal)
+    (uniform by area)."""
+    t, b = orthonormal_basis1(normal)
+    x, y = concentric_disc1(u, v)
+    x, y = radius * x, radius * y
+    return at[0] + x * t[0] + y * b[0], at[1] + x * t[1] + y * b[1], at[2] + x * t[2] + y * b[2]
 
 
 @inline
@@ -161,18 +172,14 @@ def _facing_disc_samples(dirs, dist, irradiance, points, uv, position, radius, r
                          blend):
     """Soft Falloff: a disc of `radius` through the lamp's centre, facing
     the point, of radiance `radiance (3,)`, sampled uniformly by area
-    (concentric_disc1): E = L cos_disc (pi r^2) / t^2 at distance t, cos_disc
+    (facing_disc_point1): E = L cos_disc (pi r^2) / t^2 at distance t, cos_disc
     the disc's cosine toward the point."""
     at = (position[0], position[1], position[2])
     area = math.pi * (radius * radius)
     for i in range(len(points)):
         away, _ = _toward1(points, i, at)
         normal = (-away[0], -away[1], -away[2])
-        t, b = orthonormal_basis1(normal)
-        x, y = concentric_disc1(uv[i, 0], uv[i, 1])
-        x, y = radius * x, radius * y
-        on_lamp = (at[0] + x * t[0] + y * b[0], at[1] + x * t[1] + y * b[1], at[2] + x * t[2] + y * b[2])
-        l, d = _toward1(points, i, on_lamp)
+        l, d = _toward1(points, i, facing_disc_point1(uv[i, 0], uv[i, 1], at, radius, normal))
         set_row(dirs, i, l)
         dist[i] = d
         cos_disc = max(-dot1(l, normal), 0.0)
@@ -214,19 +221,13 @@ def _sphere_samples(dirs, dist, irradiance, points, uv, position, radius, radian
 def _area_samples(dirs, dist, irradiance, points, uv, center, axis_x, axis_y, normal, ellipse, spread, area,
                   radiance):
     """Points uniform over an area lamp's rectangle, or its inscribed
-    ellipse (concentric_disc1), center + x axis_x + y axis_y:
+    ellipse (area_point1):
     E = L s(a) cos_lamp A / t^2 at distance t, L = `radiance (3,)` along the
     `normal (3,)`, s(a) its spread weight (radiometry.spread_factor1) at the
     angle a from it, A = `area`."""
     n = (normal[0], normal[1], normal[2])
     for i in range(len(points)):
-        if ellipse:
-            x, y = concentric_disc1(uv[i, 0], uv[i, 1])
-        else:
-            x, y = 2.0 * uv[i, 0] - 1.0, 2.0 * uv[i, 1] - 1.0
-        on_lamp = (center[0] + x * axis_x[0] + y * axis_y[0], center[1] + x * axis_x[1] + y * axis_y[1],
-                   center[2] + x * axis_x[2] + y * axis_y[2])
-        l, d = _toward1(points, i, on_lamp)
+        l, d = _toward1(points, i, area_point1(uv[i, 0], uv[i, 1], ellipse, center, axis_x, axis_y))
         set_row(dirs, i, l)
         dist[i] = d
         cos_lamp = -dot1(l, n)

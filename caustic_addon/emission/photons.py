@@ -177,8 +177,9 @@ def _world_photons(toward_sky, pdf, light, uv, which, centers, radii, density, s
             perp = (rel[0] - along * d[0], rel[1] - along * d[1], rel[2] - along * d[2])
             if dot1(perp, perp) <= radii[j] ** 2 * (1.0 + 1e-12):
                 crossing += density[j]
+        photons = pdf[i] * crossing
         for k in range(3):
-            value = light[i, k] / (pdf[i] * crossing) if pdf[i] * crossing != 0.0 else math.inf
+            value = light[i, k] / photons if photons != 0.0 else 0.0
             flux[i, k] = value if math.isfinite(value) else 0.0
 
 

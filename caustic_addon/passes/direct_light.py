@@ -111,11 +111,10 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
         and the radiance (l,3) each brings where nothing blocks it."""
         uv = strata(np.take(pixel, rows), np.take(first_stratum, rows) * count + k, 2 * number, seed)
         lamp = sample_lamp(light, energy, np.take(points, rows, axis=0), uv, far)
-        lamp_dirs, irradiance = lamp.dirs, lamp.irradiance
-        idx, radiance = _lambert_lit(rows, shading, facing, diffuse, lamp_dirs, irradiance, count)
-        at, dirs = rows[idx], np.take(lamp_dirs, idx, axis=0)
+        idx, radiance = _lambert_lit(rows, shading, facing, diffuse, lamp.dirs, lamp.irradiance, count)
+        at, dirs = rows[idx], np.take(lamp.dirs, idx, axis=0)
         if lobe is not None:
-            _add_glossy(radiance, at, dirs, np.take(irradiance, idx, axis=0), shading, view, lamp_lit, lobe.f0,
+            _add_glossy(radiance, at, dirs, np.take(lamp.irradiance, idx, axis=0), shading, view, lamp_lit, lobe.f0,
                         lobe.eta, lobe.alpha, lobe.gain, count)
         return at, dirs, np.take(lamp.dist, idx), radiance
 
