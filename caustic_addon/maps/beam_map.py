@@ -11,7 +11,7 @@ import numpy as np
 
 from ..util.jit import kernel
 from ..util.rows import take_rows
-from .grid import bilinear_sample, channel_tables, rect_means
+from .grid import add_within, channel_tables, rect_means
 from .illumination_map import IlluminationMap
 from .raster import Coverage, signed_areas
 
@@ -37,19 +37,10 @@ class _Layer:
         values = np.ascontiguousarray(grid.coverage.planes())
         return _Layer(grid.lo, grid.cell, values, channel_tables(values))
 
-    def _rc(self, xy: np.ndarray) -> np.ndarray:
-        """(n,2) continuous (row, col), cell centres at integers."""
-        return (xy[:, ::-1] - self.origin[::-1]) / self.cell - 0.5
-
-    def at(self, xy: np.ndarray) -> np.ndarray:
-        """(n,c) W/m^2 at chart points `xy (n,2)`, bilinear between cell
-        centres; zero off the layer."""
-        rc = self._rc(xy)
-        top = np.array(self.values.shape[1:]) - 0.5
-        inside = (rc[:, 0] >= -0.5) & (rc[:, 1] >= -0.5) & (rc[:, 0] <= top[0]) & (rc[:, 1] <= top[1])
-        out = np.zeros((len(xy), len(self.values)))
-        out[inside] = bilinear_sample(self.values, rc[inside])
-        return out
+    def add_at(self, xy: np.ndarray, out: np.ndarray) -> None:
+        """out (n,3) += W/m^2 at chart points `xy (n,2)`, bilinear between
+        cell centres; nothing off the layer."""
+        add_within(self.values, self.origin, self.cell, xy, out)
 
     def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """(n,c) mean W/m^2 over chart rectangles [lo, hi] ((n,2) each),
@@ -279,7 +270,11 @@ class BeamMap(IlluminationMap):
                 self._grids = None
 
     def irradiance_at(self, xy: np.ndarray) -> np.ndarray:
-        return super().irradiance_at(xy) + sum(layer.at(xy) for layer in self._layers)
+        beams = np.zeros((len(xy), 3))
+        xy = np.ascontiguousarray(xy, dtype=np.float64)
+        for layer in self._layers:
+            layer.add_at(xy, beams)
+        return super().irradiance_at(xy) + beams
 
     def irradiance(self) -> np.ndarray:
         """(h,w,3) W/m^2 in every cell: the fallback photons' estimate at its

@@ -42,19 +42,41 @@ def bilinear_sample(planes: np.ndarray, rc: np.ndarray) -> np.ndarray:
     return _bilinear_sample(np.ascontiguousarray(planes, dtype=np.float64), np.ascontiguousarray(rc, dtype=np.float64))
 
 
+@inline
+def bilinear1(plane, y, x):
+    """`plane (h,w)` interpolated bilinearly at the continuous (row, col)
+    position (y, x), cell centres at integers, clamped to the outermost
+    centres."""
+    h, w = plane.shape
+    down, right = (1 if h > 1 else 0), (1 if w > 1 else 0)
+    y, x = min(max(y, 0.0), h - 1.0), min(max(x, 0.0), w - 1.0)
+    i, j = min(math.floor(y), max(h - 2, 0)), min(math.floor(x), max(w - 2, 0))
+    fy, fx = y - i, x - j
+    return ((1 - fy) * (1 - fx) * plane[i, j] + (1 - fy) * fx * plane[i, j + right]
+            + fy * (1 - fx) * plane[i + down, j] + fy * fx * plane[i + down, j + right])
+
+
 @kernel("f8[:, ::1](f8[:, :, ::1], f8[:, ::1])")
 def _bilinear_sample(planes, rc):
-    h, w = planes.shape[1], planes.shape[2]
-    down, right = (1 if h > 1 else 0), (1 if w > 1 else 0)
     out = np.empty((len(rc), len(planes)))
     for n in range(len(rc)):
-        y, x = min(max(rc[n, 0], 0.0), h - 1.0), min(max(rc[n, 1], 0.0), w - 1.0)
-        i, j = min(math.floor(y), max(h - 2, 0)), min(math.floor(x), max(w - 2, 0))
-        fy, fx = y - i, x - j
         for k in range(len(planes)):
-            out[n, k] = ((1 - fy) * (1 - fx) * planes[k, i, j] + (1 - fy) * fx * planes[k, i, j + right]
-                         + fy * (1 - fx) * planes[k, i + down, j] + fy * fx * planes[k, i + down, j + right])
+            out[n, k] = bilinear1(planes[k], rc[n, 0], rc[n, 1])
     return out
+
+
+@kernel("void(f8[:, :, ::1], f8[::1], f8, f8[:, ::1], f8[:, ::1])")
+def add_within(planes, origin, cell, xy, out):
+    """out[n] += `planes (c,h,w)` bilinear between cell centres (bilinear1)
+    at chart points `xy (n,2)`, for the points on the grid: cells of edge
+    `cell` m from chart corner `origin (2,)` (x, y). One plane (c = 1)
+    adds to every channel of `out (n,3)`."""
+    h, w = planes.shape[1], planes.shape[2]
+    for n in range(len(xy)):
+        y, x = (xy[n, 1] - origin[1]) / cell - 0.5, (xy[n, 0] - origin[0]) / cell - 0.5
+        if y >= -0.5 and x >= -0.5 and y <= h - 0.5 and x <= w - 0.5:
+            for k in range(out.shape[1]):
+                out[n, k] += bilinear1(planes[min(k, len(planes) - 1)], y, x)
 
 
 def rect_means(tables: np.ndarray, origin_rc: np.ndarray, cell: float, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

@@ -32,6 +32,7 @@ from ..optics.media import beer_lambert1
 from ..optics.microfacet import shadowing_weight1, visible_normal_about1
 from ..optics.multiscatter import albedo_at1, multiscatter_factor1
 from ..optics.specular import fresnel_dielectric1, reflect1, refract1
+from ..sampling.hash import hash_uniform1
 from ..sampling.warps import concentric_disc1, orthonormal_basis1
 from ..scene.material_table import Materials
 from ..tracing.accelerator import REFLECTED, REFRACTED, Accelerator, inside1, offset1, shading_normal1
@@ -39,7 +40,7 @@ from ..tracing.hits import MISS, Hits
 from ..util.jit import inline, kernel
 from ..util.rows import contiguous, partition, take_rows
 from ..util.vectors import dot1, max_channel1, normalize1, row, scale1, set_row
-from .paths import Paths
+from .paths import MIN_BRANCH_WEIGHT, Paths
 
 _FAMILY_PRIME = np.uint64(0x100000001B3)
 _ID_PRIME = np.uint64(0x9E3779B97F4A7C15)
@@ -215,6 +216,17 @@ def _multiscatter_factors(rough, obj, entering, crossed, toward, shading, carrie
 
 
 @inline
+def turned1(d, n, eta, mirror):
+    """(out, mirror): `d` reflected about `n` if `mirror`, else refracted
+    through it, or reflected under total internal reflection (mirror then
+    True); refraction is worked out only where it is asked for."""
+    if mirror:
+        return reflect1(d, n), True
+    through, tir = refract1(d, n, eta)
+    return (reflect1(d, n), True) if tir else (through, False)
+
+
+@inline
 def scatter1(d, scattering, facing, shading, eta, alpha, mirror):
     """(out, crossed, kept) of a ray `d` at an interface of `eta`: mirror
     reflection if `mirror`, else Snell refraction (total internal
@@ -227,9 +239,7 @@ def scatter1(d, scattering, facing, shading, eta, alpha, mirror):
     (optics.microfacet.shadowing_weight1; the multiscatter factor is the
     caller's), and nothing where the ray leaves on the wrong side of the
     geometric or the shading normal: Cycles ends those paths."""
-    through, tir = refract1(d, scattering, eta)
-    mirror = mirror or tir
-    out = reflect1(d, scattering) if mirror else through
+    out, mirror = turned1(d, scattering, eta, mirror)
     side = dot1(out, facing)
     wrong = side <= 0.0 if mirror else side >= 0.0
     kept = 1.0
@@ -240,9 +250,7 @@ def scatter1(d, scattering, facing, shading, eta, alpha, mirror):
         else:
             kept = shadowing_weight1(-dot1(d, shading), abs(macro), alpha)
     elif wrong:
-        through, tir = refract1(d, facing, eta)
-        mirror = mirror or tir
-        out = reflect1(d, facing) if mirror else through
+        out, mirror = turned1(d, facing, eta, mirror)
     return normalize1(out), not mirror, kept
 
 
@@ -300,17 +308,18 @@ def _own_families(surface: Interface) -> np.ndarray:
 
 @kernel("i8(f8[:, ::1], f8[:, ::1], i8[::1], f8[::1], u8[::1], i8[::1], i8[::1], i8[::1], "
         "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1], f8[::1], b1[::1], "
-        "f8[:, ::1], b1[::1], i8[::1], f8[:, ::1], f8, "
+        "f8[:, ::1], b1[::1], i8[::1], f8[:, ::1], f8, f8, i8[::1], u8, "
         "f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], u8[::1], i1[::1], i8[::1], i8[::1])")
 def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
               points, facing, shading, scattering, entering, eta, fresnel, alpha, own,
-              color, dielectric, surface_of, factor, epsilon,
+              color, dielectric, surface_of, factor, epsilon, roulette, draws, key,
               out_origins, out_dirs, out_weight, out_medium, out_family, out_kind, out_surface, source):
     """split's branches, all reflected ones, then all refracted ones, into
     the out_ arrays (2n rows); returns how many there are. `source` is the
     path each comes from; `factor (2n,3)` the multiscatter factors of the
     reflected then the refracted branches, or (0,3): none; `family` (0,)
-    where the paths have none."""
+    where the paths have none; `draws (n,)` the ids the roulette of each
+    path's branches hashes, or (0,): no roulette (Roulette)."""
     n, count = len(dirs), 0
     for event in range(2):
         mirror = event == 0
@@ -329,6 +338,12 @@ def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
                 w = (w[0] * factor[j, 0], w[1] * factor[j, 1], w[2] * factor[j, 2])
             if not max_channel1(w) >= floor[i]:
                 continue
+            level = roulette * floor[i] / MIN_BRANCH_WEIGHT
+            if len(draws) and max_channel1(w) < level:
+                chance = max_channel1(w) / level
+                if not hash_uniform1(2 * draws[i] + (1 if crossed else 0), key) < chance:
+                    continue
+                w = (w[0] / chance, w[1] / chance, w[2] / chance)
             set_row(out_origins, count, offset1(row(points, i), row(facing, i), out, epsilon))
             set_row(out_dirs, count, out)
             set_row(out_weight, count, w)
@@ -341,8 +356,22 @@ def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
     return count
 
 
+@dataclass
+class Roulette:
+    """Russian roulette on faint branches (pbrt's, Cycles'): a branch whose
+    throughput w (max channel) falls below `weight` of its path's starting
+    weight (its floor over MIN_BRANCH_WEIGHT) goes on with probability p =
+    w / that level, its weight divided by p, so the mean is kept. The draw
+    hashes 2 id + (the branch was refracted), `draws (n,)` int64 the id of
+    each path, with `key` (sampling.hash.stream_key of the bounce's stream)."""
+
+    weight: float
+    draws: np.ndarray
+    key: int
+
+
 def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, surface: Interface,
-          carries_light: bool) -> Paths:
+          carries_light: bool, roulette: Roulette | None = None) -> Paths:
     """Both branches of every path at its specular hit: the reflected one
     with weight F and the refracted one with weight 1 - F (dielectrics
     only), each times the surface's tint, and where rough about the same
@@ -352,8 +381,9 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
     path's floor stops. With families, each branch records its event
     (next_family1); a branch scattered at a rough surface takes a family of
     its own (SCATTERED). The branches leave epsilon off the surface
-    (offset1). All in one kernel, `_branches`, but the multiscatter factors,
-    which numpy gives first where a row is rough."""
+    (offset1). With a `roulette`, the faint branches play it. All in one
+    kernel, `_branches`, but the multiscatter factors, which numpy gives
+    first where a row is rough."""
     n = len(paths)
     factor = np.zeros((0, 3))
     if surface.rough.any():
@@ -371,7 +401,9 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
         contiguous(surface.shading, f8), contiguous(surface.scattering, f8), contiguous(surface.entering, bool),
         contiguous(surface.eta, f8), contiguous(surface.fresnel, f8), contiguous(surface.alpha, f8),
         contiguous(_own_families(surface), bool), materials.color, materials.dielectric, accel.surface, factor,
-        accel.epsilon, *out)
+        accel.epsilon, 0.0 if roulette is None else roulette.weight,
+        np.zeros(0, dtype=i8) if roulette is None else contiguous(roulette.draws, i8),
+        np.uint64(0 if roulette is None else roulette.key), *out)
     origins, dirs, weight, medium, family, kind, prim, source = (a[:count] for a in out)
     return Paths(origins, dirs, weight, medium, np.take(paths.ids, source), np.take(paths.floor, source),
                  np.ones(count, dtype=bool), None if paths.band is None else np.take(paths.band, source),

@@ -16,8 +16,8 @@ At a dielectric: both the reflected ray (weight F) and the refracted ray
 (weight 1 - F) carry on, each tinted by the glass colour and by Beer-Lambert
 absorption inside, up to `max_depth` bounces. At a reflector the reflected
 ray carries on, times the reflectance colour. A branch fainter than
-ROULETTE_WEIGHT of its camera ray plays Russian roulette
-(`EyeTracer._roulette`): the faint internal reflections that make most of a
+ROULETTE_WEIGHT of its camera ray plays Russian roulette as `split` writes
+it (bounce.Roulette): the faint internal reflections that make most of a
 glass's tree stop, and the mean stays. At a rough surface both branches
 leave about one GGX microfacet normal per eye sample (bounce.facets), the
 pixel's samples stratified over the visible normals, so rough glass and
@@ -37,18 +37,18 @@ import numpy as np
 from ..emission.environment import Environment
 from ..maps.charts import PlaneChart
 from ..maps.illumination_map import IlluminationMap
-from ..sampling.hash import hash_uniform1, stream_key
+from ..sampling.hash import stream_key
 from ..scene import RenderSettings, Scene
 from ..scene.material_table import Materials
-from ..tracing.accelerator import CAMERA, REFRACTED, Accelerator
+from ..tracing.accelerator import CAMERA, Accelerator
 from ..tracing.hits import MISS, Hits
 from ..util.jit import kernel
 from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.rows import take_rows
-from .bounce import Interface, facets, multiscatter, split, trace
+from .bounce import Interface, Roulette, facets, multiscatter, split, trace
 from .camera_rays import eye_rays, pixel_offsets, ray_differentials
 from .direct_light import direct_radiance, rough_specular_radiance, strata, world_light
-from .paths import MIN_BRANCH_WEIGHT, Paths, relative_floor
+from .paths import Paths, relative_floor
 
 PASSES = ("direct", "caustic", "ambient")
 # The buffer of each pixel's share cut out by holdouts (its alpha is 1 minus it).
@@ -178,19 +178,10 @@ class EyeTracer:
             _, pixel, stratum = self._samples(rays.ids)
             uv = strata(pixel, stratum, _FACET_STREAM + 2 * depth, self.settings.seed)
             surface = facets(surface, rays.dirs, self.materials, hits.obj, uv)
-        return self._roulette(split(self.accel, self.materials, rays, hits, surface, carries_light=False), depth)
-
-    def _roulette(self, rays: Paths, depth: int) -> Paths:
-        """Russian roulette on the faint branches (pbrt's, Cycles'): a branch
-        whose throughput w (max channel) falls below ROULETTE_WEIGHT of its
-        camera ray's goes on with probability p = w / that level, its weight
-        divided by p, so the mean is kept. The draw hashes the branch's eye
-        sample, its bounce and whether it was refracted."""
-        rays.weight = np.ascontiguousarray(rays.weight, dtype=np.float64)
-        survive = _roulette_survivors(rays.weight, np.ascontiguousarray(rays.floor, dtype=np.float64),
-                                      np.ascontiguousarray(rays.ids, dtype=np.int64), rays.kind, self.pixels,
-                                      self.spp, np.uint64(stream_key(_ROULETTE_STREAM + depth, self.settings.seed)))
-        return rays if len(survive) == len(rays) else rays.take(survive)
+        _, pixel, stratum = self._samples(rays.ids)
+        roulette = Roulette(ROULETTE_WEIGHT, pixel * self.spp + stratum,
+                            stream_key(_ROULETTE_STREAM + depth, self.settings.seed))
+        return split(self.accel, self.materials, rays, hits, surface, carries_light=False, roulette=roulette)
 
     def _highlights(self, rays: Paths, hits: Hits, surface: Interface) -> None:
         """The lamps' direct light on the rough rows of `surface`, into the
@@ -234,32 +225,6 @@ def _turn_toward(normals, view):
             c = -c
         cos[i] = c
     return cos
-
-
-@kernel("i8[::1](f8[:, ::1], f8[::1], i8[::1], i1[::1], i8[::1], i8, u8)")
-def _roulette_survivors(weight, floor, ids, kind, pixels, spp, key):
-    """(k,) int64 the branches that survive the roulette
-    (EyeTracer._roulette), ascending, `weight (n,3)` divided in place by
-    the chance p of each faint one. Branch i's draw hashes 2 s + (it was
-    refracted), s = pixel * spp + stratum its eye sample in the image
-    (`pixels (m,)` the chunk's), with `key` (sampling.hash.stream_key of its
-    bounce's stream)."""
-    survive = np.empty(len(ids), dtype=np.int64)
-    count = 0
-    for i in range(len(ids)):
-        level = ROULETTE_WEIGHT * floor[i] / MIN_BRANCH_WEIGHT
-        chance = min(max(weight[i, 0], weight[i, 1], weight[i, 2]) / level, 1.0)
-        alive = True
-        if chance < 1.0:
-            sample = pixels[ids[i] // spp] * spp + ids[i] % spp
-            refracted = 1 if kind[i] == REFRACTED else 0
-            alive = hash_uniform1(2 * sample + refracted, key) < chance
-            for c in range(3):
-                weight[i, c] /= chance
-        if alive:
-            survive[count] = i
-            count += 1
-    return survive[:count]
 
 
 def edge_pixels(first: np.ndarray, shown: np.ndarray, contrast: float = EDGE_CONTRAST) -> np.ndarray:

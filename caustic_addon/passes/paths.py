@@ -72,8 +72,10 @@ class Paths:
         return [f.name for f in fields(self) if getattr(self, f.name) is not None]
 
     def select(self, mask: np.ndarray) -> "Paths":
-        """The paths where `mask (n,)` is True."""
-        return self.take(true_rows(np.ascontiguousarray(mask, dtype=bool)))
+        """The paths where `mask (n,)` is True: these very paths where it is
+        True throughout."""
+        index = true_rows(np.ascontiguousarray(mask, dtype=bool))
+        return self if len(index) == len(self) else self.take(index)
 
     def take(self, index: np.ndarray) -> "Paths":
         """The paths `index (k,)` int64, in that order."""

@@ -48,7 +48,10 @@ class Hits:
         return self.obj != MISS
 
     def select(self, mask: np.ndarray) -> "Hits":
-        return self.take(true_rows(np.ascontiguousarray(mask, dtype=bool)))
+        """The hits where `mask (n,)` is True: these very hits where it is
+        True throughout."""
+        index = true_rows(np.ascontiguousarray(mask, dtype=bool))
+        return self if len(index) == len(self.t) else self.take(index)
 
     def take(self, index: np.ndarray) -> "Hits":
         """The hits `index (k,)` int64, in that order."""

@@ -68,9 +68,10 @@ def take(a: np.ndarray, index: np.ndarray) -> np.ndarray:
 
 
 def take_rows(mask: np.ndarray, *arrays: np.ndarray) -> list[np.ndarray]:
-    """The rows of each of `arrays` where `mask (n,)` is True."""
+    """The rows of each of `arrays` where `mask (n,)` is True: the arrays
+    themselves, not copies, where it is True throughout."""
     index = true_rows(np.ascontiguousarray(mask, dtype=bool))
-    return [take(a, index) for a in arrays]
+    return list(arrays) if len(index) == len(mask) else [take(a, index) for a in arrays]
 
 
 def contiguous(a, dtype) -> np.ndarray:
