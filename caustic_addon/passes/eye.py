@@ -173,12 +173,11 @@ class EyeTracer:
         cut = self._cut_out(rays, hits)
         if cut.any():
             rays, hits, surface = rays.select(~cut), hits.select(~cut), surface.select(~cut)
+        _, pixel, stratum = self._samples(rays.ids)
         if surface.rough.any():
             self._highlights(rays, hits, surface)
-            _, pixel, stratum = self._samples(rays.ids)
             uv = strata(pixel, stratum, _FACET_STREAM + 2 * depth, self.settings.seed)
             surface = facets(surface, rays.dirs, self.materials, hits.obj, uv)
-        _, pixel, stratum = self._samples(rays.ids)
         roulette = Roulette(ROULETTE_WEIGHT, pixel * self.spp + stratum,
                             stream_key(_ROULETTE_STREAM + depth, self.settings.seed))
         return split(self.accel, self.materials, rays, hits, surface, carries_light=False, roulette=roulette)
