@@ -27,6 +27,8 @@ _PER_FINE_CELL = 72.0          # the fine beam layer: 3 channels, buffer, values
 _PER_LAMP_RAY_IN_FLIGHT = 3.5e3   # a beam grid point or a photon in a chunk, through every bounce
 _PER_EYE_SAMPLE_IN_FLIGHT = 3.0e3  # an eye sample in a chunk, with its shadow rays
 _PER_PENDING_BEAM = 250.0      # a beam waiting to be rasterised, and its share of the layers
+_PER_SCREEN_PIXEL = 48.0       # a flat receiver's screen layer: 3 channels, its values, the receiver's coverage
+_PER_KEPT_BEAM = 72.0          # a beam kept for another camera's screen layer
 # What to lower, for the part that needs the most.
 _REMEDY = {"the scene's triangles": "simplify the meshes", "the image": "lower the resolution",
            "the illumination maps": "lower the map resolution limit or the receivers",
@@ -51,7 +53,9 @@ def needed_bytes(scene: Scene, settings: RenderSettings) -> dict[str, float]:
     }
     if settings.density == "beam":
         fine_cells = (BeamMap.FINE_LIMIT * (1.0 + 2.0 * BeamMap.FINE_PAD)) ** 2
-        parts["the illumination maps"] += (len(scene.receivers) * _PER_FINE_CELL * fine_cells
+        parts["the illumination maps"] += (len(scene.receivers) * (_PER_FINE_CELL * fine_cells
+                                                                   + _PER_SCREEN_PIXEL * pixels
+                                                                   + _PER_KEPT_BEAM * BeamMap.KEPT_BEAMS)
                                            + _PER_PENDING_BEAM * BeamMap.FLUSH_BEAMS)
     return parts
 

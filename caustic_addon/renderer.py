@@ -16,6 +16,7 @@ from .maps.illumination_map import IlluminationMap
 from .maps.receivers import build_maps
 from .memory import refusal
 from .passes.beam import beam_pass
+from .passes.camera_rays import image_view
 from .passes.eye import HOLDOUT, PASSES, eye_pass
 from .passes.lamp_pass import LampPassStats, lamps_in_glass
 from .passes.photon import photon_pass
@@ -73,9 +74,12 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         clock = time.perf_counter()
         key = lamp_pass_key(scene, settings) if cache is not None else None
         cached = cache.get(key) if cache is not None else None
+        view = image_view(scene.camera)
+        if cached is not None and not all(imap.sees(view) for imap in cached[0].values()):
+            cached = None
         if cached is None:
             warnings += lamps_in_glass(scene, accel)
-            maps = build_maps(scene, settings, warnings)
+            maps = build_maps(scene, settings, warnings, view)
             run_lamps = bool(maps) and bool(scene.casters) and settings.lamp_rays > 0
             share = _LAMP_SHARE if run_lamps else 0.0
             lamp_stats = LampPassStats()

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 from typing import Optional
 
 import numpy as np
@@ -14,6 +15,7 @@ from ..util.rows import take_rows
 from .grid import add_within, channel_tables, rect_means
 from .illumination_map import IlluminationMap
 from .raster import Coverage, signed_areas
+from .screen_layer import ImageView, ScreenLayer
 
 
 # Cells a bake reads at a time.
@@ -139,6 +141,12 @@ class BeamMap(IlluminationMap):
     coarser; the others to the map's own grid, each
     beam's light shared between two layers where its size is in between
     (`layer_shares`). Each layer spans only its beams' bounding box.
+
+    On a flat receiver the beams also go to a `screen` layer
+    (screen_layer.py), which gives the pixels that see the receiver the
+    beams' exact mean over them. The first KEPT_BEAMS beams are kept, so
+    that a camera moved between renders can have its own screen layer
+    without tracing the lamps again (`sees`).
     """
 
     FINE = 8
@@ -163,10 +171,14 @@ class BeamMap(IlluminationMap):
     # to 50% off on the map's own cells.)
     FINE_BRIGHTNESS = 1e-3
     FINE_TAIL = 1e-5
+    # Beams kept for another camera's screen layer (about 72 B a beam); a
+    # map with more traces the lamps again when the camera moves.
+    KEPT_BEAMS = 1 << 20
 
-    def __init__(self, *args, threads: int = 1, **kwargs):
+    def __init__(self, *args, threads: int = 1, screen: Optional[ScreenLayer] = None, **kwargs):
         super().__init__(*args, **kwargs)
-        self.threads = threads
+        self.threads, self.screen = threads, screen
+        self._kept: Optional[list[tuple[np.ndarray, np.ndarray]]] = None if screen is None else []
         self._beam_parts: list[tuple[np.ndarray, np.ndarray]] = []
         self._pending_beams = 0
         self._grids: Optional[list[Optional[_LayerGrid]]] = None
@@ -182,6 +194,10 @@ class BeamMap(IlluminationMap):
             self._beam_parts.append((corners, irradiance))
             self._pending_beams += len(corners)
             self.beams += len(corners)
+            if self._kept is not None and self.beams > self.KEPT_BEAMS:
+                self._kept = None
+            elif self._kept is not None:
+                self._kept.append((corners, irradiance))
             if self._pending_beams >= self.FLUSH_BEAMS:
                 self._rasterise_pending(whole_chart=True)
 
@@ -249,14 +265,12 @@ class BeamMap(IlluminationMap):
             fine = np.zeros(len(corners))
         shares = (fine, (1.0 - fine) * (1.0 - coarse), coarse)
         coloured = (irradiance[:, 0] != irradiance[:, 1]) | (irradiance[:, 0] != irradiance[:, 2])
-        work = [(g, share) for g, share in zip(self._grids, shares) if g is not None and (share > 0).any()]
-
-        def rasterise(job) -> None:
-            g, share = job
-            g.add(corners, irradiance, share, not (coloured & (share > 0.0)).any())
-
+        work = [partial(g.add, corners, irradiance, share, not (coloured & (share > 0.0)).any())
+                for g, share in zip(self._grids, shares) if g is not None and (share > 0).any()]
+        if self.screen is not None:
+            work.append(partial(self.screen.add, corners, irradiance))
         with ThreadPoolExecutor(max(1, min(self.threads, len(work)))) as pool:
-            list(pool.map(rasterise, work))
+            list(pool.map(lambda job: job(), work))
 
     def prepare(self) -> None:
         """Rasterise the pending beams and turn the layers' grids into
@@ -268,6 +282,28 @@ class BeamMap(IlluminationMap):
             if self._grids is not None:
                 self._layers += [_Layer.of_coverage(g) for g in self._grids if g is not None]
                 self._grids = None
+            if self.screen is not None:
+                self.screen.prepare()
+
+    def sees(self, view: ImageView) -> bool:
+        """Whether the map has (or, from its kept beams, now makes) the
+        screen layer of camera `view`, where it has one."""
+        if self.screen is None or self.screen.view == view:
+            return True
+        if self._kept is None:
+            return False
+        self.prepare()
+        screen = self.screen.for_view(view)
+        for corners, irradiance in self._kept:
+            screen.add(corners, irradiance)
+        screen.prepare()
+        self.screen = screen
+        return True
+
+    def seen_mean(self, pixels: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        if self.screen is None:
+            return self.mean_over(lo, hi)
+        return IlluminationMap.mean_over(self, lo, hi) + self.screen.at(pixels)
 
     def irradiance_at(self, xy: np.ndarray) -> np.ndarray:
         beams = np.zeros((len(xy), 3))

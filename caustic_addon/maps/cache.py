@@ -1,6 +1,9 @@
 """Illumination maps kept between renders: moving the camera, or changing
 only the eye pass (samples, ambient), must not re-run the pass
-from the lamps. Maps are found by a hash of everything that pass reads."""
+from the lamps. Maps are found by a hash of everything that pass reads;
+the renderer uses them if each can serve the camera (`sees`: a flat
+receiver's beam map makes the new view's screen layer from the beams it
+kept, and one that kept too few to do it sends the lamps out again)."""
 
 from __future__ import annotations
 

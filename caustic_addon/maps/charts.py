@@ -92,15 +92,16 @@ class PlaneChart(Chart):
     def __init__(self, point: np.ndarray, normal: np.ndarray, vertices: np.ndarray):
         self.point, self.normal = point, normal
         self.axis_x, self.axis_y = orthonormal_basis(normal)
-        local = self._local(vertices)
+        local = self.plane_coords(vertices)
         self.origin, self.size = local.min(axis=0), np.ptp(local, axis=0)
 
-    def _local(self, points: np.ndarray) -> np.ndarray:
+    def plane_coords(self, points: np.ndarray) -> np.ndarray:
+        """(n,2) chart coordinates of world `points (n,3)` projected onto the plane."""
         rel = points - self.point
         return np.stack([rel @ self.axis_x, rel @ self.axis_y], axis=1)
 
     def coords(self, prim, u, v, points):
-        return self._local(points)
+        return self.plane_coords(points)
 
     def area_scale(self, prim):
         return np.ones(len(prim))

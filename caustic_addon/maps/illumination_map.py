@@ -144,6 +144,17 @@ class IlluminationMap:
         half = 0.5 * np.maximum(hi[:, 0] - lo[:, 0], hi[:, 1] - lo[:, 1]) / self.cell
         return self._adaptive(0.5 * (lo + hi), np.ceil(half - 0.5).astype(np.int64))
 
+    def seen_mean(self, pixels: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """Mean caustic irradiance (n,3) W/m^2 that the camera rays
+        through flat image pixels `pixels (n,)` see, their footprints the
+        chart rectangles [lo, hi] (`PlaneChart.footprint`)."""
+        return self.mean_over(lo, hi)
+
+    def sees(self, view) -> bool:
+        """Whether the map serves camera `view` (screen_layer.ImageView)
+        as well as the camera it was traced for."""
+        return True
+
     @property
     def origin_rc(self) -> np.ndarray:
         """(2,) chart (y, x) of the grid's first corner."""

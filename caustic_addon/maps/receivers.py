@@ -14,6 +14,7 @@ from .beam_map import BeamMap
 from .box_chart import BoxChart
 from .charts import Chart, PlaneChart, UVChart
 from .illumination_map import IlluminationMap, MapEstimate, auto_cell_size
+from .screen_layer import ImageView, ScreenLayer
 
 
 # Cells between a box chart's islands: beyond the adaptive estimate's
@@ -24,8 +25,10 @@ from .illumination_map import IlluminationMap, MapEstimate, auto_cell_size
 GUTTER_CELLS = 40
 
 
-def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str]) -> dict[int, IlluminationMap]:
-    """Receiver object index -> its empty map; a warning for each receiver
+def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str],
+               view: ImageView) -> dict[int, IlluminationMap]:
+    """Receiver object index -> its empty map, a flat receiver's beam map
+    with a screen layer for the camera `view`; a warning for each receiver
     that gets none, a coarser cell than the map scale asks for, or an
     automatic chart whose parts overlap."""
     estimate = MapEstimate(settings.k_nearest if settings.density in ("adaptive", "beam") else None)
@@ -46,8 +49,14 @@ def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str]) -> d
             for _ in range(3):
                 chart.lay_out(GUTTER_CELLS * _cell_size(obj.name, chart, settings, []))
         cell = _cell_size(obj.name, chart, settings, warnings)
-        maps[index] = (BeamMap(obj.name, chart, cell, estimate, threads=settings.threads)
-                       if settings.density == "beam" else IlluminationMap(obj.name, chart, cell, estimate))
+        if settings.density != "beam":
+            maps[index] = IlluminationMap(obj.name, chart, cell, estimate)
+            continue
+        screen = None
+        if isinstance(chart, PlaneChart):
+            receiver = chart.plane_coords(obj.mesh.corners.reshape(-1, 3)).reshape(-1, 3, 2)
+            screen = ScreenLayer(view, chart, np.ascontiguousarray(receiver))
+        maps[index] = BeamMap(obj.name, chart, cell, estimate, threads=settings.threads, screen=screen)
     return maps
 
 

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from ..maps.screen_layer import ImageView
 from ..sampling.sequences import r2_sequence
 from ..scene import Camera
 from ..util.jit import kernel
@@ -46,6 +47,17 @@ def _view(camera: Camera) -> tuple[np.ndarray, float]:
     if camera.kind == "ORTHO":
         return frame, camera.ortho_scale / viewfac
     return frame, 2.0 * math.tan(0.5 * camera.fov) / viewfac
+
+
+def image_view(camera: Camera) -> ImageView:
+    """How `camera` maps world points to pixels: the inverse of `eye_rays`."""
+    frame, pixsize = _view(camera)
+    viewfac = _viewfac(camera)
+    rotation = frame[:3]
+    to_camera = np.concatenate([rotation, -(rotation @ frame[3])[:, None]], axis=1)
+    return ImageView(tuple(float(v) for v in to_camera.ravel()), camera.pixx, camera.pixy, pixsize,
+                     (0.5 * camera.pixx - camera.shift_x * viewfac, 0.5 * camera.pixy + camera.shift_y * viewfac),
+                     float(camera.clip_start), camera.kind == "ORTHO")
 
 
 def eye_rays(camera: Camera, pixels: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

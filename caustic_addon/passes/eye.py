@@ -1,9 +1,11 @@
 """The backward pass: Whitted ray tracing from the eye (the paper's backward
 ray tracing), with the illumination maps' light on the receivers.
 
-Where a camera ray meets a flat receiver directly, the caustic is averaged
-over the footprint of the ray's pixel stratum, not read at one point: a
-caustic's folds are singular, and point samples of them alias.
+Where a camera ray meets a flat receiver directly, the caustic is averaged,
+not read at one point: a caustic's folds are singular, and point samples of
+them alias. The beams' light is their exact mean over the part of the pixel
+that sees the receiver (maps/screen_layer.py), the fallback photons' their
+mean over the footprint of the ray's pixel stratum.
 
 At an opaque surface: ambient * albedo, plus direct light from each lamp and
 from the world (direct_light.py), plus caustic irradiance E_c * albedo / pi
@@ -163,7 +165,7 @@ class EyeTracer:
                 lo, hi, ok = imap.chart.footprint(origins, dirs, *ray_differentials(self.scene.camera, dirs),
                                                   self.stratum)
                 spread[primary[ok]] = True
-                irradiance[spread] = imap.mean_over(lo[ok], hi[ok])
+                irradiance[spread] = imap.seen_mean(np.take(pixel[on_map], primary[ok]), lo[ok], hi[ok])
             irradiance[~spread] = imap.irradiance_at(xy[~spread])
             radiance = irradiance * take_rows(on_map, diffuse)[0] / math.pi
             self._add("caustic", here.ids, here.weight, radiance)

@@ -123,7 +123,7 @@ def test_a_pixel_footprint_stands_as_the_rectangle_of_its_mean_and_spread():
     ticks = (np.arange(64) + 0.5) / 64
     spread = np.stack(np.meshgrid(ticks, ticks), axis=-1).reshape(-1, 2)
     o, d = eye_rays(cam, np.repeat(pixel, len(spread)), spread)
-    hits = floor._local(o - (o[:, 2] / d[:, 2])[:, None] * d)
+    hits = floor.plane_coords(o - (o[:, 2] / d[:, 2])[:, None] * d)
     np.testing.assert_allclose(0.5 * (lo + hi)[0], hits.mean(axis=0), atol=1e-3 * np.ptp(hits, axis=0).max())
     np.testing.assert_allclose((hi - lo)[0] ** 2 / 12.0, hits.var(axis=0), rtol=1e-2)
     assert (hi - lo)[0, 0] < 0.97 * np.ptp(hits[:, 0])
