@@ -44,6 +44,13 @@ test-engine: venv
 
 test: venv package $(addprefix test-,$(NEWEST) $(OLDER))
 
+# `make test` runs the Blenders' suites two at a time, each suite's output
+# kept whole: a suite keeps about 1.4 of the 2 cores busy, and two side by
+# side take 22 minutes where one after another took 32 (2026-12-02).
+ifeq ($(MAKECMDGOALS),test)
+MAKEFLAGS += --jobs=2 --output-sync=target
+endif
+
 $(addprefix test-,$(NEWEST) $(OLDER)): test-%: venv package
 	@echo "== Blender $* =="
 	$(call venv_of,$*)/bin/python -m pytest -c tests/pytest.ini tests
