@@ -14,7 +14,7 @@ from ..scene import Mesh
 from ..tracing.topology import mesh_pieces
 from ..util.jit import kernel
 from ..util.rows import row_ids
-from ..util.vectors import DIVISION_FLOOR, dot1, float_rows, row, sum1
+from ..util.vectors import DIVISION_FLOOR, dot1, float_rows, row, sum1, transferred1
 from .raster import rasterise_triangles
 
 
@@ -112,7 +112,9 @@ class PlaneChart(Chart):
         stratum, `stratum` pixels wide, around each ray `origins, dirs
         (n,3)` whose change per pixel step is `d_origins, d_dirs (n,2,3)`
         (camera.ray_differentials): (lo (n,2), hi (n,2), ok (n,) bool); not
-        ok where the ray misses the plane.
+        ok where the ray runs parallel to the plane. The ray's line meets
+        the plane behind its origin where the ray left a surface in contact
+        with the receiver (tracing/contact.py), at -epsilon.
 
         To first order the footprint is the parallelogram that J, the chart
         point's derivative per pixel step (2x2), spans around the hit, and a
@@ -153,14 +155,13 @@ def _plane_footprints(origins, dirs, d_origins, d_dirs, stratum, frame, lo, hi, 
         o, d = row(origins, i), row(dirs, i)
         along = dot1(d, n)
         s = dot1(sum1(1.0, p, -1.0, o), n) / along if along != 0.0 else math.inf
-        ok[i] = math.isfinite(s) and s > 0.0
+        ok[i] = math.isfinite(s)
         if not ok[i]:
-            s, along = 0.0, 1.0
+            continue
         var_x = var_y = 0.0
         for k in range(2):
-            moved = sum1(1.0, (d_origins[i, k, 0], d_origins[i, k, 1], d_origins[i, k, 2]), s,
-                         (d_dirs[i, k, 0], d_dirs[i, k, 1], d_dirs[i, k, 2]))
-            d_point = sum1(1.0, moved, -dot1(moved, n) / along, d)
+            d_point = transferred1((d_origins[i, k, 0], d_origins[i, k, 1], d_origins[i, k, 2]),
+                                   (d_dirs[i, k, 0], d_dirs[i, k, 1], d_dirs[i, k, 2]), d, s, n)
             var_x += dot1(d_point, x) ** 2
             var_y += dot1(d_point, y) ** 2
         rel = sum1(1.0, sum1(1.0, o, s, d), -1.0, p)

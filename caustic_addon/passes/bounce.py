@@ -40,6 +40,7 @@ from ..tracing.hits import MISS, Hits
 from ..util.jit import inline, kernel
 from ..util.rows import contiguous, partition, take_rows
 from ..util.vectors import dot1, max_channel1, normalize1, row, scale1, set_row
+from .differentials import branch_differentials
 from .paths import MIN_BRANCH_WEIGHT, Paths
 
 _FAMILY_PRIME = np.uint64(0x100000001B3)
@@ -383,7 +384,8 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
     its own (SCATTERED). The branches leave epsilon off the surface
     (offset1). With a `roulette`, the faint branches play it. All in one
     kernel, `_branches`, but the multiscatter factors, which numpy gives
-    first where a row is rough."""
+    first where a row is rough. Paths with ray differentials hand them on
+    to their branches (differentials.py)."""
     n = len(paths)
     factor = np.zeros((0, 3))
     if surface.rough.any():
@@ -405,9 +407,13 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
         np.zeros(0, dtype=i8) if roulette is None else contiguous(roulette.draws, i8),
         np.uint64(0 if roulette is None else roulette.key), *out)
     origins, dirs, weight, medium, family, kind, prim, source = (a[:count] for a in out)
+    d_origins = d_dirs = None
+    if paths.d_origins is not None:
+        d_origins, d_dirs = branch_differentials(accel, paths, hits, surface, source, kind, dirs)
     return Paths(origins, dirs, weight, medium, np.take(paths.ids, source), np.take(paths.floor, source),
                  np.ones(count, dtype=bool), None if paths.band is None else np.take(paths.band, source),
-                 None if paths.family is None else family, None if paths.kind is None else kind, prim)
+                 None if paths.family is None else family, None if paths.kind is None else kind, prim,
+                 d_origins, d_dirs)
 
 
 @kernel("void(f8[:, ::1], i8[::1], f8[::1], i8[::1], f8[:, ::1], b1[::1], f8[:, ::1], i1[::1])")

@@ -40,6 +40,10 @@ class Paths:
     surface   (n,) int64 the triangle the path last scattered at, MISS
               until it first does (where surfaces touch, the next one it
               meets may lie at that very point: tracing/contact.py)
+    d_origins (n,2,3) float32 world: how the origin changes per pixel step
+    d_dirs    (n,2,3) float32 right and down (passes/differentials.py), or
+              None where no one asks (eye rays ask once they meet a
+              specular surface)
     """
 
     origins: np.ndarray
@@ -53,6 +57,8 @@ class Paths:
     family: Optional[np.ndarray] = None
     kind: Optional[np.ndarray] = None
     surface: Optional[np.ndarray] = None
+    d_origins: Optional[np.ndarray] = None
+    d_dirs: Optional[np.ndarray] = None
 
     def __len__(self) -> int:
         return len(self.ids)

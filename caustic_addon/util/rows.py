@@ -46,7 +46,7 @@ def _take_values(a, index, out):
         out[k] = a[index[k]]
 
 
-@kernel("void(f8[:, ::1], i8[::1], f8[:, ::1])")
+@kernel("void(f8[:, ::1], i8[::1], f8[:, ::1])", "void(f4[:, ::1], i8[::1], f4[:, ::1])")
 def _take_vectors(a, index, out):
     for k in range(len(index)):
         j = index[k]
@@ -56,7 +56,7 @@ def _take_vectors(a, index, out):
 
 def take(a: np.ndarray, index: np.ndarray) -> np.ndarray:
     """The rows `index (k,)` int64 of `a`, as np.take(a, index, axis=0): `a`
-    (n,) of a kernel's dtypes, or (n,...) float64."""
+    (n,) of a kernel's dtypes, or (n,...) float64 or float32."""
     a = np.ascontiguousarray(a)
     out = np.empty((len(index),) + a.shape[1:], dtype=a.dtype)
     if a.ndim == 1:

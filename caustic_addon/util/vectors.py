@@ -94,3 +94,14 @@ def max_channel1(c):
 def scale1(s, a):
     """s a of the 3-tuple `a` and scalar `s`."""
     return (s * a[0], s * a[1], s * a[2])
+
+
+@inline
+def transferred1(do, dd, d, s, normal):
+    """dp, the change of the point where the ray o + s d meets the plane of
+    `normal`, when the ray changes by `do`, `dd` (Igehy 1999, "Tracing ray
+    differentials", the transfer):
+
+        dp = (do + s dd) + ds d,   ds = -((do + s dd).n) / (d.n)"""
+    moved = sum1(1.0, do, s, dd)
+    return sum1(1.0, moved, -dot1(moved, normal) / dot1(d, normal), d)

@@ -1,0 +1,140 @@
+"""Ray differentials through specular bounces (Igehy 1999, "Tracing ray
+differentials"; pbrt's SurfaceInteraction::ComputeDifferentials): how an eye
+ray's origin and direction change per pixel step, carried through each
+reflection and refraction, so that a receiver seen through glass or in a
+mirror is averaged over the pixel's footprint there (PlaneChart.footprint),
+as one seen directly is, and not read at a point.
+
+A ray is o + s d; its differentials do, dd are (2,3) per ray, one row per
+pixel step right and down. At a hit the point moves by the transfer dp, the
+surface's shading normal by dn (its corner normals' interpolant), and the
+new direction by the derivative of the reflection or refraction formula."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..tracing.accelerator import REFLECTED, REFRACTED
+from ..util.jit import inline, kernel
+from ..util.rows import contiguous
+from ..util.vectors import dot1, row, scale1, sum1, transferred1
+
+
+@inline
+def corner1(a, i, k):
+    """Row k of item i of `a (n,k,3)` (a triangle's corner, a ray's
+    differential) as a 3-tuple."""
+    return (a[i, k, 0], a[i, k, 1], a[i, k, 2])
+
+
+@inline
+def set_corner1(a, i, k, v):
+    """Row k of item i of `a (n,k,3)` = the 3-tuple `v`."""
+    a[i, k, 0], a[i, k, 1], a[i, k, 2] = v[0], v[1], v[2]
+
+
+@inline
+def normal_change1(corners, corner_normal, prim, u, v, shading, dp0, dp1):
+    """(dn0, dn1): the change of the unit shading normal `shading` of
+    triangle `prim` (corners (N,3,3), corner normals (N,3,3)) at
+    barycentrics u, v when the point moves by `dp0`, `dp1` in its plane.
+    The point's barycentric change solves dp = e1 du + e2 dv (least
+    squares, e_k = p_k - p_0); the interpolant m = (1-u-v) n_0 + u n_1 +
+    v n_2 changes by dm = (n_1 - n_0) du + (n_2 - n_0) dv, and its
+    normalised form by (dm - n (n.dm)) / |m|, with the sign that orients it
+    as `shading`."""
+    none = (0.0, 0.0, 0.0)
+    p0 = corner1(corners, prim, 0)
+    e1, e2 = sum1(1.0, corner1(corners, prim, 1), -1.0, p0), sum1(1.0, corner1(corners, prim, 2), -1.0, p0)
+    g11, g12, g22 = dot1(e1, e1), dot1(e1, e2), dot1(e2, e2)
+    det = g11 * g22 - g12 * g12
+    n0, n1, n2 = corner1(corner_normal, prim, 0), corner1(corner_normal, prim, 1), corner1(corner_normal, prim, 2)
+    m = sum1(1.0, sum1(1.0 - u - v, n0, u, n1), v, n2)
+    size = math.sqrt(dot1(m, m))
+    if not (det > 0.0 and size > 1e-12):
+        return none, none
+    n = scale1(1.0 / size, m)
+    scale = (1.0 if dot1(n, shading) >= 0.0 else -1.0) / size
+    dm_du, dm_dv = sum1(1.0, n1, -1.0, n0), sum1(1.0, n2, -1.0, n0)
+    b = (dot1(dp0, e1), dot1(dp0, e2), dot1(dp1, e1), dot1(dp1, e2))
+    dm0 = sum1((g22 * b[0] - g12 * b[1]) / det, dm_du, (g11 * b[1] - g12 * b[0]) / det, dm_dv)
+    dm1 = sum1((g22 * b[2] - g12 * b[3]) / det, dm_du, (g11 * b[3] - g12 * b[2]) / det, dm_dv)
+    return (scale1(scale, sum1(1.0, dm0, -dot1(n, dm0), n)), scale1(scale, sum1(1.0, dm1, -dot1(n, dm1), n)))
+
+
+@inline
+def reflected_change1(d, dd, n, dn):
+    """dr of the mirror direction r = d - 2 (d.n) n (Igehy 1999):
+
+        dr = dd - 2 ((d.n) dn + (dd.n + d.dn) n)"""
+    c = dot1(d, n)
+    return sum1(1.0, dd, -2.0, sum1(c, dn, dot1(dd, n) + dot1(d, dn), n))
+
+
+@inline
+def refracted_change1(d, dd, n, dn, t, eta):
+    """dt of the refracted direction t = eta d - mu n, mu = eta (d.n) +
+    cos_t and cos_t = -t.n, `n` on the side `d` comes from (Igehy 1999):
+
+        dt = eta dd - mu dn - dmu n,  dmu = (eta - eta^2 (d.n) / (t.n)) d(d.n)
+
+    with d(d.n) = dd.n + d.dn."""
+    c, cos_t = dot1(d, n), -dot1(t, n)
+    mu = eta * c + cos_t
+    d_mu = (eta + eta * eta * c / cos_t) * (dot1(dd, n) + dot1(d, dn)) if cos_t > 0.0 else 0.0
+    return sum1(1.0, sum1(eta, dd, -mu, dn), -d_mu, n)
+
+
+@kernel("void(i8[::1], i8[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], "
+        "f8[::1], f8[::1], f8[:, :, ::1], f8[:, :, ::1], f4[:, :, ::1], f4[:, :, ::1], f4[:, :, ::1], "
+        "f4[:, :, ::1])")
+def _branch_differentials(reflected, refracted, out_dirs, dirs, t, facing, scattering, eta, prim, u, v, corners,
+                          corner_normal, d_origins, d_dirs, out_d_origins, out_d_dirs):
+    """The differentials of the branches of each path i: its reflected
+    branch is row `reflected[i]` of the out_ arrays, its refracted one row
+    `refracted[i]` (-1: none). The transfer and the normal's change are the
+    path's, shared by its branches."""
+    for i in range(len(reflected)):
+        if reflected[i] < 0 and refracted[i] < 0:
+            continue
+        d, normal = row(dirs, i), row(scattering, i)
+        dd0, dd1 = corner1(d_dirs, i, 0), corner1(d_dirs, i, 1)
+        dp0 = transferred1(corner1(d_origins, i, 0), dd0, d, t[i], row(facing, i))
+        dp1 = transferred1(corner1(d_origins, i, 1), dd1, d, t[i], row(facing, i))
+        dn0, dn1 = normal_change1(corners, corner_normal, prim[i], u[i], v[i], normal, dp0, dp1)
+        k = reflected[i]
+        if k >= 0:
+            set_corner1(out_d_origins, k, 0, dp0)
+            set_corner1(out_d_origins, k, 1, dp1)
+            set_corner1(out_d_dirs, k, 0, reflected_change1(d, dd0, normal, dn0))
+            set_corner1(out_d_dirs, k, 1, reflected_change1(d, dd1, normal, dn1))
+        k = refracted[i]
+        if k >= 0:
+            out = row(out_dirs, k)
+            set_corner1(out_d_origins, k, 0, dp0)
+            set_corner1(out_d_origins, k, 1, dp1)
+            set_corner1(out_d_dirs, k, 0, refracted_change1(d, dd0, normal, dn0, out, eta[i]))
+            set_corner1(out_d_dirs, k, 1, refracted_change1(d, dd1, normal, dn1, out, eta[i]))
+
+
+def branch_differentials(accel, paths, hits, surface, source: np.ndarray, kind: np.ndarray,
+                         out_dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(d_origins, d_dirs), each (k,2,3) float32, of the branches that `source (k,)`
+    paths of `paths` sent from their `hits` at `surface`
+    (bounce.Interface), along `out_dirs (k,3)`, each of `kind (k,)`."""
+    k = len(source)
+    branch = {kind_: np.full(len(paths), -1, dtype=np.int64) for kind_ in (REFLECTED, REFRACTED)}
+    for kind_, rows in branch.items():
+        chosen = np.flatnonzero(kind == kind_)
+        rows[source[chosen]] = chosen
+    out_d_origins, out_d_dirs = np.empty((k, 2, 3), dtype=np.float32), np.empty((k, 2, 3), dtype=np.float32)
+    f8 = np.float64
+    _branch_differentials(branch[REFLECTED], branch[REFRACTED], contiguous(out_dirs, f8),
+                          contiguous(paths.dirs, f8), contiguous(hits.t, f8), contiguous(surface.facing, f8),
+                          contiguous(surface.scattering, f8), contiguous(surface.eta, f8),
+                          contiguous(hits.prim, np.int64), contiguous(hits.u, f8), contiguous(hits.v, f8),
+                          accel.corners, accel.corner_normal, contiguous(paths.d_origins, np.float32),
+                          contiguous(paths.d_dirs, np.float32), out_d_origins, out_d_dirs)
+    return out_d_origins, out_d_dirs
