@@ -14,7 +14,7 @@ from ..scene import Mesh
 from ..tracing.topology import mesh_pieces
 from ..util.jit import kernel
 from ..util.rows import row_ids
-from ..util.vectors import DIVISION_FLOOR, dot1, float_rows, row, sum1, transferred1
+from ..util.vectors import DIVISION_FLOOR, dot1, float_rows, row, subrow, sum1, transferred1
 from .raster import rasterise_triangles
 
 
@@ -160,8 +160,7 @@ def _plane_footprints(origins, dirs, d_origins, d_dirs, stratum, frame, lo, hi, 
             continue
         var_x = var_y = 0.0
         for k in range(2):
-            d_point = transferred1((d_origins[i, k, 0], d_origins[i, k, 1], d_origins[i, k, 2]),
-                                   (d_dirs[i, k, 0], d_dirs[i, k, 1], d_dirs[i, k, 2]), d, s, n)
+            d_point = transferred1(subrow(d_origins, i, k), subrow(d_dirs, i, k), d, s, n)
             var_x += dot1(d_point, x) ** 2
             var_y += dot1(d_point, y) ** 2
         rel = sum1(1.0, sum1(1.0, o, s, d), -1.0, p)

@@ -19,20 +19,7 @@ import numpy as np
 from ..tracing.accelerator import REFLECTED, REFRACTED
 from ..util.jit import inline, kernel
 from ..util.rows import contiguous
-from ..util.vectors import dot1, row, scale1, sum1, transferred1
-
-
-@inline
-def corner1(a, i, k):
-    """Row k of item i of `a (n,k,3)` (a triangle's corner, a ray's
-    differential) as a 3-tuple."""
-    return (a[i, k, 0], a[i, k, 1], a[i, k, 2])
-
-
-@inline
-def set_corner1(a, i, k, v):
-    """Row k of item i of `a (n,k,3)` = the 3-tuple `v`."""
-    a[i, k, 0], a[i, k, 1], a[i, k, 2] = v[0], v[1], v[2]
+from ..util.vectors import dot1, row, scale1, set_subrow, subrow, sum1, transferred1
 
 
 @inline
@@ -46,11 +33,11 @@ def normal_change1(corners, corner_normal, prim, u, v, shading, dp0, dp1):
     normalised form by (dm - n (n.dm)) / |m|, with the sign that orients it
     as `shading`."""
     none = (0.0, 0.0, 0.0)
-    p0 = corner1(corners, prim, 0)
-    e1, e2 = sum1(1.0, corner1(corners, prim, 1), -1.0, p0), sum1(1.0, corner1(corners, prim, 2), -1.0, p0)
+    p0 = subrow(corners, prim, 0)
+    e1, e2 = sum1(1.0, subrow(corners, prim, 1), -1.0, p0), sum1(1.0, subrow(corners, prim, 2), -1.0, p0)
     g11, g12, g22 = dot1(e1, e1), dot1(e1, e2), dot1(e2, e2)
     det = g11 * g22 - g12 * g12
-    n0, n1, n2 = corner1(corner_normal, prim, 0), corner1(corner_normal, prim, 1), corner1(corner_normal, prim, 2)
+    n0, n1, n2 = subrow(corner_normal, prim, 0), subrow(corner_normal, prim, 1), subrow(corner_normal, prim, 2)
     m = sum1(1.0, sum1(1.0 - u - v, n0, u, n1), v, n2)
     size = math.sqrt(dot1(m, m))
     if not (det > 0.0 and size > 1e-12):
@@ -100,23 +87,23 @@ def _branch_differentials(reflected, refracted, out_dirs, dirs, t, facing, scatt
         if reflected[i] < 0 and refracted[i] < 0:
             continue
         d, normal = row(dirs, i), row(scattering, i)
-        dd0, dd1 = corner1(d_dirs, i, 0), corner1(d_dirs, i, 1)
-        dp0 = transferred1(corner1(d_origins, i, 0), dd0, d, t[i], row(facing, i))
-        dp1 = transferred1(corner1(d_origins, i, 1), dd1, d, t[i], row(facing, i))
+        dd0, dd1 = subrow(d_dirs, i, 0), subrow(d_dirs, i, 1)
+        dp0 = transferred1(subrow(d_origins, i, 0), dd0, d, t[i], row(facing, i))
+        dp1 = transferred1(subrow(d_origins, i, 1), dd1, d, t[i], row(facing, i))
         dn0, dn1 = normal_change1(corners, corner_normal, prim[i], u[i], v[i], normal, dp0, dp1)
         k = reflected[i]
         if k >= 0:
-            set_corner1(out_d_origins, k, 0, dp0)
-            set_corner1(out_d_origins, k, 1, dp1)
-            set_corner1(out_d_dirs, k, 0, reflected_change1(d, dd0, normal, dn0))
-            set_corner1(out_d_dirs, k, 1, reflected_change1(d, dd1, normal, dn1))
+            set_subrow(out_d_origins, k, 0, dp0)
+            set_subrow(out_d_origins, k, 1, dp1)
+            set_subrow(out_d_dirs, k, 0, reflected_change1(d, dd0, normal, dn0))
+            set_subrow(out_d_dirs, k, 1, reflected_change1(d, dd1, normal, dn1))
         k = refracted[i]
         if k >= 0:
             out = row(out_dirs, k)
-            set_corner1(out_d_origins, k, 0, dp0)
-            set_corner1(out_d_origins, k, 1, dp1)
-            set_corner1(out_d_dirs, k, 0, refracted_change1(d, dd0, normal, dn0, out, eta[i]))
-            set_corner1(out_d_dirs, k, 1, refracted_change1(d, dd1, normal, dn1, out, eta[i]))
+            set_subrow(out_d_origins, k, 0, dp0)
+            set_subrow(out_d_origins, k, 1, dp1)
+            set_subrow(out_d_dirs, k, 0, refracted_change1(d, dd0, normal, dn0, out, eta[i]))
+            set_subrow(out_d_dirs, k, 1, refracted_change1(d, dd1, normal, dn1, out, eta[i]))
 
 
 def branch_differentials(accel, paths, hits, surface, source: np.ndarray, kind: np.ndarray,

@@ -66,6 +66,19 @@ def set_row(a, i, v):
 
 
 @inline
+def subrow(a, i, k):
+    """Row k of item i of `a (n,m,3)` (a triangle's corner, one of a ray's
+    differentials) as a 3-tuple."""
+    return (a[i, k, 0], a[i, k, 1], a[i, k, 2])
+
+
+@inline
+def set_subrow(a, i, k, v):
+    """Row k of item i of `a (n,m,3)` = the 3-tuple `v`."""
+    a[i, k, 0], a[i, k, 1], a[i, k, 2] = v[0], v[1], v[2]
+
+
+@inline
 def dot1(a, b):
     """a . b of 3-tuples."""
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
