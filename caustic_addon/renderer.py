@@ -15,6 +15,7 @@ from .maps.cache import MapCache, lamp_pass_key
 from .maps.illumination_map import IlluminationMap
 from .maps.receivers import build_maps
 from .memory import refusal
+from .emission.world_sun import extract_sun
 from .passes.beam import beam_pass
 from .passes.camera_rays import image_view
 from .passes.eye import HOLDOUT, PASSES, eye_pass
@@ -63,6 +64,10 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         raise SceneError(too_large)
     monitor = Monitor(progress, cancel)
     seconds = {}
+    # an environment's sun is a lamp, the rest of the world the sky the eye
+    # pass sees through the casters
+    sun, sky = extract_sun(scene.world)
+    lamps = scene.lights + ([sun] if sun is not None else [])
 
     clock = time.perf_counter()
     accel = Accelerator(scene.objects, scene.extent(), settings.threads)
@@ -85,7 +90,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
             lamp_stats = LampPassStats()
             if run_lamps:
                 lamp_pass = beam_pass if settings.density == "beam" else photon_pass
-                lamp_stats = lamp_pass(scene, settings, accel, materials, maps, monitor, share)
+                lamp_stats = lamp_pass(scene, lamps, settings, accel, materials, maps, monitor, share)
             if cache is not None:
                 cache.put(key, (maps, lamp_stats, list(warnings)))
         else:
@@ -101,7 +106,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         seconds["maps"] = time.perf_counter() - clock
 
         clock = time.perf_counter()
-        buffers = eye_pass(scene, settings, accel, materials, maps, monitor, share)
+        buffers = eye_pass(scene, settings, accel, materials, maps, sky, monitor, share)
         seconds["eye"] = time.perf_counter() - clock
     finally:
         accel.close()

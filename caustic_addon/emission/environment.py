@@ -2,8 +2,8 @@
 directions sampled in proportion to it (a piecewise-constant 2D
 distribution over the lat-long image, rows weighted by sin(theta): pbrt-v4's
 ImageInfiniteLight, Cycles' background map), with their solid-angle
-density, so the eye pass and the photon pass can importance-sample a bright
-sky or a sun in an HDRI.
+density, so the eye pass can importance-sample a bright sky, and the pass
+from the lamps find an HDRI's sun (world_sun.py).
 
 What the camera sees is the image looked up bilinearly, as Cycles' Linear
 interpolation; what lights the scene is each pixel's own value
@@ -123,16 +123,6 @@ def _image_samples(uv, cdf_rows, row_pdf, cdf_cols, col_pdf, dirs, density):
         density[i] = image_density1(d, row_pdf, col_pdf)
 
 
-@kernel("void(f8[:, ::1], f8[:, ::1])")
-def _sphere_samples(uv, dirs):
-    """Directions uniform over the sphere: z = 1 - 2 u, phi = 2 pi v."""
-    for i in range(len(uv)):
-        z = 1.0 - 2.0 * uv[i, 0]
-        r = math.sqrt(max(0.0, 1.0 - z * z))
-        phi = 2.0 * math.pi * uv[i, 1]
-        dirs[i, 0], dirs[i, 1], dirs[i, 2] = r * math.cos(phi), r * math.sin(phi), z
-
-
 def directions_to_uv(dirs: np.ndarray) -> np.ndarray:
     """(n,2) direction_to_uv1 of each of the unit `dirs (n,3)`."""
     out = np.empty((len(dirs), 2))
@@ -153,9 +143,7 @@ def luminance(rgb: np.ndarray) -> np.ndarray:
 
 
 class Environment:
-    """A world, ready to evaluate and sample.
-
-    A plain colour is sampled uniformly over the sphere; an image by its
+    """A world, ready to evaluate and, if it has an image, to sample by its
     pixels' luminance times sin(theta) (each pixel's solid angle), with a
     density of p_pixel w h / (2 pi^2 sin(theta)) per steradian."""
 
@@ -163,7 +151,6 @@ class Environment:
         self.world = world
         image = world.environment
         if image is None:
-            self.cdf_rows = self.cdf_cols = None
             return
         h, w = image.shape[:2]
         theta = (np.arange(h) + 0.5) / h * math.pi
@@ -197,32 +184,14 @@ class Environment:
 
     def sample(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(dirs (n,3), density (n,) per steradian) at `uv (n,2)` in the unit
-        square: uniform over the sphere for a plain colour, else in
-        proportion to the image."""
+        square, in proportion to the world's image."""
         uv = contiguous(uv, np.float64)
-        dirs = np.empty((len(uv), 3))
-        if self.cdf_rows is None:
-            _sphere_samples(uv, dirs)
-            return dirs, np.full(len(uv), 1.0 / (4.0 * math.pi))
-        density = np.empty(len(uv))
+        dirs, density = np.empty((len(uv), 3)), np.empty(len(uv))
         _image_samples(uv, self.cdf_rows, self.row_pdf, self.cdf_cols, self.col_pdf, dirs, density)
         return dirs, density
 
-    def total(self) -> np.ndarray:
-        """(3,) int L dw over the sphere, W/(m^2): the world's flux through a
-        unit area from every direction."""
-        image = self.world.environment
-        if image is None:
-            return 4.0 * math.pi * self.world.color
-        h, w = image.shape[:2]
-        theta = (np.arange(h) + 0.5) / h * math.pi
-        solid_angle = (2.0 * math.pi / w) * (math.pi / h) * np.sin(theta)
-        return (image * solid_angle[:, None, None]).sum(axis=(0, 1)) * self.world.color
-
     def density(self, dirs: np.ndarray) -> np.ndarray:
         """(n,) the solid-angle density at which `sample` draws `dirs (n,3)`."""
-        if self.cdf_rows is None:
-            return np.full(len(dirs), 1.0 / (4.0 * math.pi))
         out = np.empty(len(dirs))
         _densities(contiguous(dirs, np.float64), self.row_pdf, self.col_pdf, out)
         return out

@@ -21,13 +21,10 @@ import numpy as np
 
 from ..sampling.hash import hash_uniform
 from ..sampling.sequences import r2_sequence
-from ..sampling.warps import orthonormal_basis1, sample_disc, uniform_disc1
-from ..scene import Light, SunLight, World
-from ..util.jit import kernel
-from ..util.vectors import dot1, row
+from ..sampling.warps import sample_disc
+from ..scene import Light, SunLight
 from . import radiometry
-from .aims import Aim, Sphere, aims, balance_density, share, upstream_distance
-from .environment import Environment
+from .aims import Aim, Sphere, aims, balance_density, share
 
 
 # Hash streams of a photon's point on a lamp with a size (the transport uses
@@ -122,79 +119,12 @@ class AimedEmitter(Emitter):
         return _kept(origins, dirs, flux, ids)
 
 
-class WorldEmitter(Emitter):
-    """Photons from the world toward the casters: a direction the light
-    comes from, drawn in proportion to the world's radiance
-    (environment.Environment.sample), and a point on the disc across a
-    target sphere, square to that direction, upstream of the scene; `counts
-    (k,)` over the targets. A photon carries L(w) / (p(w) x the summed
-    density of the discs it crosses, photons per m^2), so a sun in an HDRI
-    throws its caustic as a sun lamp would."""
-
-    light = None
-
-    def __init__(self, environment: Environment, targets: list[Sphere], counts: np.ndarray, start_distance: float,
-                 shift: np.ndarray, seed: int):
-        self.environment, self.targets, self.start_distance = environment, targets, start_distance
-        self.shift, self.seed = shift, seed
-        self.starts = np.concatenate([[0], np.cumsum(counts)])
-        self.count = int(self.starts[-1])
-        self.centers = np.array([t.center for t in targets], dtype=np.float64)
-        self.radii = np.array([t.radius for t in targets], dtype=np.float64)
-        self.density = counts / (math.pi * self.radii ** 2)
-
-    def emit(self, start: int, stop: int) -> Photons:
-        i = np.arange(start, stop)
-        ids = i + self.id_base
-        which = np.searchsorted(self.starts, i, side="right") - 1
-        toward_sky, pdf = self.environment.sample(r2_sequence(i - self.starts[which], self.shift))
-        uv = np.stack([hash_uniform(ids, _LAMP_STREAM, self.seed), hash_uniform(ids, _LAMP_STREAM + 1, self.seed)],
-                      axis=1)
-        origins, flux = np.empty((len(i), 3)), np.empty((len(i), 3))
-        _world_photons(toward_sky, pdf, self.environment.light(toward_sky), uv, which.astype(np.int64),
-                       self.centers, self.radii, self.density, float(self.start_distance), origins, flux)
-        return _kept(origins, -toward_sky, flux, ids)
-
-
-@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], i8[::1], f8[:, ::1], f8[::1], f8[::1], f8, "
-        "f8[:, ::1], f8[:, ::1])")
-def _world_photons(toward_sky, pdf, light, uv, which, centers, radii, density, start_distance, origins, flux):
-    """WorldEmitter's photons: from the disc point (uniform_disc1 of `uv`)
-    across target `which`, square to `toward_sky (n,3)`, `start_distance`
-    upstream; flux L(w) / (p(w) sum_j rate_j [the line crosses disc j]),
-    0 where that is not finite."""
-    for i in range(len(uv)):
-        d = row(toward_sky, i)
-        t, b = orthonormal_basis1(d)
-        x, y = uniform_disc1(1.0, uv[i, 0], uv[i, 1])
-        x, y = x * radii[which[i]], y * radii[which[i]]
-        for k in range(3):
-            origins[i, k] = centers[which[i], k] + x * t[k] + y * b[k] + start_distance * d[k]
-        crossing = 0.0
-        for j in range(len(radii)):
-            rel = (origins[i, 0] - centers[j, 0], origins[i, 1] - centers[j, 1], origins[i, 2] - centers[j, 2])
-            along = dot1(rel, d)
-            perp = (rel[0] - along * d[0], rel[1] - along * d[1], rel[2] - along * d[2])
-            if dot1(perp, perp) <= radii[j] ** 2 * (1.0 + 1e-12):
-                crossing += density[j]
-        photons = pdf[i] * crossing
-        for k in range(3):
-            value = light[i, k] / photons if photons != 0.0 else 0.0
-            flux[i, k] = value if math.isfinite(value) else 0.0
-
-
-def world_flux(environment: Environment, targets: list[Sphere]) -> float:
-    """W (max channel) the world sends through the targets' cross-sections."""
-    return float(np.max(environment.total())) * sum(math.pi * t.radius ** 2 for t in targets)
-
-
-def make_emitters(lights: list[Light], world: World, targets: list[Sphere], scene_sphere: Sphere, mode: str,
-                  energy: float, lamp_rays: int, seed: int) -> list[Emitter]:
-    """One emitter per lamp that sends light to a target, and one for the
-    world if it is not black, with the `lamp_rays` shared among the aims and
-    the world in proportion to the flux each receives. In 'sphere' mode a
-    point or spot lamp sends its share everywhere (the paper's eq. 1), and a
-    sun over the whole scene's disc."""
+def make_emitters(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere, mode: str, energy: float,
+                  lamp_rays: int, seed: int) -> list[Emitter]:
+    """One emitter per lamp that sends light to a target, with the
+    `lamp_rays` shared among the aims in proportion to the flux each
+    receives. In 'sphere' mode a point or spot lamp sends its share
+    everywhere (the paper's eq. 1), and a sun over the whole scene's disc."""
     rng = np.random.default_rng(seed)
     if not targets:
         return []
@@ -208,12 +138,9 @@ def make_emitters(lights: list[Light], world: World, targets: list[Sphere], scen
             aimed = aims(light, targets, scene_sphere)
         if aimed and sum(aim.flux(energy) for aim in aimed) > 0:
             per_light.append((light, aimed))
-    environment = None if world.is_black else Environment(world)
-    from_world = world_flux(environment, targets) if environment is not None else 0.0
-    if not per_light and from_world <= 0:
+    if not per_light:
         return []
     fluxes = [np.array([aim.flux(energy) for aim in aimed]) for _, aimed in per_light]
-    fluxes.append(np.array([from_world * t.radius ** 2 / sum(s.radius ** 2 for s in targets) for t in targets]))
     counts = np.split(share(lamp_rays, np.concatenate(fluxes)), np.cumsum([len(f) for f in fluxes])[:-1])
     emitters = []
     for (light, aimed), n in zip(per_light, counts):
@@ -221,9 +148,6 @@ def make_emitters(lights: list[Light], world: World, targets: list[Sphere], scen
             emitters.append(PointSphereEmitter(light, energy, int(n.sum())))
         else:
             emitters.append(AimedEmitter(light, energy, aimed, n, rng.random(2), seed))
-    if from_world > 0:
-        emitters.append(WorldEmitter(environment, targets, counts[-1], upstream_distance(scene_sphere),
-                                     rng.random(2), seed))
     for k in range(1, len(emitters)):
         emitters[k].id_base = emitters[k - 1].id_base + emitters[k - 1].count
     return emitters

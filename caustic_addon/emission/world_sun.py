@@ -1,10 +1,12 @@
-"""An environment's sun as a sun lamp, so that beam mode throws its caustic
-without noise: the pixels around the brightest one that are at least
-SUN_THRESHOLD of its luminance, within SUN_RADIUS of it, become a sun of
-their irradiance and solid angle (Blender's Angle is the disc of that solid
-angle), and the rest of the world goes on as photons. Only a compact source
-that brings at least SUN_SHARE of the world's light counts as a sun: a sky
-with no sun, or an overcast one, stays all photons."""
+"""An environment's sun as a sun lamp, so that the pass from the lamps
+throws its caustic, sharp (beams without noise): the pixels around the
+brightest one that are at least SUN_THRESHOLD of its luminance, within
+SUN_RADIUS of it, become a sun of their irradiance and solid angle
+(Blender's Angle is the disc of that solid angle), and the rest of the
+world is the sky, whose light through the casters the eye pass gathers
+(passes/world_paths.py). Only a compact source that brings at least
+SUN_SHARE of the world's light counts as a sun: a sky with no sun, or an
+overcast one, is all sky."""
 
 from __future__ import annotations
 

@@ -41,7 +41,6 @@ from ..emission.aims import Sphere, casters_and_bounds, visible_targets
 from ..emission.beam_sources import BeamSource, beam_sources
 from ..emission.lamp_points import beam_lamps
 from ..emission.photons import make_emitters
-from ..emission.world_sun import extract_sun
 from ..maps.deposits import Deposits
 from ..maps.illumination_map import IlluminationMap
 from ..maps.receivers import GUTTER_CELLS
@@ -343,24 +342,21 @@ def photon_lamps(lights: list[Light], scene: Scene) -> list[Light]:
     return [light for light in lights if rough and visible_targets(light, rough)]
 
 
-def beam_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials, maps: dict,
-              monitor: Monitor, share: float) -> LampPassStats:
-    """Trace every source's grid in bands of rows into beams on `maps`, once
-    per wavelength band, with the lamp rays shared among them; a lamp with
-    a size is points of it (lamp_points.py). Neighbouring bands of rows
-    share a row, so every grid triangle is in one."""
+def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel: Accelerator, materials: Materials,
+              maps: dict, monitor: Monitor, share: float) -> LampPassStats:
+    """Trace the grids of the `lights` in bands of rows into beams on
+    `maps`, once per wavelength band, with the lamp rays shared among them;
+    a lamp with a size is points of it (lamp_points.py). Neighbouring bands
+    of rows share a row, so every grid triangle is in one."""
     count = materials.band_count
     targets, scene_sphere = casters_and_bounds(scene)
     receivers = np.concatenate([o.mesh.vertices for o in scene.receivers])
-    # the world's sun comes as beams, the rest of its light as photons, and
-    # so does the light of lamps that light a rough caster; each their
-    # share of the lamp rays by its flux
-    sun, world = extract_sun(scene.world)
-    lights = scene.lights + ([sun] if sun is not None else [])
+    # the lamps that light a rough caster send photons, each lamp its share
+    # of the lamp rays by its flux
     as_photons = photon_lamps(lights, scene)
-    emitters = [e for e in make_emitters(lights, world, targets, scene_sphere, "targeted", settings.energy,
+    emitters = [e for e in make_emitters(lights, targets, scene_sphere, "targeted", settings.energy,
                                          settings.lamp_rays, settings.seed)
-                if e.light is None or any(e.light is light for light in as_photons)]
+                if any(e.light is light for light in as_photons)]
     beamed = [light for light in lights if not any(light is other for other in as_photons)]
     from_photons = sum(e.count for e in emitters)
     lamps = beam_lamps(beamed, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),

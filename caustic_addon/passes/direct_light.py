@@ -15,8 +15,8 @@ K - 1 of the R2 sequence, rotated by a hash of the pixel. A lamp that
 looks smaller than a degree (a sun, a small lamp far off) casts a few of
 them first, at least two a pixel, and the rest only where a pixel's
 points disagree (`direct_radiance`). A sample behind the surface gets no shadow ray.
-Dielectrics and reflectors block shadow rays: the light they redirect
-arrives through the illumination maps.
+Dielectrics and reflectors block the lamps' shadow rays: the light they
+redirect arrives through the illumination maps.
 Rough casters show the lamps' highlights (`rough_specular_radiance`), as
 Cycles' glossy and glass closures do.
 
@@ -25,11 +25,14 @@ hemisphere, and its lobe with int L(w) V(w) f_s(v, w) cos(theta) dw, what
 Cycles computes with bounces at 0. Both are estimated from the same
 directions, drawn by cos(theta) / pi (Malley), for an image by the world's
 radiance (environment.py), and where there is a lobe by its visible normals
-(Heitz 2018), weighted by the balance heuristic (Veach 1997)."""
+(Heitz 2018), weighted by the balance heuristic (Veach 1997). A direction
+that meets a caster goes on through it to the sky (world_paths.py): that
+part of the world's light is kept apart, for the caustic pass."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -46,6 +49,7 @@ from ..tracing.accelerator import Accelerator
 from ..util.jit import kernel
 from ..util.rows import contiguous
 from ..util.vectors import dot1, max_channel1, row, set_row
+from .world_paths import WorldThroughCasters
 
 # Hash streams of the strata's rotations: two per lamp, two for each of the
 # world's strategies, two per lamp seen in rough casters.
@@ -55,6 +59,18 @@ _ROUGH_STREAM = 1 << 18
 # SHADOW_PROBES shadow rays a pixel first, the rest only where they disagree.
 SMALL_LAMP = math.radians(1.0)
 SHADOW_PROBES = 2
+# Draws of a pixel's world rays, per strategy: its strata of every eye sample.
+_WORLD_DRAWS = 1 << 20
+
+
+@dataclass
+class WorldLight:
+    """The world's light at n points: irradiance (n,3) W/m^2 from it, and
+    glossy (n,3) W/(m^2 sr) the radiance their specular layers reflect of
+    it toward the eye."""
+
+    irradiance: np.ndarray
+    glossy: np.ndarray
 
 
 def strata(ids: np.ndarray, index: np.ndarray, stream: int, seed: int) -> np.ndarray:
@@ -207,14 +223,16 @@ def _pixels_agree(pixel: np.ndarray, clear: np.ndarray, blocked: np.ndarray) -> 
 
 def world_light(accel: Accelerator, environment: Environment, points: np.ndarray, shading: np.ndarray,
                 facing: np.ndarray, view: np.ndarray, lobe: Lobe | None, far: float, pixel: np.ndarray,
-                first_stratum: np.ndarray, samples: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """(irradiance (n,3) W/m^2, glossy (n,3) W/(m^2 sr)) the world brings
-    the points, shadows included, and the radiance their specular layers
-    (`lobe`, or None) reflect of it toward `view (n,3)`, from `samples`
-    directions of each strategy per point: `_world_directions` weighs them,
-    `_add_world` adds what the shadow rays let through."""
+                first_stratum: np.ndarray, samples: int, seed: int, through: WorldThroughCasters | None = None,
+                medium: np.ndarray | None = None, surface: np.ndarray | None = None) -> tuple[WorldLight, WorldLight]:
+    """(open, through): the world's light at the points, shadows included,
+    in two parts: what reaches them along directions that meet nothing,
+    and, given `through`, what reaches them through the casters
+    (world_paths.py; a ray leaves triangle `surface (n,)` inside object
+    `medium (n,)`), else nothing. `samples` directions of each strategy per
+    point: `_world_directions` weighs them, `_add_world` adds each part."""
     n = len(points)
-    irradiance, glossy = np.zeros((n, 3)), np.zeros((n, 3))
+    parts = [WorldLight(np.zeros((n, 3)), np.zeros((n, 3))) for _ in range(2)]
     image = environment.world.environment is not None
     shading, facing = contiguous(shading, np.float64), contiguous(facing, np.float64)
     view = contiguous(view, np.float64)
@@ -232,7 +250,7 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
         if lobe is not None:
             drawn.append((lobe.sample(shading, tangent, bitangent, view, strata(pixel, index, _WORLD_STREAM + 4, seed)),
                           True))
-        for dirs, among_active in drawn:
+        for strategy, (dirs, among_active) in enumerate(drawn):
             dirs = contiguous(dirs, np.float64)
             env_density = contiguous(environment.density(dirs), np.float64) if image else np.zeros(0)
             idx, density, cos = _world_directions(shading, facing, view, dirs, env_density, active, alpha,
@@ -240,12 +258,20 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
             if len(idx) == 0:
                 continue
             toward = np.take(dirs, idx, axis=0)
-            seen = ~accel.occluded(accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), toward),
-                                   toward, np.full(len(idx), far))
-            light = contiguous(environment.light(np.take(toward, np.flatnonzero(seen), axis=0)), np.float64)
-            _add_world(irradiance, glossy, idx, seen, toward, light, density, cos, samples, shading, view, f0, eta,
-                       alpha, gain)
-    return irradiance, glossy
+            origins = accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), toward)
+
+            def add(part: WorldLight, seen: np.ndarray, light: np.ndarray) -> None:
+                _add_world(part.irradiance, part.glossy, idx, seen, toward, contiguous(light, np.float64), density,
+                           cos, samples, shading, view, f0, eta, alpha, gain)
+
+            if through is None:
+                seen = ~accel.occluded(origins, toward, np.full(len(idx), far))
+            else:
+                draws = (np.take(pixel, idx) * _WORLD_DRAWS + np.take(index, idx)) * 3 + strategy
+                seen, met, behind = through.light(origins, toward, np.take(medium, idx), np.take(surface, idx), draws)
+                add(parts[1], met, np.take(behind, np.flatnonzero(met), axis=0))
+            add(parts[0], seen, environment.light(np.take(toward, np.flatnonzero(seen), axis=0)))
+    return parts[0], parts[1]
 
 
 @kernel("Tuple((i8[::1], f8[::1], f8[::1]))(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], b1[::1], "

@@ -11,7 +11,8 @@ differentials carry there, in the pixels the edge pass refines (EyeTracer).
 
 At an opaque surface: ambient * albedo, plus direct light from each lamp and
 from the world (direct_light.py), plus caustic irradiance E_c * albedo / pi
-read from the receiver's map. Under a Principled BSDF's specular layer the
+read from the receiver's map and the world's light through the casters
+(world_paths.py), both in the caustic pass. Under a Principled BSDF's specular layer the
 albedo is the base colour times the share the layer leaves it toward the
 eye (optics/principled.py); the lobe itself reflects the lamps and the
 world, but not the caustic, whose directions the map does not keep.
@@ -43,7 +44,7 @@ from ..emission.environment import Environment
 from ..maps.charts import PlaneChart
 from ..maps.illumination_map import IlluminationMap
 from ..sampling.hash import stream_key
-from ..scene import RenderSettings, Scene
+from ..scene import RenderSettings, Scene, World
 from ..scene.material_table import Materials
 from ..tracing.accelerator import CAMERA, Accelerator
 from ..tracing.hits import MISS, Hits
@@ -54,6 +55,7 @@ from .bounce import Interface, Roulette, facets, multiscatter, split, trace
 from .camera_rays import eye_rays, pixel_offsets, ray_differentials
 from .direct_light import direct_radiance, rough_specular_radiance, strata, world_light
 from .paths import Paths, relative_floor
+from .world_paths import WorldThroughCasters
 
 PASSES = ("direct", "caustic", "ambient")
 # The buffer of each pixel's share cut out by holdouts (its alpha is 1 minus it).
@@ -91,11 +93,11 @@ class EyeTracer:
     its water changes by 0.02%)."""
 
     def __init__(self, accel: Accelerator, scene: Scene, materials: Materials, maps: dict[int, IlluminationMap],
-                 environment: Environment, settings: RenderSettings, pixels: np.ndarray, spp: int,
-                 holdout: np.ndarray, edge_pass: bool = False):
+                 environment: Environment, through: WorldThroughCasters | None, settings: RenderSettings,
+                 pixels: np.ndarray, spp: int, holdout: np.ndarray, edge_pass: bool = False):
         self.accel, self.scene, self.materials, self.maps = accel, scene, materials, maps
         self.holdout, self.adaptive_shadows = holdout, not edge_pass
-        self.environment, self.settings = environment, settings
+        self.environment, self.through, self.settings = environment, through, settings
         self.energy, self.spp = settings.energy, spp
         self.stratum = 1.0 / math.sqrt(spp)
         self.pixels = np.ascontiguousarray(pixels, dtype=np.int64)
@@ -160,9 +162,11 @@ class EyeTracer:
         self._add("direct", rays.ids, rays.weight, direct + np.take(m.emission, hits.obj, axis=0))
         ambient = self.scene.ambient * diffuse
         if not self.scene.world.is_black:
-            world, glossy = world_light(accel, self.environment, points, shading, facing, view, lobe, self.far,
-                                        pixel, stratum, settings.world_samples, settings.seed)
-            ambient = ambient + world * diffuse / math.pi + glossy
+            seen, through = world_light(accel, self.environment, points, shading, facing, view, lobe, self.far,
+                                        pixel, stratum, settings.world_samples, settings.seed, self.through,
+                                        rays.medium, hits.prim)
+            ambient = ambient + seen.irradiance * diffuse / math.pi + seen.glossy
+            self._add("caustic", rays.ids, rays.weight, through.irradiance * diffuse / math.pi + through.glossy)
         self._add("ambient", rays.ids, rays.weight, ambient)
 
         for index, imap in self.maps.items():
@@ -290,17 +294,21 @@ def edge_pixels(first: np.ndarray, shown: np.ndarray, contrast: float = EDGE_CON
 
 
 def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
-             maps: dict[int, IlluminationMap], monitor: Monitor, start: float) -> dict[str, np.ndarray]:
+             maps: dict[int, IlluminationMap], sky: World, monitor: Monitor, start: float) -> dict[str, np.ndarray]:
     """Trace `spp` eye rays through every pixel, chunk by chunk, reporting
     progress from `start` to 1; then, with `edge_samples`, trace that many
     again through each pixel whose samples disagree (`edge_pixels`: a
     silhouette, a shadow's edge, an edge seen through glass), which replace
-    its first ones and cast all of a small lamp's shadow rays. Returns the pass buffers and the holdout's, each
-    (pixels, 3)."""
+    its first ones and cast all of a small lamp's shadow rays. The world's
+    light through the casters is the `sky`'s, the world without its sun.
+    Returns the pass buffers and the holdout's, each (pixels, 3)."""
     cam = scene.camera
     pixels = cam.pixx * cam.pixy
     camera_medium = int(accel.medium_at(cam.position[None])[0])
     environment = Environment(scene.world)
+    sky_paths = None
+    if materials.specular_surface.any() and not sky.is_black:
+        sky_paths = WorldThroughCasters(accel, materials, Environment(sky), settings.max_depth, settings.seed)
     holdout = np.array([o.visibility.holdout for o in scene.objects], dtype=bool)
     edges = settings.edge_samples > settings.spp
     main_share = (1.0 - start) * (0.8 if edges else 1.0)
@@ -318,8 +326,8 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
             pixel = np.take(pixel_list, sample // spp)
             origins, dirs = eye_rays(cam, pixel, offsets[sample % spp])
             weight = np.full((len(sample), 3), 1.0 / spp)
-            tracer = EyeTracer(accel, scene, materials, maps, environment, settings, pixel_list[local], spp,
-                               holdout, edge_pass)
+            tracer = EyeTracer(accel, scene, materials, maps, environment, sky_paths, settings, pixel_list[local],
+                               spp, holdout, edge_pass)
             trace(accel, materials, Paths.start(origins, dirs, weight, sample - first * spp, camera_medium,
                                                 relative_floor(weight), camera=True), settings.max_depth, tracer)
             return first, tracer

@@ -33,7 +33,7 @@ from ..emission.photons import Emitter, Photons, make_emitters
 from ..maps.deposits import Deposits
 from ..optics.spectrum import photon_band
 from ..sampling.hash import hash_uniform, hash_uniform1, stream_key
-from ..scene import RenderSettings, Scene
+from ..scene import Light, RenderSettings, Scene
 from ..scene.material_table import Materials
 from ..tracing.accelerator import Accelerator, offset1
 from ..tracing.hits import MISS, Hits
@@ -73,29 +73,41 @@ class PhotonTracer:
             self.landed += len(rows)
 
     def scattered(self, paths: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
-        rough = surface.rough.any()
-        if rough:
-            uv = np.stack([hash_uniform(paths.ids, FACET_STREAM + 2 * depth + k, self.seed) for k in (0, 1)], axis=1)
-            surface = facets(surface, paths.dirs, self.materials, hits.obj, uv)
-        reflect_key, roulette_key = (np.uint64(stream_key(2 * depth + k, self.seed)) for k in (0, 1))
-        factor = np.zeros((0, 3))
-        if rough:
-            reflect = hash_uniform(paths.ids, 2 * depth, self.seed) < surface.fresnel
-            dirs, crossed, _ = scatter(surface, paths.dirs, reflect)
-            factor = multiscatter(surface, self.materials, hits.obj, paths.dirs, dirs, crossed, True)
-        n, f8, i8 = len(paths), np.float64, np.int64
-        out = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty(n, dtype=i8), np.empty(n, dtype=i8))
-        count = _photon_bounces(
-            contiguous(paths.dirs, f8), contiguous(paths.weight, f8), contiguous(paths.medium, i8),
-            contiguous(paths.floor, f8), contiguous(paths.ids, i8), contiguous(hits.obj, i8),
-            contiguous(surface.points, f8), contiguous(surface.facing, f8), contiguous(surface.shading, f8),
-            contiguous(surface.scattering, f8), contiguous(surface.entering, bool), contiguous(surface.eta, f8),
-            contiguous(surface.fresnel, f8), contiguous(surface.alpha, f8), self.materials.color,
-            contiguous(factor, f8), self.accel.epsilon, reflect_key, roulette_key, *out)
-        origins, dirs, weight, medium, source = (a[:count] for a in out)
-        return Paths(origins, dirs, weight, medium, take(paths.ids, source), take(paths.floor, source),
-                     np.ones(count, dtype=bool), None if paths.band is None else take(paths.band, source),
-                     surface=take(hits.prim, source))
+        return one_branch(self.accel, self.materials, paths, hits, surface, paths.ids, depth, self.seed, 0, True)
+
+
+def one_branch(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, surface: Interface,
+               draws: np.ndarray, depth: int, seed: int, stream: int, carries_light: bool) -> Paths:
+    """The paths that go on from their specular hits at bounce `depth`,
+    each along one branch: reflected with its Fresnel probability, else
+    refracted, about a GGX normal where the surface is rough, then Russian
+    roulette (`_photon_bounces`). A path's random numbers hash its id in
+    `draws (n,)` with streams from `stream` on and `seed`; Multiscatter
+    GGX's factor is taken on the eye's side (bounce.multiscatter) of light
+    if `carries_light`, else of an eye ray."""
+    rough = surface.rough.any()
+    if rough:
+        uv = np.stack([hash_uniform(draws, stream + FACET_STREAM + 2 * depth + k, seed) for k in (0, 1)], axis=1)
+        surface = facets(surface, paths.dirs, materials, hits.obj, uv)
+    reflect_key, roulette_key = (np.uint64(stream_key(stream + 2 * depth + k, seed)) for k in (0, 1))
+    factor = np.zeros((0, 3))
+    if rough:
+        reflect = hash_uniform(draws, stream + 2 * depth, seed) < surface.fresnel
+        dirs, crossed, _ = scatter(surface, paths.dirs, reflect)
+        factor = multiscatter(surface, materials, hits.obj, paths.dirs, dirs, crossed, carries_light)
+    n, f8, i8 = len(paths), np.float64, np.int64
+    out = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty(n, dtype=i8), np.empty(n, dtype=i8))
+    count = _photon_bounces(
+        contiguous(paths.dirs, f8), contiguous(paths.weight, f8), contiguous(paths.medium, i8),
+        contiguous(paths.floor, f8), contiguous(draws, i8), contiguous(hits.obj, i8),
+        contiguous(surface.points, f8), contiguous(surface.facing, f8), contiguous(surface.shading, f8),
+        contiguous(surface.scattering, f8), contiguous(surface.entering, bool), contiguous(surface.eta, f8),
+        contiguous(surface.fresnel, f8), contiguous(surface.alpha, f8), materials.color,
+        contiguous(factor, f8), accel.epsilon, reflect_key, roulette_key, *out)
+    origins, dirs, weight, medium, source = (a[:count] for a in out)
+    return Paths(origins, dirs, weight, medium, take(paths.ids, source), take(paths.floor, source),
+                 np.ones(count, dtype=bool), None if paths.band is None else take(paths.band, source),
+                 kind=None if paths.kind is None else take(paths.kind, source), surface=take(hits.prim, source))
 
 
 @inline
@@ -115,26 +127,26 @@ def roulette1(peak, threshold, xi):
 @kernel("i8(f8[:, ::1], f8[:, ::1], i8[::1], f8[::1], i8[::1], i8[::1], "
         "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1], f8[::1], f8[:, ::1], "
         "f8[:, ::1], f8, u8, u8, f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], i8[::1])")
-def _photon_bounces(dirs, weight, medium, floor, ids, obj, points, facing, shading, scattering, entering, eta,
+def _photon_bounces(dirs, weight, medium, floor, draws, obj, points, facing, shading, scattering, entering, eta,
                     fresnel, alpha, color, factor, epsilon, reflect_key, roulette_key,
                     out_origins, out_dirs, out_weight, out_medium, source):
-    """PhotonTracer.scattered's rows: each photon reflects where
-    hash_uniform1(id, reflect_key) < its Fresnel reflectance, else refracts
-    (bounce.scatter1), its flux times the surface's tint, what scatter1
+    """one_branch's rows: each path reflects where
+    hash_uniform1(draw, reflect_key) < its Fresnel reflectance, else refracts
+    (bounce.scatter1), its weight times the surface's tint, what scatter1
     keeps and, where `factor (n,3)` is given (else (0,3)), the multiscatter
-    factor; then roulette1 with hash_uniform1(id, roulette_key). The
+    factor; then roulette1 with hash_uniform1(draw, roulette_key). The
     survivors go into the out_ arrays, in order, epsilon off the surface
     (offset1), `source` the row each comes from; returns how many."""
     count = 0
     for i in range(len(dirs)):
         o, d = obj[i], row(dirs, i)
-        mirror = hash_uniform1(ids[i], reflect_key) < fresnel[i]
+        mirror = hash_uniform1(draws[i], reflect_key) < fresnel[i]
         out, crossed, kept = scatter1(d, row(scattering, i), row(facing, i), row(shading, i), eta[i], alpha[i],
                                       mirror)
         w = (weight[i, 0] * color[o, 0], weight[i, 1] * color[o, 1], weight[i, 2] * color[o, 2])
         if len(factor):
             w = (w[0] * (kept * factor[i, 0]), w[1] * (kept * factor[i, 1]), w[2] * (kept * factor[i, 2]))
-        divisor, alive = roulette1(max_channel1(w), floor[i], hash_uniform1(ids[i], roulette_key))
+        divisor, alive = roulette1(max_channel1(w), floor[i], hash_uniform1(draws[i], roulette_key))
         if not alive:
             continue
         set_row(out_origins, count, offset1(row(points, i), row(facing, i), out, epsilon))
@@ -174,17 +186,17 @@ def photon_jobs(emitters: list[Emitter], accel: Accelerator, materials: Material
     jobs = []
     for emitter in emitters:
         size = chunk_size(emitter.count, settings.chunk_size, settings.threads)
-        medium = MISS if emitter.light is None else lamp_medium(accel, emitter.light)
+        medium = lamp_medium(accel, emitter.light)
         jobs += [partial(job, emitter, start, min(start + size, emitter.count), medium)
                  for start in range(0, emitter.count, size)]
     return jobs
 
 
-def photon_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
-                maps: dict, monitor: Monitor, share: float) -> LampPassStats:
-    """Emit and trace every photon, chunk by chunk, onto `maps`."""
-    emitters = make_emitters(scene.lights, scene.world, *casters_and_bounds(scene), settings.emission,
-                             settings.energy, settings.lamp_rays, settings.seed)
+def photon_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel: Accelerator,
+                materials: Materials, maps: dict, monitor: Monitor, share: float) -> LampPassStats:
+    """Emit and trace every photon of the `lights`, chunk by chunk, onto `maps`."""
+    emitters = make_emitters(lights, *casters_and_bounds(scene), settings.emission, settings.energy,
+                             settings.lamp_rays, settings.seed)
     stats, deliver = deliverer(maps)
     jobs = photon_jobs(emitters, accel, materials, maps, settings)
     run_chunks(jobs, settings.threads, monitor, 0.0, share, "photon pass", deliver)

@@ -242,8 +242,9 @@ class Accelerator:
                   kind: np.ndarray | None = None, leaving: np.ndarray | None = None) -> Hits:
         """Closest hits of rays `origins (n,3)`, `dirs (n,3)` (unit), world space.
 
-        With `kind (n,)`, CAMERA, REFLECTED or REFRACTED per ray, each ray
-        sees only the objects visible to its kind; without, every object.
+        With `kind (n,)`, CAMERA, REFLECTED, REFRACTED or SHADOW per ray,
+        each ray sees only the objects visible to its kind; without, every
+        object.
 
         With `medium (n,)`, the closed object each ray is inside (MISS if
         none), a face of a closed mesh met from the side the medium rules out
@@ -313,7 +314,7 @@ class Accelerator:
 
     def _closest_by_kind(self, origins: np.ndarray, dirs: np.ndarray, kind: np.ndarray | None) -> Hits:
         """Closest hits, each ray among the objects its `kind (n,)` sees (None: all)."""
-        if kind is None or all(view is self._all for view in self._views[:SHADOW]):
+        if kind is None or all(view is self._all for view in self._views):
             return self._closest(origins, dirs)
         kinds = np.unique(kind)
         if len(kinds) == 1:

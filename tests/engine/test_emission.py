@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from caustic_addon import PointLight, SpotLight, SunLight, World
+from caustic_addon import PointLight, SpotLight, SunLight
 from caustic_addon.emission.aims import Aim, Sphere
 from caustic_addon.emission.photons import PointSphereEmitter, make_emitters
 from caustic_addon.sampling.warps import sample_disc
@@ -29,7 +29,7 @@ def test_targeted_flux_is_the_intensity_times_the_cones_union():
     counting uniform directions that fall in either cone."""
     light = PointLight((0, 0, 5), 4 * math.pi)  # I = 1 W/sr
     targets = [Sphere(np.array([0.0, 0.0, 0.0]), 1.0), Sphere(np.array([0.8, 0.0, 0.0]), 1.0)]
-    (emitter,) = make_emitters([light], World(), targets, Sphere(np.zeros(3), 10.0), "targeted", 1.0, 200_000, 0)
+    (emitter,) = make_emitters([light], targets, Sphere(np.zeros(3), 10.0), "targeted", 1.0, 200_000, 0)
     flux = emitter.emit(0, emitter.count).flux[:, 0].sum()
 
     rng = np.random.default_rng(5)
@@ -61,7 +61,7 @@ def test_cone_samples_stay_in_the_cone_and_are_uniform():
 def test_sun_discs_carry_irradiance_times_area():
     sun = SunLight((0, 0, -1), 3.0)
     target = Sphere(np.array([0.0, 0.0, 1.0]), 0.5)
-    (emitter,) = make_emitters([sun], World(), [target], Sphere(np.zeros(3), 4.5), "targeted", 1.0, 10_000, 0)
+    (emitter,) = make_emitters([sun], [target], Sphere(np.zeros(3), 4.5), "targeted", 1.0, 10_000, 0)
     photons = emitter.emit(0, emitter.count)
     assert photons.flux[:, 0].sum() == pytest.approx(3.0 * math.pi * 0.25, rel=1e-9)
     np.testing.assert_allclose(photons.dirs, np.tile([0.0, 0.0, -1.0], (len(photons.dirs), 1)))
@@ -71,16 +71,16 @@ def test_sun_discs_carry_irradiance_times_area():
 def test_a_spot_that_misses_every_target_emits_nothing():
     spot = SpotLight((0, 0, 5), (1, 0, 0), 100.0, spot_size=math.radians(30))
     targets = [Sphere(np.array([0.0, 0.0, 0.0]), 1.0)]
-    assert make_emitters([spot], World(), targets, targets[0], "targeted", 1.0, 1000, 0) == []
+    assert make_emitters([spot], targets, targets[0], "targeted", 1.0, 1000, 0) == []
     aimed = SpotLight((0, 0, 5), (0, 0, -1), 100.0, spot_size=math.radians(30))
-    assert len(make_emitters([aimed], World(), targets, targets[0], "targeted", 1.0, 1000, 0)) == 1
+    assert len(make_emitters([aimed], targets, targets[0], "targeted", 1.0, 1000, 0)) == 1
 
 
 def test_photon_budget_follows_the_flux_each_lamp_sends_to_the_targets():
     targets = [Sphere(np.array([0.0, 0.0, 0.0]), 1.0)]
     near = PointLight((0, 0, 3), 100.0)
     far = PointLight((0, 0, 30), 100.0)
-    emitters = make_emitters([near, far], World(), targets, targets[0], "targeted", 1.0, 100_000, 0)
+    emitters = make_emitters([near, far], targets, targets[0], "targeted", 1.0, 100_000, 0)
     counts = [e.count for e in emitters]
     # each lamp's flux toward the sphere: P / (4 pi) times its cone's solid angle
     fluxes = [1.0 - math.sqrt(1.0 - (1.0 / d) ** 2) for d in (3.0, 30.0)]

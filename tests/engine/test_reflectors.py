@@ -265,7 +265,7 @@ def corridor(rho: float) -> tuple[Scene, float]:
 def entering_photons(scene: Scene, photons: int) -> tuple[int, float]:
     """(count, flux) of the emitted photons whose rays cross the corridor's
     opening (z = CORRIDOR_H, |x| < W/2, |y| < LENGTH/2), from the render's own emitters."""
-    emitters = make_emitters(scene.lights, scene.world, *casters_and_bounds(scene), "targeted", 1.0, photons, 0)
+    emitters = make_emitters(scene.lights, *casters_and_bounds(scene), "targeted", 1.0, photons, 0)
     count, flux = 0, 0.0
     for emitter in emitters:
         batch = emitter.emit(0, emitter.count)
