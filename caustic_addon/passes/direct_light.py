@@ -223,11 +223,11 @@ def _pixels_agree(pixel: np.ndarray, clear: np.ndarray, blocked: np.ndarray) -> 
 
 def world_light(accel: Accelerator, environment: Environment, points: np.ndarray, shading: np.ndarray,
                 facing: np.ndarray, view: np.ndarray, lobe: Lobe | None, far: float, pixel: np.ndarray,
-                first_stratum: np.ndarray, samples: int, seed: int, through: WorldThroughCasters | None = None,
+                first_stratum: np.ndarray, samples: int, seed: int, sky_paths: WorldThroughCasters | None = None,
                 medium: np.ndarray | None = None, surface: np.ndarray | None = None) -> tuple[WorldLight, WorldLight]:
     """(open, through): the world's light at the points, shadows included,
     in two parts: what reaches them along directions that meet nothing,
-    and, given `through`, what reaches them through the casters
+    and, given `sky_paths`, what reaches them through the casters
     (world_paths.py; a ray leaves triangle `surface (n,)` inside object
     `medium (n,)`), else nothing. `samples` directions of each strategy per
     point: `_world_directions` weighs them, `_add_world` adds each part."""
@@ -264,11 +264,12 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
                 _add_world(part.irradiance, part.glossy, idx, seen, toward, contiguous(light, np.float64), density,
                            cos, samples, shading, view, f0, eta, alpha, gain)
 
-            if through is None:
+            if sky_paths is None:
                 seen = ~accel.occluded(origins, toward, np.full(len(idx), far))
             else:
                 draws = (np.take(pixel, idx) * _WORLD_DRAWS + np.take(index, idx)) * 3 + strategy
-                seen, met, behind = through.light(origins, toward, np.take(medium, idx), np.take(surface, idx), draws)
+                seen, met, behind = sky_paths.light(origins, toward, np.take(medium, idx), np.take(surface, idx),
+                                                    draws)
                 add(parts[1], met, np.take(behind, np.flatnonzero(met), axis=0))
             add(parts[0], seen, environment.light(np.take(toward, np.flatnonzero(seen), axis=0)))
     return parts[0], parts[1]

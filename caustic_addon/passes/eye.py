@@ -12,10 +12,11 @@ differentials carry there, in the pixels the edge pass refines (EyeTracer).
 At an opaque surface: ambient * albedo, plus direct light from each lamp and
 from the world (direct_light.py), plus caustic irradiance E_c * albedo / pi
 read from the receiver's map and the world's light through the casters
-(world_paths.py), both in the caustic pass. Under a Principled BSDF's specular layer the
-albedo is the base colour times the share the layer leaves it toward the
-eye (optics/principled.py); the lobe itself reflects the lamps and the
-world, but not the caustic, whose directions the map does not keep.
+(world_paths.py), both in the caustic pass. Under a Principled BSDF's
+specular layer the albedo is the base colour times the share the layer
+leaves it toward the eye (optics/principled.py); the lobe itself reflects
+the lamps and the world, but not the caustic, whose directions the map
+does not keep.
 
 At a dielectric: both the reflected ray (weight F) and the refracted ray
 (weight 1 - F) carry on, each tinted by the glass colour and by Beer-Lambert
@@ -93,11 +94,11 @@ class EyeTracer:
     its water changes by 0.02%)."""
 
     def __init__(self, accel: Accelerator, scene: Scene, materials: Materials, maps: dict[int, IlluminationMap],
-                 environment: Environment, through: WorldThroughCasters | None, settings: RenderSettings,
+                 environment: Environment, sky_paths: WorldThroughCasters | None, settings: RenderSettings,
                  pixels: np.ndarray, spp: int, holdout: np.ndarray, edge_pass: bool = False):
         self.accel, self.scene, self.materials, self.maps = accel, scene, materials, maps
         self.holdout, self.adaptive_shadows = holdout, not edge_pass
-        self.environment, self.through, self.settings = environment, through, settings
+        self.environment, self.sky_paths, self.settings = environment, sky_paths, settings
         self.energy, self.spp = settings.energy, spp
         self.stratum = 1.0 / math.sqrt(spp)
         self.pixels = np.ascontiguousarray(pixels, dtype=np.int64)
@@ -163,10 +164,11 @@ class EyeTracer:
         ambient = self.scene.ambient * diffuse
         if not self.scene.world.is_black:
             seen, through = world_light(accel, self.environment, points, shading, facing, view, lobe, self.far,
-                                        pixel, stratum, settings.world_samples, settings.seed, self.through,
+                                        pixel, stratum, settings.world_samples, settings.seed, self.sky_paths,
                                         rays.medium, hits.prim)
             ambient = ambient + seen.irradiance * diffuse / math.pi + seen.glossy
-            self._add("caustic", rays.ids, rays.weight, through.irradiance * diffuse / math.pi + through.glossy)
+            if self.sky_paths is not None:
+                self._add("caustic", rays.ids, rays.weight, through.irradiance * diffuse / math.pi + through.glossy)
         self._add("ambient", rays.ids, rays.weight, ambient)
 
         for index, imap in self.maps.items():
