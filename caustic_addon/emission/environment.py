@@ -19,6 +19,7 @@ row 0 and +X the image's middle column."""
 from __future__ import annotations
 
 import math
+from functools import cached_property
 
 import numpy as np
 
@@ -162,6 +163,19 @@ class Environment:
         self.cdf_rows = np.concatenate([[0.0], np.cumsum(self.row_pdf)])
         self.col_pdf = np.ascontiguousarray(weight / np.maximum(rows[:, None], DIVISION_FLOOR))
         self.cdf_cols = np.concatenate([np.zeros((h, 1)), np.cumsum(self.col_pdf, axis=1)], axis=1)
+
+    @cached_property
+    def mean_level(self) -> float:
+        """The mean over the sphere of the radiance that lights the scene,
+        W/(m^2 sr), max channel."""
+        image = self.world.environment
+        if image is None:
+            return float(np.max(self.world.color))
+        h, w = image.shape[:2]
+        theta = (np.arange(h) + 0.5) / h * math.pi
+        solid_angle = (2.0 * math.pi / w) * (math.pi / h) * np.sin(theta)
+        mean = (image * solid_angle[:, None, None]).sum(axis=(0, 1)) / (4.0 * math.pi)
+        return float(np.max(mean * self.world.color))
 
     def light(self, dirs: np.ndarray) -> np.ndarray:
         """(n,3) W/(m^2 sr) that lights the scene from `dirs (n,3)`: the

@@ -41,7 +41,7 @@ from ..emission.environment import Environment
 from ..emission.lamp_samples import apparent_size, sample_lamp
 from ..optics.microfacet import bsdf_cosine1
 from ..optics.principled import Lobe, lobe_pdf1, lobe_weight1
-from ..sampling.hash import hash_uniform1, stream_key
+from ..sampling.hash import hash_uniform, hash_uniform1, stream_key
 from ..sampling.sequences import r2_point1
 from ..sampling.warps import cosine_hemisphere, frames
 from ..scene import Light
@@ -61,6 +61,9 @@ SMALL_LAMP = math.radians(1.0)
 SHADOW_PROBES = 2
 # Draws of a pixel's world rays, per strategy: its strata of every eye sample.
 _WORLD_DRAWS = 1 << 20
+# Directions toward the world that met something, followed on through the
+# casters together.
+_WORLD_BATCH = 1 << 18
 
 
 @dataclass
@@ -224,12 +227,17 @@ def _pixels_agree(pixel: np.ndarray, clear: np.ndarray, blocked: np.ndarray) -> 
 def world_light(accel: Accelerator, environment: Environment, points: np.ndarray, shading: np.ndarray,
                 facing: np.ndarray, view: np.ndarray, lobe: Lobe | None, far: float, pixel: np.ndarray,
                 first_stratum: np.ndarray, samples: int, seed: int, sky_paths: WorldThroughCasters | None = None,
-                medium: np.ndarray | None = None, surface: np.ndarray | None = None) -> tuple[WorldLight, WorldLight]:
+                medium: np.ndarray | None = None, surface: np.ndarray | None = None,
+                chance: np.ndarray | None = None) -> tuple[WorldLight, WorldLight]:
     """(open, through): the world's light at the points, shadows included,
     in two parts: what reaches them along directions that meet nothing,
     and, given `sky_paths`, what reaches them through the casters
     (world_paths.py; a ray leaves triangle `surface (n,)` inside object
-    `medium (n,)`), else nothing. `samples` directions of each strategy per
+    `medium (n,)`), else nothing. A shadow ray finds the directions that
+    meet something first; those of point i are followed with probability
+    `chance[i]` (Russian roulette: what they bring is divided by it),
+    _WORLD_BATCH or so at a time (one bounce.trace for them all: its calls
+    cost more than its rays). `samples` directions of each strategy per
     point: `_world_directions` weighs them, `_add_world` adds each part."""
     n = len(points)
     parts = [WorldLight(np.zeros((n, 3)), np.zeros((n, 3))) for _ in range(2)]
@@ -242,6 +250,31 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
     else:
         active, alpha, f0, eta, gain = lobe.active, lobe.alpha, lobe.f0, lobe.eta, lobe.gain
         tangent, bitangent = frames(shading)
+
+    def add(part: WorldLight, idx, seen, toward, light, density, cos) -> None:
+        _add_world(part.irradiance, part.glossy, idx, seen, toward, contiguous(light, np.float64), density, cos,
+                   samples, shading, view, f0, eta, alpha, gain)
+
+    blocked = []
+
+    def follow() -> None:
+        """The blocked directions gathered so far, each followed on through
+        the casters with its point's chance (one trace for them all), added
+        to their parts."""
+        if not blocked:
+            return
+        at, origins, toward, density, cos, draws = (np.concatenate(c) for c in zip(*blocked))
+        blocked.clear()
+        kept = np.flatnonzero(hash_uniform(draws, _WORLD_STREAM + 6, seed) < np.take(chance, at))
+        at, origins, toward, density, cos, draws = (np.take(a, kept, axis=0)
+                                                    for a in (at, origins, toward, density, cos, draws))
+        # a followed direction stands for 1 / chance of its kind
+        density = density * np.take(chance, at)
+        opened, met, behind = sky_paths.light(origins, toward, np.take(medium, at), np.take(surface, at), draws)
+        add(parts[0], at, opened, toward, environment.light(np.take(toward, np.flatnonzero(opened), axis=0)),
+            density, cos)
+        add(parts[1], at, met, toward, np.take(behind, np.flatnonzero(met), axis=0), density, cos)
+
     for k in range(samples):
         index = first_stratum * samples + k
         drawn = [(cosine_hemisphere(shading, strata(pixel, index, _WORLD_STREAM, seed)), False)]
@@ -259,19 +292,17 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
                 continue
             toward = np.take(dirs, idx, axis=0)
             origins = accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), toward)
-
-            def add(part: WorldLight, seen: np.ndarray, light: np.ndarray) -> None:
-                _add_world(part.irradiance, part.glossy, idx, seen, toward, contiguous(light, np.float64), density,
-                           cos, samples, shading, view, f0, eta, alpha, gain)
-
-            if sky_paths is None:
-                seen = ~accel.occluded(origins, toward, np.full(len(idx), far))
-            else:
-                draws = (np.take(pixel, idx) * _WORLD_DRAWS + np.take(index, idx)) * 3 + strategy
-                seen, met, behind = sky_paths.light(origins, toward, np.take(medium, idx), np.take(surface, idx),
-                                                    draws)
-                add(parts[1], met, np.take(behind, np.flatnonzero(met), axis=0))
-            add(parts[0], seen, environment.light(np.take(toward, np.flatnonzero(seen), axis=0)))
+            seen = ~accel.occluded(origins, toward, np.full(len(idx), far))
+            add(parts[0], idx, seen, toward, environment.light(np.take(toward, np.flatnonzero(seen), axis=0)),
+                density, cos)
+            if sky_paths is not None and not seen.all():
+                rows = np.flatnonzero(~seen)
+                at = np.take(idx, rows)
+                draws = (np.take(pixel, at) * _WORLD_DRAWS + np.take(index, at)) * 3 + strategy
+                blocked.append((at, *(np.take(a, rows, axis=0) for a in (origins, toward, density, cos)), draws))
+                if sum(len(b[0]) for b in blocked) >= _WORLD_BATCH:
+                    follow()
+    follow()
     return parts[0], parts[1]
 
 

@@ -161,24 +161,24 @@ class EyeTracer:
                                  lobe, self.far, pixel, stratum, settings.lamp_samples, settings.seed,
                                  self.adaptive_shadows, self.spp)
         self._add("direct", rays.ids, rays.weight, direct + np.take(m.emission, hits.obj, axis=0))
-        ambient = self.scene.ambient * diffuse
-        if not self.scene.world.is_black:
-            seen, through = world_light(accel, self.environment, points, shading, facing, view, lobe, self.far,
-                                        pixel, stratum, settings.world_samples, settings.seed, self.sky_paths,
-                                        rays.medium, hits.prim)
-            ambient = ambient + seen.irradiance * diffuse / math.pi + seen.glossy
-            if self.sky_paths is not None:
-                self._add("caustic", rays.ids, rays.weight, through.irradiance * diffuse / math.pi + through.glossy)
-        self._add("ambient", rays.ids, rays.weight, ambient)
-
+        caustic = np.zeros((len(rays), 3))
         for index, imap in self.maps.items():
             on_map = hits.obj == index
             if not on_map.any():
                 continue
             here, at = rays.select(on_map), hits.select(on_map)
             irradiance = self._caustic(imap, index, here, at, pixel[on_map])
-            radiance = irradiance * take_rows(on_map, diffuse)[0] / math.pi
-            self._add("caustic", here.ids, here.weight, radiance)
+            caustic[on_map] = irradiance * take_rows(on_map, diffuse)[0] / math.pi
+        ambient = self.scene.ambient * diffuse
+        if not self.scene.world.is_black:
+            chance = None if self.sky_paths is None else self.sky_paths.chances(diffuse, direct + caustic)
+            seen, through = world_light(accel, self.environment, points, shading, facing, view, lobe, self.far,
+                                        pixel, stratum, settings.world_samples, settings.seed, self.sky_paths,
+                                        rays.medium, hits.prim, chance)
+            ambient = ambient + seen.irradiance * diffuse / math.pi + seen.glossy
+            caustic += through.irradiance * diffuse / math.pi + through.glossy
+        self._add("ambient", rays.ids, rays.weight, ambient)
+        self._add("caustic", rays.ids, rays.weight, caustic)
 
     def _caustic(self, imap: IlluminationMap, index: int, rays: Paths, hits: Hits, pixel: np.ndarray) -> np.ndarray:
         """(n,3) the caustic irradiance that `rays` see at their `hits` on

@@ -22,12 +22,19 @@ from ..emission.environment import Environment
 from ..scene.material_table import Materials
 from ..tracing.accelerator import SHADOW, Accelerator
 from ..tracing.hits import Hits
+from ..util.vectors import DIVISION_FLOOR, max_channel
 from .bounce import Interface, trace
 from .paths import Paths
 from .photon import ROULETTE_FRACTION, one_branch
 
 # The first of the random streams of a world ray's choices, past the eye's.
 _STREAM = 1 << 21
+# Blocked directions are all followed at a point where the sky through the
+# casters could bring this share of the light it has from elsewhere, and
+# fewer below (Russian roulette, as the eye's faint branches play it)...
+ROULETTE_SHARE = 0.05
+# ... but at least this share of them.
+MIN_CHANCE = 1.0 / 16.0
 
 
 class _WorldRays:
@@ -67,6 +74,16 @@ class WorldThroughCasters:
     sky: Environment
     max_depth: int
     seed: int
+
+    def chances(self, diffuse: np.ndarray, lit: np.ndarray) -> np.ndarray:
+        """(n,) the chance with which points of diffuse reflectance
+        `diffuse (n,3)`, whose radiance from the lamps and the maps is `lit
+        (n,3)`, follow their blocked directions toward the world: 1 where the
+        sky's mean radiance times the reflectance could be ROULETTE_SHARE of
+        `lit` (max channels), less in proportion below, at least MIN_CHANCE."""
+        could = max_channel(diffuse) * self.sky.mean_level
+        have = ROULETTE_SHARE * max_channel(lit)
+        return np.clip(could / np.maximum(have, DIVISION_FLOOR), MIN_CHANCE, 1.0)
 
     def light(self, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray, surface: np.ndarray,
               draws: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

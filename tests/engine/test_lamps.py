@@ -14,6 +14,7 @@ from caustic_addon.emission.environment import Environment, uv_to_directions
 from caustic_addon.emission.lamp_samples import sample_lamp
 from caustic_addon.emission.world_sun import extract_sun
 from caustic_addon.optics.specular import fresnel_dielectric
+from caustic_addon.passes import world_paths
 from caustic_addon.sampling.sequences import r2_sequence
 from scenes import floor_points, top_camera
 
@@ -222,16 +223,20 @@ def test_the_worlds_light_through_index_matched_glass_is_the_light_the_glass_hid
     np.testing.assert_allclose(total, 1.0, rtol=1e-6)
 
 
-def test_the_worlds_light_through_a_glass_pane_is_the_panes_transmittance():
+@pytest.mark.parametrize("chance", [1.0, 0.25])
+def test_the_worlds_light_through_a_glass_pane_is_the_panes_transmittance(chance, monkeypatch):
     """Under a glass pane of index n, wide enough to cover the sky, a white
     floor in a uniform world of radiance 1 has radiance E / pi = 2 int T cos
     sin dtheta, T(theta) = (1 - R) / (1 + R) the pane's transmittance with
     every internal reflection (R the unpolarised Fresnel reflectance at
-    theta), what the world's paths through it gather."""
+    theta), what the world's paths through it gather; and still where the
+    paths are followed with a `chance` (the Russian roulette that a point
+    lit brightly from elsewhere plays)."""
+    monkeypatch.setattr(world_paths.WorldThroughCasters, "chances", lambda self, diffuse, lit: np.full(len(lit), chance))
     n = 1.5
     pane = Object("Pane", shapes.wavy_slab(200.0, 0.05, waves=(), cells=1, center=(0, 0, 1.0)), Dielectric(n))
     scene = floor_scene(None, 0.05, 4, [pane], world=World(1.0), camera_height=0.5, floor=400.0)
-    result = render(scene, RenderSettings(spp=1, world_samples=1024, max_depth=32))
+    result = render(scene, RenderSettings(spp=1, world_samples=int(1024 / chance), max_depth=32))
     theta = (np.arange(20_000) + 0.5) / 20_000 * (math.pi / 2)
     reflectance = fresnel_dielectric(np.cos(theta), 1.0 / n)
     expected = 2.0 * np.sum((1 - reflectance) / (1 + reflectance) * np.cos(theta) * np.sin(theta)) * (math.pi / 40_000)
