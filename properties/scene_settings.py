@@ -79,8 +79,8 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
         default=8, min=1, soft_max=64)
     world_samples: IntProperty(
         name="World Samples",
-        description="Directions per eye sample toward the world, spread evenly over the pixel: more give "
-                    "smoother light from the sky",
+        description="Directions per eye sample toward the world, spread evenly over the pixel and followed on "
+                    "through glass and water: more give smoother light from the sky, in the open and through them",
         default=8, min=1, soft_max=64)
     ambient: FloatVectorProperty(
         name="Ambient",
