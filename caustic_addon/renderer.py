@@ -10,12 +10,12 @@ from typing import Optional
 
 import numpy as np
 
+from .emission.world_sun import extract_sun
 from .errors import SceneError
 from .maps.cache import MapCache, lamp_pass_key
 from .maps.illumination_map import IlluminationMap
 from .maps.receivers import build_maps
 from .memory import refusal
-from .emission.world_sun import extract_sun
 from .passes.beam import beam_pass
 from .passes.camera_rays import image_view
 from .passes.eye import HOLDOUT, PASSES, eye_pass

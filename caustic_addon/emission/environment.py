@@ -138,6 +138,13 @@ def uv_to_directions(uv: np.ndarray) -> np.ndarray:
     return out
 
 
+def row_solid_angles(h: int, w: int) -> np.ndarray:
+    """(h,) the solid angle (sr) of a pixel in each row of an h x w lat-long
+    image: (2 pi / w) (pi / h) sin(theta) at the row's centre."""
+    theta = (np.arange(h) + 0.5) / h * math.pi
+    return (2.0 * math.pi / w) * (math.pi / h) * np.sin(theta)
+
+
 def luminance(rgb: np.ndarray) -> np.ndarray:
     """(...) Rec.709 luminance of linear `rgb (..., 3)`."""
     return 0.2126 * rgb[..., 0] + 0.7152 * rgb[..., 1] + 0.0722 * rgb[..., 2]
@@ -171,9 +178,7 @@ class Environment:
         image = self.world.environment
         if image is None:
             return float(np.max(self.world.color))
-        h, w = image.shape[:2]
-        theta = (np.arange(h) + 0.5) / h * math.pi
-        solid_angle = (2.0 * math.pi / w) * (math.pi / h) * np.sin(theta)
+        solid_angle = row_solid_angles(*image.shape[:2])
         mean = (image * solid_angle[:, None, None]).sum(axis=(0, 1)) / (4.0 * math.pi)
         return float(np.max(mean * self.world.color))
 

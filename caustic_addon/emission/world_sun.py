@@ -17,7 +17,7 @@ from typing import Optional
 import numpy as np
 
 from ..scene import SunLight, World
-from .environment import luminance, uv_to_directions
+from .environment import luminance, row_solid_angles, uv_to_directions
 
 # A sun pixel is at least this share of the brightest pixel's luminance...
 SUN_THRESHOLD = 0.01
@@ -35,8 +35,7 @@ def extract_sun(world: World) -> tuple[Optional[SunLight], World]:
         return None, world
     h, w = image.shape[:2]
     rgb = image * world.color
-    theta = (np.arange(h) + 0.5) / h * math.pi
-    solid_angle = (2.0 * math.pi / w) * (math.pi / h) * np.sin(theta)
+    solid_angle = row_solid_angles(h, w)
     lum = np.maximum(luminance(rgb), 0.0)
     peak = np.unravel_index(np.argmax(lum), lum.shape)
     if not lum[peak] > 0:
