@@ -100,7 +100,21 @@ def relative_l2(image: np.ndarray, reference: np.ndarray, region: np.ndarray) ->
 
 
 def cycles_renders(samples: int, sweep: list[int]) -> tuple[np.ndarray, np.ndarray, list[tuple]]:
-    """(first and second reference render (h,w,3), [(samples, seconds, image)] of the sweep)."""
+    """(first and second reference render (h,w,3), [(samples, seconds, image)] of the sweep), cached in
+    results/_cycles_sized_lamps_<samples>.npz (not committed; delete it after a change to the scene)."""
+    cache = RESULTS / f"_cycles_sized_lamps_{samples}.npz"
+    if cache.exists():
+        saved = np.load(cache)
+        return saved["first"], saved["second"], [(int(s), float(t), image) for s, t, image in
+                                                 zip(saved["samples"], saved["seconds"], saved["images"])]
+    first, second, swept = _cycles_renders(samples, sweep)
+    RESULTS.mkdir(exist_ok=True)
+    np.savez(cache, first=first, second=second, samples=[s for s, _, _ in swept],
+             seconds=[t for _, t, _ in swept], images=np.stack([image for _, _, image in swept]))
+    return first, second, swept
+
+
+def _cycles_renders(samples: int, sweep: list[int]) -> tuple[np.ndarray, np.ndarray, list[tuple]]:
     _, objects = cycles_accuracy.build_scene()
     lamp = objects["Lamp"].data
     lamp.shadow_soft_size, lamp.use_soft_falloff = RADIUS, False

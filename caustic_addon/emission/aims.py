@@ -11,7 +11,7 @@ light is that of a lamp that sends rays everywhere."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Optional
 
 import numpy as np
@@ -144,6 +144,15 @@ class Aim:
             facing = max(float(self.axis @ light.direction), 0.0)
             return float(light.power * energy * self.measure * facing / math.pi)
         return float(light.power * energy * self.measure / (4.0 * math.pi))
+
+    def widened(self, scale: float) -> "Aim":
+        """This aim with its disc's radius `scale` times as large: a disc's in
+        metres, a cone's in the map's rho (1 - cos_max times scale^2)."""
+        if scale == 1.0:
+            return self
+        if self.is_disc:
+            return replace(self, radius=self.radius * scale)
+        return replace(self, cos_max=max(1.0 - (1.0 - self.cos_max) * scale ** 2, -1.0))
 
     def contains(self, origins: np.ndarray, dirs: np.ndarray) -> np.ndarray:
         """(n,) bool: which rays `origins, dirs (n,3)` the aim holds: a

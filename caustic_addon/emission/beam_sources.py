@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Optional
 
 import numpy as np
 
@@ -16,14 +17,16 @@ from .aims import Aim, Sphere, aims, balance_density, share
 
 @dataclass
 class BeamSource:
-    """A grid of `grid` x `grid` points over one aim of a lamp. `overlap`
-    lists every aim of the same lamp with its grid's sample density (points
-    per unit measure), to share the rays that several aims hold."""
+    """A grid of `grid` x `grid` points over one aim of a lamp, the disc
+    turned by `roll` radians about the aim's axis. `overlap` lists every
+    aim of the same lamp with its grid's sample density (points per unit
+    measure), to share the rays that several aims hold."""
 
     aim: Aim
     energy: float
     grid: int
     overlap: list[tuple[Aim, float]] = field(default_factory=list)
+    roll: float = 0.0
 
     @property
     def light(self) -> Light:
@@ -39,7 +42,11 @@ class BeamSource:
         grid - 1]: (origins (n,3), dirs (n,3), weight (n,3) intensity (W/sr)
         or irradiance (W/m^2) times the ray's share of its cell, 1 where no
         other aim holds it)."""
-        origins, dirs = self.aim.rays(concentric_disc(rc / (self.grid - 1)))
+        disc = concentric_disc(rc / (self.grid - 1))
+        if self.roll:
+            c, s = math.cos(self.roll), math.sin(self.roll)
+            disc = disc @ np.array([[c, s], [-s, c]])
+        origins, dirs = self.aim.rays(disc)
         others, density = zip(*self.overlap)
         weight = self.aim.emitted(self.energy, dirs)
         weight *= ((1.0 / self.cell_measure) / balance_density(others, np.array(density), origins, dirs))[:, None]
@@ -47,15 +54,33 @@ class BeamSource:
 
 
 def beam_sources(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere, energy: float,
-                 lamp_rays: int) -> list[BeamSource]:
+                 lamp_rays: int, phases: Optional[np.ndarray] = None) -> list[BeamSource]:
     """Grids over every lamp's aims, about `lamp_rays` grid points in all,
     shared in proportion to the flux each aim receives; none over an aim
-    that receives none (a lamp of power 0)."""
-    every = [aim for light in lights for aim in aims(light, targets, scene_sphere) if aim.flux(energy) > 0]
+    that receives none (a lamp of power 0).
+
+    `phases (lights, 2)` in [0,1)^2 (None: 0) shift each lamp's grids
+    against its casters: the aim widened so that its rings of grid points
+    move out by phase[0] of the step between rings at the edge (which puts
+    the outer ring's neighbour, the last one on the caster, anywhere
+    across the step), and the grid turned by phase[1] of a turn (which
+    moves the concentric map's bent diagonals). Neighbouring points of a
+    lamp with a size, whose grids would land alike, then sample what lies
+    between one grid's points (the light of a glass's rim, say) between
+    them."""
+    if phases is None:
+        phases = np.zeros((len(lights), 2))
+    every = [(aim, phase) for light, phase in zip(lights, phases) for aim in aims(light, targets, scene_sphere)
+             if aim.flux(energy) > 0]
     if not every:
         return []
-    points = share(lamp_rays, [aim.flux(energy) for aim in every], minimum=9)
-    sources = [BeamSource(aim, energy, int(round(math.sqrt(n)))) for aim, n in zip(every, points)]
+    points = share(lamp_rays, [aim.flux(energy) for aim, _ in every], minimum=9)
+    sources = []
+    for (aim, phase), n in zip(every, points):
+        grid = int(round(math.sqrt(n)))
+        # rings of the concentric map 2 / (grid - 1) apart in rho
+        sources.append(BeamSource(aim.widened(1.0 + 2.0 * phase[0] / (grid - 1)), energy, grid,
+                                  roll=2.0 * math.pi * phase[1]))
     for source in sources:
         source.overlap = [(other.aim, 1.0 / other.cell_measure) for other in sources
                           if other.aim.light is source.aim.light]

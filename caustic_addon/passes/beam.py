@@ -359,10 +359,10 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
                 if any(e.light is light for light in as_photons)]
     beamed = [light for light in lights if not any(light is other for other in as_photons)]
     from_photons = sum(e.count for e in emitters)
-    lamps = beam_lamps(beamed, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
-                       min(imap.cell for imap in maps.values()), (settings.lamp_rays - from_photons) // count)
+    lamps, phases = beam_lamps(beamed, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
+                               min(imap.cell for imap in maps.values()), (settings.lamp_rays - from_photons) // count)
     sources = beam_sources(lamps, targets, scene_sphere, settings.energy,
-                           (settings.lamp_rays - from_photons) // count)
+                           (settings.lamp_rays - from_photons) // count, phases)
     stacks: dict[tuple[int, int], list[BeamSource]] = {}
     for source in sources:
         stacks.setdefault((source.grid, lamp_medium(accel, source.light)), []).append(source)
