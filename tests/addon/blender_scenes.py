@@ -171,3 +171,19 @@ def rendered_pixels(folder) -> np.ndarray:
     image.pixels.foreach_get(pixels)
     bpy.data.images.remove(image)
     return pixels.reshape(h, w, 4)[::-1].astype(np.float64)
+
+
+def compositor_tree(scene, name):
+    """An empty compositor node tree, `name`, that renders use: Blender 5.3
+    keeps it in a compositor effect, 5.0-5.2 in compositing_node_group, 4.x
+    in scene.node_tree."""
+    if hasattr(scene, "compositor_effects"):
+        effect = scene.compositor_effects.new(name=name)
+        effect.node_group = bpy.data.node_groups.new(name, 'CompositorNodeTree')
+        return effect.node_group
+    if bpy.app.version >= (5, 0, 0):
+        scene.compositing_node_group = bpy.data.node_groups.new(name, 'CompositorNodeTree')
+        return scene.compositing_node_group
+    scene.use_nodes = True
+    scene.node_tree.nodes.clear()
+    return scene.node_tree

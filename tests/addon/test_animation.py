@@ -121,17 +121,6 @@ def test_undo_after_render_animation_keeps_the_frames(tmp_path):
     assert np.array_equal(scenes.pixels_of("Caustic Render"), last)
 
 
-def compositor_tree():
-    """The scene's compositor node tree, made empty (Blender 5 keeps it in a node group)."""
-    scene = bpy.context.scene
-    if bpy.app.version >= (5, 0, 0):
-        scene.compositing_node_group = bpy.data.node_groups.new("Compositing", 'CompositorNodeTree')
-        return scene.compositing_node_group
-    scene.use_nodes = True
-    scene.node_tree.nodes.clear()
-    return scene.node_tree
-
-
 def test_multilayer_exr_holds_the_image_and_its_passes(tmp_path):
     moving_glass()
     exr_output(multilayer=True)
@@ -139,7 +128,7 @@ def test_multilayer_exr_holds_the_image_and_its_passes(tmp_path):
     assert os.listdir(tmp_path) == ["ml_1.exr"]
     image = bpy.data.images.load(str(tmp_path / "ml_1.exr"))
     assert tuple(image.size) == (0, 0) and image.type == 'MULTILAYER'
-    node = compositor_tree().nodes.new('CompositorNodeImage')
+    node = scenes.compositor_tree(bpy.context.scene, "Compositing").nodes.new('CompositorNodeImage')
     node.image = image
     assert {"Combined", "Direct", "Caustic", "Ambient"} <= {socket.name for socket in node.outputs}
 

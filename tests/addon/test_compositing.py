@@ -12,25 +12,9 @@ import blender_scenes as scenes
 from test_animation import file_pixels
 
 
-def compositor_tree(scene):
-    """An empty compositor node tree that renders use: Blender 5.3 keeps it
-    in a compositor effect, 5.0-5.2 in compositing_node_group, 4.x in
-    scene.node_tree."""
-    if hasattr(scene, "compositor_effects"):
-        effect = scene.compositor_effects.new(name="Caustics")
-        effect.node_group = bpy.data.node_groups.new("Caustics", 'CompositorNodeTree')
-        return effect.node_group
-    if bpy.app.version >= (5, 0, 0):
-        scene.compositing_node_group = bpy.data.node_groups.new("Caustics", 'CompositorNodeTree')
-        return scene.compositing_node_group
-    scene.use_nodes = True
-    scene.node_tree.nodes.clear()
-    return scene.node_tree
-
-
 def add_caustic_pass(scene, caustic_file):
     """Render Layers' Image + the Caustic pass of `caustic_file` -> the composite, as the doc shows."""
-    tree = compositor_tree(scene)
+    tree = scenes.compositor_tree(scene, "Caustics")
     nodes, links = tree.nodes, tree.links
     render_layers = nodes.new('CompositorNodeRLayers')
     caustics = nodes.new('CompositorNodeImage')
