@@ -147,7 +147,8 @@ class Aim:
 
     def widened(self, scale: float) -> "Aim":
         """This aim with its disc's radius `scale` times as large: a disc's in
-        metres, a cone's in the map's rho (1 - cos_max times scale^2)."""
+        metres, a cone's in the map's rho (1 - cos_max times scale^2); this
+        very aim at scale 1, whose rays then stay bit for bit."""
         if scale == 1.0:
             return self
         if self.is_disc:

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Optional
 
 import numpy as np
 
@@ -54,12 +53,12 @@ class BeamSource:
 
 
 def beam_sources(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere, energy: float,
-                 lamp_rays: int, phases: Optional[np.ndarray] = None) -> list[BeamSource]:
+                 lamp_rays: int, phases: np.ndarray) -> list[BeamSource]:
     """Grids over every lamp's aims, about `lamp_rays` grid points in all,
     shared in proportion to the flux each aim receives; none over an aim
     that receives none (a lamp of power 0).
 
-    `phases (lights, 2)` in [0,1)^2 (None: 0) shift each lamp's grids
+    `phases (lights, 2)` in [0,1)^2 shift each lamp's grids
     against its casters: the aim widened so that its rings of grid points
     move out by phase[0] of the step between rings at the edge (which puts
     the outer ring's neighbour, the last one on the caster, anywhere
@@ -68,8 +67,6 @@ def beam_sources(lights: list[Light], targets: list[Sphere], scene_sphere: Spher
     lamp with a size, whose grids would land alike, then sample what lies
     between one grid's points (the light of a glass's rim, say) between
     them."""
-    if phases is None:
-        phases = np.zeros((len(lights), 2))
     every = [(aim, phase) for light, phase in zip(lights, phases) for aim in aims(light, targets, scene_sphere)
              if aim.flux(energy) > 0]
     if not every:

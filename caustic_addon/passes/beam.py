@@ -358,11 +358,11 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
                                          settings.lamp_rays, settings.seed)
                 if any(e.light is light for light in as_photons)]
     beamed = [light for light in lights if not any(light is other for other in as_photons)]
-    from_photons = sum(e.count for e in emitters)
+    # each wavelength band's share of the lamp rays that photons leave
+    band_rays = (settings.lamp_rays - sum(e.count for e in emitters)) // count
     lamps, phases = beam_lamps(beamed, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
-                               min(imap.cell for imap in maps.values()), (settings.lamp_rays - from_photons) // count)
-    sources = beam_sources(lamps, targets, scene_sphere, settings.energy,
-                           (settings.lamp_rays - from_photons) // count, phases)
+                               min(imap.cell for imap in maps.values()), band_rays)
+    sources = beam_sources(lamps, targets, scene_sphere, settings.energy, band_rays, phases)
     stacks: dict[tuple[int, int], list[BeamSource]] = {}
     for source in sources:
         stacks.setdefault((source.grid, lamp_medium(accel, source.light)), []).append(source)
