@@ -498,6 +498,31 @@ def test_lamp_rays_aimed_at_sphere_vertices_and_edges_hit_its_front():
     assert np.count_nonzero(through) == 0
 
 
+def test_a_hit_beside_a_slivers_long_edge_stays_where_the_ray_met_it():
+    """A hit is kept epsilon inside its triangle's edges (a float32 hit can
+    fall just past one). It was moved there by raising the barycentric and
+    renormalising, which also slid it along the edge by up to the floor
+    times the triangle's length: 0.8 mm on a fan's sliver (a slab's bottom,
+    spokes 0.7 m long, 12.5 mm apart at the rim), which threw the light
+    through a wavy slab's bottom a third of a pixel off and kept its folds
+    from converging (issue 18). It now moves at most epsilon, straight off
+    the edge."""
+    sliver = Mesh(np.array([[0.0, 0.0, 0.0], [-0.5, 0.4875, 0.0], [-0.5, 0.5, 0.0]]), np.array([[0, 1, 2]]))
+    accel = Accelerator([Object("Bottom", sliver, Diffuse())], 4.0, threads=1)
+    spoke = np.array([-0.5, 0.5, 0.0]) / np.linalg.norm([-0.5, 0.5])
+    inward = np.array([-spoke[1], spoke[0], 0.0])  # off the spoke from (0, 0) to (-0.5, 0.5), into the sliver
+    along, off = np.meshgrid([0.05, 0.1, 0.3, 0.6], [1e-7, 1e-6, 4e-6, 0.5 * accel.epsilon], indexing="ij")
+    aimed = along.reshape(-1, 1) * spoke + off.reshape(-1, 1) * inward
+    hits = accel.intersect(aimed + [0.0, 0.0, 1.0], np.tile([0.0, 0.0, -1.0], (len(aimed), 1)))
+    accel.close()
+    assert hits.hit.all()
+    # Embree's float32 barycentrics are good to about 1e-7 m here
+    moved = hits.points - aimed
+    assert np.linalg.norm(moved, axis=1).max() <= accel.epsilon + 1e-6
+    assert (moved @ inward).min() >= -1e-6
+    assert np.abs(moved @ spoke).max() <= 1e-6
+
+
 def test_phantom_exits_pass_the_glass_unrefracted():
     """The same lamp rays, told they start outside the glass (medium MISS):
     none is reported on a face of the sphere turned away from it; the few
