@@ -1,8 +1,12 @@
 """Folds and cusps against an independent unbiased reference: Mitsuba 3's
-particle tracer (issue 18, item 3), on the ball lens's fold ring and on
-sunlight through a wavy water slab.
+particle tracer (issue 18, item 3), on the ball lens's fold ring, on
+sunlight through a wavy water slab, and on water with one cosine wave whose
+exact caustic is known (benchmarks/sine_slab.py: sine_slab, the wave along
+the quads' edges under a vertical sun; sine_slab_diagonal, across their
+diagonals under a slanted sun).
 
-    .venv/bin/python benchmarks/mitsuba_folds.py [--scenes ball_lens wavy_slab] [--counts 1e4 3e4 ...]
+    .venv/bin/python benchmarks/mitsuba_folds.py [--scenes ball_lens wavy_slab sine_slab sine_slab_diagonal]
+        [--counts 1e4 3e4 ...]
         [--refinement 1] [--mitsuba-python /tmp/mitsuba-venv/bin/python] [--reference-passes 64]
 
 Mitsuba runs in its own venv (benchmarks/mitsuba_ptracer.py in a subprocess;
@@ -28,10 +32,12 @@ light. So that both count the same paths:
   water (its connection to the camera is a shadow ray).
 
 Errors are relative L2 over the caustic's pixels (benchmarks/beams_at_scale
-.relative_l2): the ball lens's pixels inside the shadow disc
-(ball_lens.pixel_reference), against the exact reference and against
-Mitsuba's; every pixel of the slab's view (all of it is floor under the water),
-against Mitsuba's. The reference is `--reference-passes` passes of
+.relative_l2), against Mitsuba's reference ("error") and against an exact
+one ("error_vs_exact"): the ball lens's pixels inside the shadow disc,
+against ball_lens.pixel_reference; the slabs' pixels that no wall's light
+reaches (water_reference.wall_free), against the cosine waves' exact image
+(sine_slab) and the wavy slab's image by water_reference's own float64
+particle tracer (2 x 5e8 particles, its noise 0.04%). The reference is `--reference-passes` passes of
 `--reference-spp` particles per pixel; its own noise is half the relative
 L2 distance between its two halves (the halves' errors add in quadrature).
 Mitsuba's curve renders independent seeds at increasing particles per pixel.
@@ -89,6 +95,9 @@ def scene_of(name: str) -> Scene:
     if name == "ball_lens":
         import ball_lens
         return ball_lens.scene()
+    if name.startswith("sine_slab"):
+        import sine_slab
+        return sine_slab.scene(name)
     return slab_scene()
 
 
@@ -141,7 +150,7 @@ def export_scene(name: str, scene: Scene, path: Path) -> None:
         else:
             shape = dict(bsdf="diffuse", albedo=float(np.asarray(obj.material.albedo).reshape(-1)[0]))
             mesh = obj.mesh
-            if name == "wavy_slab":
+            if name != "ball_lens":
                 # only the floor the slab shades, moved as its shadow is by the sun's slant
                 shift = -light.direction[:2] / light.direction[2] * 0.35
                 mesh = shapes.plane(SLAB_SIZE - 0.1, (shift[0], shift[1], 0.0))
@@ -163,6 +172,22 @@ def mitsuba(name: str, scene: Scene, spp: int, passes: int, seed: int, args) -> 
                         "--threads", str(args.threads)], check=True)
     data = np.load(out)
     return dict(images=data["images"], wall=data["wall"], cpu=data["cpu"])
+
+
+def water_reference_image(scene: Scene) -> tuple[np.ndarray, float]:
+    """The wavy slab's image by water_reference's own float64 particle
+    tracer, 2 x 5e8 particles (cached in results/_own_wavy_slab.npz, not
+    committed), and its noise (half the relative L2 between the halves)."""
+    import water_reference
+    out = RESULTS / "_own_wavy_slab.npz"
+    if not out.exists():
+        (sun,) = scene.lights
+        halves = [water_reference.radiance(SLAB_SIZE, round(SLAB_SIZE / 0.0125), SLAB_WAVES, sun.direction,
+                                           float(sun.strength * sun.color[0]), particles=5e8, seed=seed)
+                  for seed in (0, 77)]
+        np.savez(out, halves=np.array(halves))
+    halves = np.load(out)["halves"]
+    return halves.mean(axis=0), 0.5 * relative_l2(halves[0], halves[1], np.ones(halves[0].shape, dtype=bool))
 
 
 def engine(scene: Scene, lamp_rays: int, refinement: int, threads: int) -> tuple[dict, np.ndarray]:
@@ -208,7 +233,8 @@ def main() -> None:
     parser.add_argument("--mitsuba-python", default=MITSUBA_PYTHON)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--label", default="curve", help="the key the engine's and Mitsuba's rows go under")
-    parser.add_argument("--no-mitsuba-curve", action="store_true", help="the engine's rows only")
+    parser.add_argument("--no-mitsuba-curve", action="store_true",
+                        help="the engine's rows only (Mitsuba's rows under --label kept from the last run)")
     args = parser.parse_args()
 
     RESULTS.mkdir(exist_ok=True)
@@ -228,33 +254,39 @@ def main() -> None:
             import ball_lens
             truth = ball_lens.pixel_reference(scene)
             region, exact = truth.region, truth.irradiance / math.pi
+        elif name.startswith("sine_slab"):
+            import sine_slab
+            region, exact = sine_slab.region(name), sine_slab.exact_radiance(name)
         else:
-            region, exact = np.ones(reference.shape, dtype=bool), None
+            import water_reference
+            exact, own_noise = water_reference_image(scene)
+            top = water_reference.DEPTH + sum(wave[0] for wave in SLAB_WAVES)
+            region = water_reference.wall_free(SLAB_SIZE, top, scene.lights[0].direction)
         entry["reference"] = dict(
             particles_per_pixel=args.reference_spp * reference_passes, wall=float(ref["wall"].sum()),
             cpu_seconds=float(ref["cpu"].sum()), pixels=int(region.sum()),
             noise=0.5 * relative_l2(halves[0], halves[1], region))
-        if exact is not None:
-            entry["reference"]["error_vs_exact"] = relative_l2(reference, exact, region)
-            entry["reference"]["mean_ratio_vs_exact"] = float(reference[region].sum() / exact[region].sum())
-        rows = []
+        if name == "wavy_slab":
+            entry["reference"]["own_tracer_noise"] = own_noise
+        entry["reference"]["error_vs_exact"] = relative_l2(reference, exact, region)
+        entry["reference"]["mean_ratio_vs_exact"] = float(reference[region].sum() / exact[region].sum())
+        rows = [row for row in entry.get(args.label, []) if row["renderer"] != "engine beams"] \
+            if args.no_mitsuba_curve else []
         for spp in [] if args.no_mitsuba_curve else args.mitsuba_spp:
             passes = max(1, spp // args.reference_spp)
             run = mitsuba(name, scene, spp // passes, passes, 7 * spp, args)
             image = run["images"].mean(axis=0)
             row = dict(renderer="mitsuba ptracer", particles_per_pixel=spp, seconds=float(run["wall"].sum()),
-                       cpu_seconds=float(run["cpu"].sum()), error=relative_l2(image, reference, region))
-            if exact is not None:
-                row["error_vs_exact"] = relative_l2(image, exact, region)
+                       cpu_seconds=float(run["cpu"].sum()), error=relative_l2(image, reference, region),
+                       error_vs_exact=relative_l2(image, exact, region))
             rows.append(row)
             print(name, row, flush=True)
         best = None
         for refinement in args.refinement:
             for count in args.counts:
                 figures, caustic = engine(scene, int(count), refinement, args.threads)
-                figures.update(renderer="engine beams", error=relative_l2(caustic, reference, region))
-                if exact is not None:
-                    figures["error_vs_exact"] = relative_l2(caustic, exact, region)
+                figures.update(renderer="engine beams", error=relative_l2(caustic, reference, region),
+                               error_vs_exact=relative_l2(caustic, exact, region))
                 rows.append(figures)
                 best = caustic
                 print(name, figures, flush=True)
