@@ -43,7 +43,7 @@ L2 distance between its two halves (the halves' errors add in quadrature).
 Mitsuba's curve renders independent seeds at increasing particles per pixel.
 
 Writes benchmarks/results/mitsuba_folds.json and mitsuba_folds_<scene>_<label>.png
-(engine, Mitsuba, their difference, side by side).
+(engine, Mitsuba, and each one less the exact image, side by side).
 """
 
 from __future__ import annotations
@@ -209,7 +209,7 @@ def side_by_side(path: Path, images: list[np.ndarray], titles: list[str], region
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, len(images), figsize=(4.2 * len(images), 3.6))
     for ax, image, title in zip(axes, images, titles):
-        if title.startswith("(engine"):
+        if title.startswith("("):
             shown = ax.imshow(np.where(region, image, 0.0), cmap="RdBu_r", vmin=-0.1, vmax=0.1)
             fig.colorbar(shown, ax=ax, fraction=0.04)
         else:
@@ -297,11 +297,11 @@ def main() -> None:
             # the caustic's box, with a margin
             rows, cols = np.nonzero(region & (reference > 0.02 * scale))
             crop = (slice(max(rows.min() - 8, 0), rows.max() + 9), slice(max(cols.min() - 8, 0), cols.max() + 9))
-            best, reference, region = best[crop], reference[crop], region[crop]
-            images = [best, reference, (best - reference) / scale]
+            best, reference, exact, region = best[crop], reference[crop], exact[crop], region[crop]
+            images = [best, reference, (best - exact) / scale, (reference - exact) / scale]
             titles = [f"engine, {int(args.counts[-1]):,} lamp rays", f"Mitsuba ptracer, "
                       f"{args.reference_spp * reference_passes:,} particles/pixel",
-                      "(engine - Mitsuba) / bright level"]
+                      "(engine - exact) / bright level", "(Mitsuba - exact) / bright level"]
             side_by_side(RESULTS / f"mitsuba_folds_{name}_{args.label}.png", images, titles, region, scale)
             np.save(RESULTS / f"_engine_{name}.npy", best)
 
