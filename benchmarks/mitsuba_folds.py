@@ -37,8 +37,8 @@ one ("error_vs_exact"): the ball lens's pixels inside the shadow disc,
 against ball_lens.pixel_reference; the slabs' pixels that no wall's light
 reaches (water_reference.wall_free), against the cosine waves' exact image
 (sine_slab) and the wavy slab's image by water_reference's own float64
-particle tracer (2 x 5e8 particles, its noise 0.04%). The reference is `--reference-passes` passes of
-`--reference-spp` particles per pixel; its own noise is half the relative
+particle tracer (2 x 5e8 particles, its noise 0.05%). Mitsuba's reference is
+`--reference-passes` passes of `--reference-spp` particles per pixel; its own noise is half the relative
 L2 distance between its two halves (the halves' errors add in quadrature).
 Mitsuba's curve renders independent seeds at increasing particles per pixel.
 
@@ -65,6 +65,7 @@ sys.path[:0] = [str(HERE), str(HERE.parent)]
 
 from caustic_addon import Camera, Object, RenderSettings, Scene, render, shapes  # noqa: E402
 from caustic_addon.scene import Dielectric, PointLight, SunLight  # noqa: E402
+from water_reference import BOTTOM, DEPTH, EYE_HEIGHT, PIXX, PIXY  # noqa: E402
 
 RESULTS = HERE / "results"
 MITSUBA_PYTHON = "/tmp/mitsuba-venv/bin/python"
@@ -72,6 +73,7 @@ MAX_DEPTH = 5
 COUNTS = (1e4, 3e4, 1e5, 3e5, 1e6)
 MITSUBA_SPP = (4, 16, 64, 256, 1024)
 SLAB_SIZE = 1.0
+SLAB_CELLS = round(SLAB_SIZE / 0.0125)
 SLAB_WAVES = ((0.012, 0.45, 0.3), (0.009, 0.31, 1.4), (0.006, 0.23, 2.5))
 
 
@@ -84,9 +86,9 @@ def slab_scene() -> Scene:
     the floor, 90 degrees across 240x180 (0.6 m by 0.45 m of floor)."""
     import beams_at_scale
     gallery = beams_at_scale.wavy_slab()
-    water = shapes.wavy_slab(SLAB_SIZE, 0.25, SLAB_WAVES, round(SLAB_SIZE / 0.0125), (0.0, 0.0, 0.35))
+    water = shapes.wavy_slab(SLAB_SIZE, DEPTH, SLAB_WAVES, SLAB_CELLS, (0.0, 0.0, BOTTOM))
     objects = [o if o.name != "Water" else Object("Water", water, o.material) for o in gallery.objects]
-    camera = Camera.look_at((0.0, 0.0, 0.3), (0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), pixx=240, pixy=180,
+    camera = Camera.look_at((0.0, 0.0, EYE_HEIGHT), (0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), pixx=PIXX, pixy=PIXY,
                             fov=math.radians(90.0))
     return Scene(objects=objects, lights=gallery.lights, camera=camera)
 
@@ -152,7 +154,7 @@ def export_scene(name: str, scene: Scene, path: Path) -> None:
             mesh = obj.mesh
             if name != "ball_lens":
                 # only the floor the slab shades, moved as its shadow is by the sun's slant
-                shift = -light.direction[:2] / light.direction[2] * 0.35
+                shift = -light.direction[:2] / light.direction[2] * BOTTOM
                 mesh = shapes.plane(SLAB_SIZE - 0.1, (shift[0], shift[1], 0.0))
         corners, normals = _corners_and_normals(mesh)
         arrays[f"corners{len(described)}"], arrays[f"normals{len(described)}"] = corners, normals
@@ -182,7 +184,7 @@ def water_reference_image(scene: Scene) -> tuple[np.ndarray, float]:
     out = RESULTS / "_own_wavy_slab.npz"
     if not out.exists():
         (sun,) = scene.lights
-        halves = [water_reference.radiance(SLAB_SIZE, round(SLAB_SIZE / 0.0125), SLAB_WAVES, sun.direction,
+        halves = [water_reference.radiance(SLAB_SIZE, SLAB_CELLS, SLAB_WAVES, sun.direction,
                                            float(sun.strength * sun.color[0]), particles=5e8, seed=seed)
                   for seed in (0, 77)]
         np.savez(out, halves=np.array(halves))
@@ -260,7 +262,7 @@ def main() -> None:
         else:
             import water_reference
             exact, own_noise = water_reference_image(scene)
-            top = water_reference.DEPTH + sum(wave[0] for wave in SLAB_WAVES)
+            top = DEPTH + sum(wave[0] for wave in SLAB_WAVES)
             region = water_reference.wall_free(SLAB_SIZE, top, scene.lights[0].direction)
         entry["reference"] = dict(
             particles_per_pixel=args.reference_spp * reference_passes, wall=float(ref["wall"].sum()),

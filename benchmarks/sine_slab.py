@@ -23,7 +23,8 @@ against the distribution of U over the pixel's square: a box one pixel wide
 (angle 0), or a tent reaching one pixel's half-diagonal (angle -pi/4). The
 sums here run over 2^24 points per metre of water: exact to about 1e-5 of a
 pixel's light, folds included. Internal reflections (2% of 2% of the light)
-and the walls are left out; the camera sees floor lit by neither.
+are left out, and so is the light through the walls, whose pixels `region`
+leaves out.
 
 The camera is mitsuba_folds.slab_scene's: 0.05 m under the water, looking
 straight down, 90 degrees across 240x180, so a pixel is 2.5 mm of floor.
@@ -73,10 +74,10 @@ def landings(u: np.ndarray, angle: float, sun) -> tuple[np.ndarray, np.ndarray]:
     c, s = math.cos(angle), math.sin(angle)
     d = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1], d[2]])
     m = np.floor((u - ticks[0]) / step).astype(np.int64)
-    t = (u - ticks[m]) / step
+    offset = u - ticks[m]
     slope = (heights[m + 1] - heights[m]) / step
-    z = heights[m] + (u - ticks[m]) * slope
-    n = normals[m] + t[:, None] * (normals[m + 1] - normals[m])
+    z = heights[m] + offset * slope
+    n = normals[m] + (offset / step)[:, None] * (normals[m + 1] - normals[m])
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     eta = 1.0 / IOR
     rays = np.broadcast_to(d, n.shape)
@@ -117,15 +118,10 @@ def exact_radiance(name: str = "sine_slab", samples_per_metre: int = 1 << 24) ->
         u = -0.5 * SIZE + (np.arange(start, min(start + chunk, total)) + 0.5) * du
         landed, weight = landings(u, angle, sun)
         where = (landed - first) / width
-        if angle == 0.0:
-            j = np.floor(where).astype(np.int64)
-            seen = (j >= 0) & (j < count)
-            irradiance += np.bincount(j[seen], weights=weight[seen], minlength=count) * du / width
-        else:
-            # the tent: linear weights to the two nearest U_j, its height 1/width
-            j = np.floor(where).astype(np.int64)
-            f = where - j
-            for jj, share in ((j, 1.0 - f), (j + 1, f)):
-                seen = (jj >= 0) & (jj < count)
-                irradiance += np.bincount(jj[seen], weights=(weight * share)[seen], minlength=count) * du / width
+        j = np.floor(where).astype(np.int64)
+        # the box: all to U_j; the tent: linear weights to the two nearest U_j, its height 1/width
+        shares = ((j, 1.0),) if angle == 0.0 else ((j, 1.0 - (where - j)), (j + 1, where - j))
+        for jj, share in shares:
+            seen = (jj >= 0) & (jj < count)
+            irradiance += np.bincount(jj[seen], weights=(weight * share)[seen], minlength=count) * du / width
     return ALBEDO * irradiance[index] / math.pi

@@ -113,6 +113,7 @@ def _trace(heights, normals, origin, step, half, d, strength, rect, side, seed, 
     pixel = view[2]
     dx, dy = (rect[2] - rect[0]) / side, (rect[3] - rect[1]) / side
     weight = strength * -d[2] * dx * dy / (pixel * pixel)
+    eta = 1.0 / IOR
     for thread in numba.prange(threads):
         np.random.seed(seed + thread)
         for row in range(thread, side, threads):
@@ -130,7 +131,6 @@ def _trace(heights, normals, origin, step, half, d, strength, rect, side, seed, 
                     continue
                 h = 1.0 + tau * d[2]
                 nx, ny, nz = _normal(normals, origin, step, px, py)
-                eta = 1.0 / IOR
                 cos_i = -(d[0] * nx + d[1] * ny + d[2] * nz)
                 w = fresnel_transmittance(cos_i, eta)
                 cos_t = math.sqrt(1.0 - eta * eta * (1.0 - cos_i * cos_i))
@@ -165,7 +165,7 @@ def radiance(size: float, cells: int, waves, sun, strength: float, albedo: float
     d = np.asarray(sun, dtype=np.float64) / np.linalg.norm(sun)
     x0, y0, pixel, rows, columns = window
     back = np.tile(-d[:2] / -d[2], 2)
-    rect = np.array([x0, y0 - rows * pixel, x0 + columns * pixel, y0]) + back + np.array([-margin, -margin, margin, margin])
+    rect = np.array([x0 - margin, y0 - rows * pixel - margin, x0 + columns * pixel + margin, y0 + margin]) + back
     image = np.zeros((numba.get_num_threads(), rows, columns))
     _trace(heights, normals, -0.5 * size, size / cells, 0.5 * size, d, strength, rect, int(math.sqrt(particles)),
            seed, np.array([x0, y0, pixel]), image)

@@ -452,10 +452,9 @@ def surface_point1(corners, min_barycentric, prim, u, v):
     the point moves d * altitude <= epsilon and keeps its place along the
     edge (near a corner, off each edge in turn, twice over, since a move
     off one can bring it nearer the other). Raising b_k and renormalising
-    would move it along the edge too,
-    by up to b_k's floor times the triangle's length: 0.8 mm on a fan's
-    0.7 m spokes, which threw the light through a slab's bottom off by a
-    third of a pixel."""
+    would move it along the edge too, by up to b_k's floor times the
+    triangle's length: 0.8 mm on a fan's 0.7 m spokes, which threw the
+    light through a slab's bottom off by a third of a pixel."""
     b0, b1, b2 = 1.0 - u - v, u, v
     for _ in range(2):
         for k in range(3):
