@@ -60,7 +60,10 @@ $(addprefix test-,$(NEWEST) $(OLDER)): test-%: venv package
 # The wheels blender_manifest.toml lists, and only those; the zip of this
 # machine's platform also carries kernels/, its compiled kernels for both
 # Pythons (packaging/ship_kernels.py: numba compiles for the platform it
-# runs on).
+# runs on). The zips are made and stripped in a folder of their own, then
+# moved into dist/ whole: the Blenders' suites run side by side and each
+# makes the package again (tests/addon/test_install.py), so a suite must
+# never read a zip another is still writing or stripping.
 WHEELS := $(shell sed -n 's|^ *"\./\(wheels/[^"]*\.whl\)",*|\1|p' blender_manifest.toml)
 BLENDER_EXT = $(VENV)/bin/python $(firstword $(wildcard $(VENV)/lib/python3.13/site-packages/bpy/*/scripts/addons_core/bl_pkg/cli/blender_ext.py))
 
@@ -72,9 +75,11 @@ package: venv
 	  $(VENV)/bin/python -m pip download -q $$(basename $$wheel | cut -d- -f1)==$$(basename $$wheel | cut -d- -f2) \
 	    --no-deps --only-binary=:all: --python-version $${python#cp} --platform $${platform%%.*} -d wheels || exit 1; }; \
 	done
-	$(BLENDER_EXT) build --split-platforms --source-dir . --output-dir dist
-	$(VENV)/bin/python packaging/ship_kernels.py strip dist/caustics-*.zip
-	for zip in dist/caustics-*.zip; do $(BLENDER_EXT) validate $$zip || exit 1; done
+	out=$$(mktemp -d dist/.build-XXXXXX) && trap 'rm -rf "$$out"' EXIT && \
+	  $(BLENDER_EXT) build --split-platforms --source-dir . --output-dir $$out && \
+	  $(VENV)/bin/python packaging/ship_kernels.py strip $$out/caustics-*.zip && \
+	  for zip in $$out/caustics-*.zip; do $(BLENDER_EXT) validate $$zip || exit 1; done && \
+	  mv $$out/caustics-*.zip dist/
 
 bench: $(VENV)/.installed
 	$(VENV)/bin/python benchmarks/speed.py
