@@ -18,6 +18,7 @@ from embreex.mesh_construction import TriangleMesh
 
 from ..scene import Object
 from ..util.jit import inline, kernel
+from ..util.parallel import threads_here
 from ..util.vectors import dot1, float_rows, length, normalize, normalize1, row, set_row, sum1
 from .contact import Contacts
 from .hits import MISS, Hits
@@ -219,9 +220,10 @@ class Accelerator:
             self.rays_cast += n
 
     def _run(self, embree, origins: np.ndarray, dirs: np.ndarray, finish=None, **kwargs) -> list:
-        """Embree scene `embree` over the batch, split across threads: per
-        part of rows a..b, embreex's result, or `finish(a, b, result)`
-        where given, run on the part's thread."""
+        """Embree scene `embree` over the batch, split across the threads
+        util.parallel.threads_here gives: per part of rows a..b, embreex's
+        result, or `finish(a, b, result)` where given, run on the part's
+        thread."""
         n = len(origins)
         self.count_rays(n)
         o32 = np.ascontiguousarray(origins, dtype=np.float32)
@@ -232,10 +234,11 @@ class Accelerator:
             result = embree.run(o32[a:b], d32[a:b], dists=None if dists is None else dists[a:b], **kwargs)
             return result if finish is None else finish(a, b, result)
 
-        if self._pool is None or n < _MIN_SPLIT:
+        threads = threads_here(self.threads)
+        if self._pool is None or threads == 1 or n < _MIN_SPLIT:
             return [part(0, n)]
-        bounds = np.linspace(0, n, self.threads + 1).astype(int)
-        futures = [self._pool.submit(part, bounds[i], bounds[i + 1]) for i in range(self.threads)]
+        bounds = np.linspace(0, n, threads + 1).astype(int)
+        futures = [self._pool.submit(part, bounds[i], bounds[i + 1]) for i in range(threads)]
         return [f.result() for f in futures]
 
     def intersect(self, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray | None = None,

@@ -4,7 +4,9 @@ chunks in flight keep both cores busy."""
 
 from __future__ import annotations
 
+import threading
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from functools import partial
 from typing import Callable, Optional, TypeVar
 
 from ..errors import Cancelled
@@ -12,6 +14,9 @@ from ..errors import Cancelled
 T = TypeVar("T")
 Progress = Callable[[float, str], None]
 Cancel = Callable[[], bool]
+
+# Set on a thread while it runs one of several chunks in flight.
+_chunk = threading.local()
 
 
 class Monitor:
@@ -35,6 +40,8 @@ def run_chunks(jobs: list[Callable[[], T]], threads: int, monitor: Monitor, star
     whichever finishes first, so that whatever is summed from them is summed
     in the same order every time; no more than `threads` results wait."""
     done, consumed = {}, 0
+    if len(jobs) > 1:
+        jobs = [partial(_as_chunk, job) for job in jobs]
     with ThreadPoolExecutor(threads) as pool:
         pending = {}
 
@@ -58,6 +65,21 @@ def run_chunks(jobs: list[Callable[[], T]], threads: int, monitor: Monitor, star
             for future in pending:
                 future.cancel()
             raise
+
+
+def _as_chunk(job: Callable[[], T]) -> T:
+    _chunk.active = True
+    try:
+        return job()
+    finally:
+        _chunk.active = False
+
+
+def threads_here(threads: int) -> int:
+    """Threads that work begun on this thread may split into: one inside a
+    chunk of run_chunks, whose siblings in flight keep the other cores busy
+    (splitting it too would only add waits), else `threads`."""
+    return 1 if getattr(_chunk, "active", False) else threads
 
 
 def chunk_size(total: int, limit: int, threads: int) -> int:

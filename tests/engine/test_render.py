@@ -10,7 +10,7 @@ import pytest
 
 from caustic_addon import render
 from caustic_addon.emission.aims import Sphere
-from caustic_addon.util.parallel import Monitor, run_chunks
+from caustic_addon.util.parallel import Monitor, run_chunks, threads_here
 from scenes import ball_lens, floor_points, quick, shadow_radius, unobstructed_irradiance
 
 
@@ -137,3 +137,14 @@ def test_chunks_come_back_in_the_order_of_their_jobs():
     consumed = []
     run_chunks(jobs, 2, Monitor(), 0.0, 1.0, "test", consumed.append)
     assert consumed == [0, 1, 2, 3]
+
+
+def test_a_chunk_in_flight_beside_others_casts_on_its_own_thread():
+    """Chunks in flight keep the cores busy; a chunk that split its casts
+    across threads too only waited for its parts (the pool frame's eye
+    pass ran 9% longer). A lone job may still split."""
+    seen = []
+    run_chunks([partial(threads_here, 2)] * 3, 2, Monitor(), 0.0, 1.0, "test", seen.append)
+    run_chunks([partial(threads_here, 2)], 2, Monitor(), 0.0, 1.0, "test", seen.append)
+    assert seen == [1, 1, 1, 2]
+    assert threads_here(2) == 2
