@@ -68,7 +68,8 @@ BAND_SHARE = 4
 # machine's threads: where the bands part changes the beams along their
 # borders and the order the maps sum them in, and a render must be the same
 # on every machine (a farm's nodes render the chunks of one frame range).
-GRID_BANDS = 4
+# Each band's casts split over its share of the cores (threads_here).
+GRID_BANDS = 2
 # Beams smaller than this fraction of the chart's area squared fall back to photons.
 _MIN_AREA_FRACTION = 1e-16
 # A beam whose corners span a world triangle more than this many times the
@@ -376,8 +377,9 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
         # GRID_BANDS bands of rows, of at most chunk_size / BAND_SHARE points
         # each: a band's cost is mostly work per bounce and refinement level,
         # whatever its paths, so fewer bands are faster (the pool's beam pass
-        # at 2 threads: 0.13 s in 2 bands, 0.17 s in 4, 0.23 s in 8), and
-        # grids of one size are traced together
+        # at 2 threads: 0.13 s in 2 bands, 0.16 s in 4; the ball lens's at
+        # 3,162 lamp rays 42, 61 and 52 ms in 2, 4 and 1), and grids of one
+        # size are traced together
         rows = max(1, min(settings.chunk_size // (BAND_SHARE * grid * len(stack)), -(-(grid - 1) // GRID_BANDS)))
         jobs += [partial(band_beams, stack, first, min(first + rows + 1, grid), accel, materials, maps,
                          settings.max_depth, medium, settings.beam_refinement, band, settings.seed)

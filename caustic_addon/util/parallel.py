@@ -15,7 +15,7 @@ T = TypeVar("T")
 Progress = Callable[[float, str], None]
 Cancel = Callable[[], bool]
 
-# Set on a thread while it runs one of several chunks in flight.
+# A thread's share of the cores while it runs a chunk (`threads`), else none.
 _chunk = threading.local()
 
 
@@ -40,8 +40,8 @@ def run_chunks(jobs: list[Callable[[], T]], threads: int, monitor: Monitor, star
     whichever finishes first, so that whatever is summed from them is summed
     in the same order every time; no more than `threads` results wait."""
     done, consumed = {}, 0
-    if len(jobs) > 1:
-        jobs = [partial(_as_chunk, job) for job in jobs]
+    cores = max(1, threads // max(1, min(threads, len(jobs))))
+    jobs = [partial(_as_chunk, job, cores) for job in jobs]
     with ThreadPoolExecutor(threads) as pool:
         pending = {}
 
@@ -67,19 +67,21 @@ def run_chunks(jobs: list[Callable[[], T]], threads: int, monitor: Monitor, star
             raise
 
 
-def _as_chunk(job: Callable[[], T]) -> T:
-    _chunk.active = True
+def _as_chunk(job: Callable[[], T], cores: int) -> T:
+    _chunk.threads = cores
     try:
         return job()
     finally:
-        _chunk.active = False
+        _chunk.threads = None
 
 
 def threads_here(threads: int) -> int:
-    """Threads that work begun on this thread may split into: one inside a
-    chunk of run_chunks, whose siblings in flight keep the other cores busy
-    (splitting it too would only add waits), else `threads`."""
-    return 1 if getattr(_chunk, "active", False) else threads
+    """Threads that work begun on this thread may split into, of
+    `threads`: inside a chunk of run_chunks, its share of the cores beside
+    the chunks in flight with it (one when they are as many as the
+    threads: splitting it too would only add waits)."""
+    share = getattr(_chunk, "threads", None)
+    return threads if share is None else min(threads, share)
 
 
 def chunk_size(total: int, limit: int, threads: int) -> int:

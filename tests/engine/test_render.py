@@ -150,12 +150,12 @@ def test_chunks_come_back_in_the_order_of_their_jobs():
     assert consumed == [0, 1, 2, 3]
 
 
-def test_a_chunk_in_flight_beside_others_casts_on_its_own_thread():
+def test_a_chunk_in_flight_splits_its_casts_over_its_share_of_the_cores():
     """Chunks in flight keep the cores busy; a chunk that split its casts
-    across threads too only waited for its parts (the pool frame's eye
-    pass ran 9% longer). A lone job may still split."""
+    across all the threads too only waited for its parts (the pool frame's
+    eye pass ran 9% longer). Fewer chunks than threads share the rest."""
     seen = []
-    run_chunks([partial(threads_here, 2)] * 3, 2, Monitor(), 0.0, 1.0, "test", seen.append)
-    run_chunks([partial(threads_here, 2)], 2, Monitor(), 0.0, 1.0, "test", seen.append)
-    assert seen == [1, 1, 1, 2]
+    for jobs, threads in ((3, 2), (1, 2), (2, 8), (3, 8)):
+        run_chunks([partial(threads_here, threads)] * jobs, threads, Monitor(), 0.0, 1.0, "test", seen.append)
+    assert seen == [1, 1, 1, 2, 4, 4, 2, 2, 2]
     assert threads_here(2) == 2
