@@ -32,6 +32,9 @@ def load_addon():
 def addon():
     module = load_addon()
     module.register()
+    # the warming thread's compiles change the warnings filters, which
+    # warnings.catch_warnings (snapshot.py) does not guard across threads
+    module.jobs.kernels.wait()
     yield module
     # Blender 4.2's bpy module crashes at exit if an operator is still registered.
     module.unregister()
