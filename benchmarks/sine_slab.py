@@ -38,7 +38,7 @@ import numpy as np
 
 from caustic_addon import Camera, Object, Scene, shapes
 from caustic_addon.scene import Dielectric, Diffuse, SunLight
-from water_reference import (BOTTOM, DEPTH, EYE_HEIGHT, IOR, PIXX, PIXY, fresnel_transmittance, refract,
+from water_reference import (BOTTOM, DEPTH, EYE_HEIGHT, IOR, PIXEL, PIXX, PIXY, fresnel_transmittance, refract,
                              wall_free)
 
 SIZE, CELLS = 1.0, 80
@@ -99,15 +99,14 @@ def exact_radiance(name: str = "sine_slab", samples_per_metre: int = 1 << 24) ->
     """(PIXY, PIXX) the floor's radiance ALBEDO E / pi, each pixel its
     footprint's mean, row 0 at +y (the image's top)."""
     angle, sun = VARIANTS[name]
-    pixel = 2.0 * EYE_HEIGHT / PIXX
     cols, rows = np.arange(PIXX), np.arange(PIXY)
     if angle == 0.0:
         # U is x: a column's box
-        first, width, count = -0.5 * PIXX * pixel, pixel, PIXX
+        first, width, count = -0.5 * PIXX * PIXEL, PIXEL, PIXX
         index = np.broadcast_to(cols, (PIXY, PIXX))
     else:
         # U = (x - y)/sqrt(2): the pixels c + r = j share U_j, spaced half a diagonal
-        width = pixel * math.sqrt(0.5)
+        width = PIXEL * math.sqrt(0.5)
         first, count = -0.5 * (PIXX + PIXY) * width + width, PIXX + PIXY - 1
         index = rows[:, None] + cols[None, :]
     irradiance = np.zeros(count)

@@ -31,6 +31,8 @@ import numpy as np
 # 0.25 m deep, the camera 0.3 m up looking down, 90 degrees across 240x180
 BOTTOM, DEPTH, IOR = 0.35, 0.25, 1.33
 EYE_HEIGHT, PIXX, PIXY = 0.3, 240, 180
+# the floor's width one pixel sees from there
+PIXEL = 2.0 * EYE_HEIGHT / PIXX
 
 
 def refract(d: np.ndarray, n: np.ndarray, eta: float) -> np.ndarray:
@@ -154,7 +156,7 @@ def _trace(heights, normals, origin, step, half, d, strength, rect, side, seed, 
 
 def radiance(size: float, cells: int, waves, sun, strength: float, albedo: float = 1.0,
              particles: float = 1e9, margin: float = 0.15, seed: int = 0,
-             window=(-EYE_HEIGHT, EYE_HEIGHT * PIXY / PIXX, 2.0 * EYE_HEIGHT / PIXX, PIXY, PIXX)) -> np.ndarray:
+             window=(-EYE_HEIGHT, EYE_HEIGHT * PIXY / PIXX, PIXEL, PIXY, PIXX)) -> np.ndarray:
     """(rows, columns) the floor's radiance albedo E / pi under the water,
     row 0 at +y, from `particles` particles leaving the floor's window,
     moved back along the sun to z = 1 m and widened by `margin` m (more
@@ -178,9 +180,8 @@ def wall_free(size: float, top: float, sun) -> np.ndarray:
     any height up to `top` above the bottom, out through the flat bottom),
     two pixels wider."""
     d = np.asarray(sun, dtype=np.float64) / np.linalg.norm(sun)
-    pixel = 2.0 * EYE_HEIGHT / PIXX
-    x = (np.arange(PIXX) + 0.5 - 0.5 * PIXX) * pixel
-    y = (0.5 * PIXY - np.arange(PIXY) - 0.5) * pixel
+    x = (np.arange(PIXX) + 0.5 - 0.5 * PIXX) * PIXEL
+    y = (0.5 * PIXY - np.arange(PIXY) - 0.5) * PIXEL
     free = np.ones((PIXY, PIXX), dtype=bool)
     for axis, along in ((0, x[None, :]), (1, y[:, None])):
         if abs(d[axis]) < 1e-12:
@@ -191,5 +192,5 @@ def wall_free(size: float, top: float, sun) -> np.ndarray:
         out = refract(inside[None], np.array([[0.0, 0.0, 1.0]]), IOR)[0]
         band = wall[axis] * 0.5 * size + np.array([0.0, top]) * inside[axis] / -inside[2] \
             + BOTTOM * out[axis] / -out[2]
-        free &= ~((along > band.min() - 2 * pixel) & (along < band.max() + 2 * pixel))
+        free &= ~((along > band.min() - 2 * PIXEL) & (along < band.max() + 2 * PIXEL))
     return free

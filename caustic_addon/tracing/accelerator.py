@@ -235,7 +235,7 @@ class Accelerator:
             return result if finish is None else finish(a, b, result)
 
         threads = threads_here(self.threads)
-        if self._pool is None or threads == 1 or n < _MIN_SPLIT:
+        if threads == 1 or n < _MIN_SPLIT:
             return [part(0, n)]
         bounds = np.linspace(0, n, threads + 1).astype(int)
         futures = [self._pool.submit(part, bounds[i], bounds[i + 1]) for i in range(threads)]
