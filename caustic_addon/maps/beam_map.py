@@ -5,8 +5,7 @@ from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from functools import partial
-from typing import Optional
+from typing import Callable, Optional
 
 import numpy as np
 
@@ -72,13 +71,15 @@ class _LayerGrid:
         self.lo, self.cell = lo, cell
         self.coverage = Coverage(tuple(np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)[::-1]), 1)
 
-    def add(self, corners: np.ndarray, irradiance: np.ndarray, share: np.ndarray, white: bool) -> None:
-        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2,
-        times `share (m,)`, all `white` or not; parts outside the box are
+    def add_jobs(self, corners: np.ndarray, irradiance: np.ndarray, share: np.ndarray, white: bool,
+                 bands: int) -> list[Callable[[], None]]:
+        """Jobs that add beams `corners (m,3,2)` chart metres, `irradiance
+        (m,3)` W/m^2, times `share (m,)`, all `white` or not, a band of the
+        grid's rows each (Coverage.add_jobs); parts outside the box are
         dropped."""
         if not white:
             self.coverage.widen(3)
-        self.coverage.add(corners, irradiance, self.lo, self.cell, share)
+        return self.coverage.add_jobs(corners, irradiance, self.lo, self.cell, share, bands)
 
 
 def _weighted_quantiles(values: np.ndarray, weights: np.ndarray, q) -> np.ndarray:
@@ -174,6 +175,9 @@ class BeamMap(IlluminationMap):
     # Beams kept for another camera's screen layer (about 72 B a beam); a
     # map with more traces the lamps again when the camera moves.
     KEPT_BEAMS = 1 << 20
+    # Bands of rows each layer is rasterised in, per thread: a caustic
+    # crowds into a few rows, and the threads share them out as they go.
+    RASTER_BANDS = 4
 
     def __init__(self, *args, threads: int = 1, screen: Optional[ScreenLayer] = None, **kwargs):
         super().__init__(*args, **kwargs)
@@ -265,10 +269,11 @@ class BeamMap(IlluminationMap):
             fine = np.zeros(len(corners))
         shares = (fine, (1.0 - fine) * (1.0 - coarse), coarse)
         coloured = (irradiance[:, 0] != irradiance[:, 1]) | (irradiance[:, 0] != irradiance[:, 2])
-        work = [partial(g.add, corners, irradiance, share, not (coloured & (share > 0.0)).any())
-                for g, share in zip(self._grids, shares) if g is not None and (share > 0).any()]
+        bands = self.RASTER_BANDS * self.threads
+        work = [job for g, share in zip(self._grids, shares) if g is not None and (share > 0).any()
+                for job in g.add_jobs(corners, irradiance, share, not (coloured & (share > 0.0)).any(), bands)]
         if self.screen is not None:
-            work.append(partial(self.screen.add, corners, irradiance))
+            work += self.screen.add_jobs(corners, irradiance, bands)
         with ThreadPoolExecutor(max(1, min(self.threads, len(work)))) as pool:
             list(pool.map(lambda job: job(), work))
 

@@ -18,6 +18,9 @@ which over a closed polygon is its coverage of the cell.
 
 from __future__ import annotations
 
+from functools import partial
+from typing import Callable
+
 import numpy as np
 
 from ..util.jit import inline, kernel
@@ -75,11 +78,23 @@ class Coverage:
         grid's first corner `origin (2,)` and its `cell` edge, in those
         units, of `values (m,c)` times `share (m,)` (None: 1; a triangle of
         share 0 is skipped); one channel of buffer takes the first."""
+        for job in self.add_jobs(corners, values, origin, cell, share, bands=1):
+            job()
+
+    def add_jobs(self, corners: np.ndarray, values: np.ndarray, origin=(0.0, 0.0), cell: float = 1.0,
+                 share: np.ndarray | None = None, bands: int = 1) -> list[Callable[[], None]]:
+        """`add`, as jobs that each write one of `bands` bands of the
+        grid's rows, to run on threads of their own: each cell gets the
+        same pieces in the same order whatever the bands, so the sums are
+        `add`'s to the bit."""
         h, w = self.shape
-        share = np.ones(len(corners)) if share is None else share
-        _accumulate(self.acc, h, w, np.ascontiguousarray(corners, dtype=np.float64),
-                    np.ascontiguousarray(values, dtype=np.float64), np.asarray(origin, dtype=np.float64), float(cell),
-                    np.ascontiguousarray(share, dtype=np.float64))
+        corners = np.ascontiguousarray(corners, dtype=np.float64)
+        values = np.ascontiguousarray(values, dtype=np.float64)
+        share = np.ones(len(corners)) if share is None else np.ascontiguousarray(share, dtype=np.float64)
+        origin = np.asarray(origin, dtype=np.float64)
+        edges = np.linspace(0, h, max(1, min(bands, h)) + 1).astype(np.int64)
+        return [partial(_accumulate, self.acc, h, w, corners, values, origin, float(cell), share, int(first), int(end))
+                for first, end in zip(edges[:-1], edges[1:])]
 
     def widen(self, channels: int) -> None:
         """Hold `channels` channels from now on, each a copy of the one held."""
@@ -92,14 +107,14 @@ class Coverage:
         return np.cumsum(self.acc.reshape(-1, h, w + 2), axis=2)[:, :, 1:w + 1]
 
 
-@kernel("void(f8[:, ::1], i8, i8, f8[:, :, ::1], f8[:, ::1], f8[::1], f8, f8[::1])")
-def _accumulate(acc, h, w, corners, values, origin, cell, share):
+@kernel("void(f8[:, ::1], i8, i8, f8[:, :, ::1], f8[:, ::1], f8[::1], f8, f8[::1], i8, i8)")
+def _accumulate(acc, h, w, corners, values, origin, cell, share, first_row, end_row):
     """Add every edge piece of triangles `corners (m,3,2)` (in units of
     `cell` from `origin (2,)`) of `values (m,c)` times `share (m,)` to the
     accumulation buffer `acc (c, h (w+2))`: each sloped edge is cut at the
-    lines y = k into rows 0..h-1, and each row piece at the lines x = k
-    into columns -1..w-1 (everything left of the grid joins column -1;
-    pieces right of it are dropped)."""
+    lines y = k into rows first_row..end_row-1 of 0..h-1, and each row
+    piece at the lines x = k into columns -1..w-1 (everything left of the
+    grid joins column -1; pieces right of it are dropped)."""
     channels = acc.shape[0]
     local = np.empty((3, 2))
     for t in range(corners.shape[0]):
@@ -118,7 +133,7 @@ def _accumulate(acc, h, w, corners, values, origin, cell, share):
             lo, hi = min(ys, ye), max(ys, ye)
             slope = (xe - xs) / (ye - ys)
             up = 1.0 if ye > ys else -1.0
-            for row in range(max(int(np.floor(lo)), 0), min(int(np.floor(hi)), h - 1) + 1):
+            for row in range(max(int(np.floor(lo)), first_row), min(int(np.floor(hi)), end_row - 1) + 1):
                 y0, y1 = max(lo, row), min(hi, row + 1.0)
                 xa, xb = xs + (y0 - ys) * slope, xs + (y1 - ys) * slope
                 dy = (y1 - y0) * up

@@ -22,6 +22,7 @@ coordinates (where depth is affine) before it is projected.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -89,12 +90,18 @@ class ScreenLayer:
 
     def add(self, corners: np.ndarray, irradiance: np.ndarray) -> None:
         """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2."""
+        for job in self.add_jobs(corners, irradiance, bands=1):
+            job()
+
+    def add_jobs(self, corners: np.ndarray, irradiance: np.ndarray, bands: int) -> list[Callable[[], None]]:
+        """`add`, as jobs that each rasterise a band of the image's rows
+        (raster.Coverage.add_jobs)."""
         triangles, source = self._image_triangles(corners)
         values = np.take(irradiance, source, axis=0)
         if ((values[:, 0] != values[:, 1]) | (values[:, 0] != values[:, 2])).any():
             self._flux.widen(3)
-        self._flux.add(triangles, values)
         self._values = None
+        return self._flux.add_jobs(triangles, values, bands=bands)
 
     def prepare(self) -> None:
         """Divide the beams' integral in each pixel by the area the receiver covers in it."""
