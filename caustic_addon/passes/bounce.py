@@ -23,6 +23,7 @@ microfacet normals (`_facets`) and multiscatter factors
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import Protocol
 
@@ -309,18 +310,19 @@ def _own_families(surface: Interface) -> np.ndarray:
 
 @kernel("i8(f8[:, ::1], f8[:, ::1], i8[::1], f8[::1], u8[::1], i8[::1], i8[::1], i8[::1], "
         "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1], f8[::1], b1[::1], "
-        "f8[:, ::1], b1[::1], i8[::1], f8[:, ::1], f8, f8, i8[::1], u8, "
+        "f8[:, ::1], b1[::1], i8[::1], f8[:, ::1], f8, f8, i8[::1], i8, u8, "
         "f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], u8[::1], i1[::1], i8[::1], i8[::1])")
 def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
               points, facing, shading, scattering, entering, eta, fresnel, alpha, own,
-              color, dielectric, surface_of, factor, epsilon, roulette, draws, key,
+              color, dielectric, surface_of, factor, epsilon, roulette, draws, strata, key,
               out_origins, out_dirs, out_weight, out_medium, out_family, out_kind, out_surface, source):
     """split's branches, all reflected ones, then all refracted ones, into
     the out_ arrays (2n rows); returns how many there are. `source` is the
     path each comes from; `factor (2n,3)` the multiscatter factors of the
     reflected then the refracted branches, or (0,3): none; `family` (0,)
     where the paths have none; `draws (n,)` the ids the roulette of each
-    path's branches hashes, or (0,): no roulette (Roulette)."""
+    path's branches hashes, or (0,): no roulette, `strata` how many
+    draws share one stratified set (Roulette)."""
     n, count = len(dirs), 0
     for event in range(2):
         mirror = event == 0
@@ -342,7 +344,9 @@ def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
             level = roulette * floor[i] / MIN_BRANCH_WEIGHT
             if len(draws) and max_channel1(w) < level:
                 chance = max_channel1(w) / level
-                if not hash_uniform1(2 * draws[i] + (1 if crossed else 0), key) < chance:
+                group, member = draws[i] // strata, draws[i] % strata
+                u = hash_uniform1(2 * group + (1 if crossed else 0), key) + member / strata
+                if not u - math.floor(u) < chance:
                     continue
                 w = (w[0] / chance, w[1] / chance, w[2] / chance)
             set_row(out_origins, count, offset1(row(points, i), row(facing, i), out, epsilon))
@@ -362,13 +366,23 @@ class Roulette:
     """Russian roulette on faint branches (pbrt's, Cycles'): a branch whose
     throughput w (max channel) falls below `weight` of its path's starting
     weight (its floor over MIN_BRANCH_WEIGHT) goes on with probability p =
-    w / that level, its weight divided by p, so the mean is kept. The draw
-    hashes 2 id + (the branch was refracted), `draws (n,)` int64 the id of
-    each path, with `key` (sampling.hash.stream_key of the bounce's stream)."""
+    w / that level, its weight divided by p, so the mean is kept.
+
+    The draws of a group of `strata` paths (an eye pixel's samples: `draws
+    (n,)` int64, group draw // strata, member draw % strata) are
+    stratified: u = frac(r + member / strata), r one uniform per group and
+    kind of branch, which hashes 2 group + (the branch was refracted) with
+    `key` (sampling.hash.stream_key of the bounce's stream). Each u is
+    uniform, so each branch's mean is kept, and of a pixel's faint
+    branches about p of them go on, not a binomial count: 4 samples whose
+    reflections each go on with p = 0.8 keep 3 or 4, never 1, so a pixel
+    seen through glass is not a speckle that the edge pass mistakes for
+    an edge."""
 
     weight: float
     draws: np.ndarray
     key: int
+    strata: int = 1
 
 
 def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, surface: Interface,
@@ -405,7 +419,7 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
         contiguous(_own_families(surface), bool), materials.color, materials.dielectric, accel.surface, factor,
         accel.epsilon, 0.0 if roulette is None else roulette.weight,
         np.zeros(0, dtype=i8) if roulette is None else contiguous(roulette.draws, i8),
-        np.uint64(0 if roulette is None else roulette.key), *out)
+        1 if roulette is None else roulette.strata, np.uint64(0 if roulette is None else roulette.key), *out)
     origins, dirs, weight, medium, family, kind, prim, source = (a[:count] for a in out)
     d_origins = d_dirs = None
     if paths.d_origins is not None:

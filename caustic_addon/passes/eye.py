@@ -222,7 +222,7 @@ class EyeTracer:
             uv = strata(pixel, stratum, _FACET_STREAM + 2 * depth, self.settings.seed)
             surface = facets(surface, rays.dirs, self.materials, hits.obj, uv)
         roulette = Roulette(ROULETTE_WEIGHT, pixel * self.spp + stratum,
-                            stream_key(_ROULETTE_STREAM + depth, self.settings.seed))
+                            stream_key(_ROULETTE_STREAM + depth, self.settings.seed), self.spp)
         return split(self.accel, self.materials, rays, hits, surface, carries_light=False, roulette=roulette)
 
     def _highlights(self, rays: Paths, hits: Hits, surface: Interface) -> None:

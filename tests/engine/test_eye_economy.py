@@ -1,6 +1,6 @@
 """The eye pass does less work where it changes nothing on average: faint
-branches through glass play Russian roulette, and a small lamp's shadow
-rays stop at two a pixel where they agree."""
+branches through glass play Russian roulette, a pixel's stratified, and a
+small lamp's shadow rays stop at two a pixel where they agree."""
 
 import math
 
@@ -8,6 +8,13 @@ import numpy as np
 import pytest
 
 from caustic_addon import Dielectric, Diffuse, Object, RenderSettings, Scene, SunLight, World, render, shapes
+from caustic_addon.passes.bounce import Roulette, orient, split
+from caustic_addon.passes.eye import ROULETTE_WEIGHT
+from caustic_addon.passes.paths import Paths, relative_floor
+from caustic_addon.sampling.hash import stream_key
+from caustic_addon.scene.material_table import Materials
+from caustic_addon.tracing.accelerator import REFLECTED, Accelerator
+from caustic_addon.tracing.hits import MISS
 from scenes import floor_points, top_camera
 
 
@@ -57,3 +64,38 @@ def test_a_small_suns_shadow_takes_one_ray_a_point_where_a_pixels_agree():
     spp = 16
     assert result.stats["rays_eye_pass"] <= spp * (pixels * pixels * 2 + across * 15)
     assert result.stats["rays_eye_pass"] < 0.25 * spp * pixels * pixels * 17
+
+
+def test_a_pixels_faint_reflections_go_on_in_a_stratified_count():
+    """Glass (n = 1.5) seen head-on reflects F = 4% (Fresnel at normal
+    incidence): below 5% of the camera ray, each reflection goes on with
+    p = F / 0.05 = 0.8, its weight 1 / p. Each one's mean stays F, and of a
+    pixel's 4 samples 3 or 4 reflections go on (about p of them, stratified),
+    never the binomial count's 2 or fewer, which a pixel would show as a
+    speckle of light reflected in the glass."""
+    pixels, spp = 4000, 4
+    glass = Object("Pane", shapes.plane(4.0, (0.0, 0.0, 0.0)), Dielectric(1.5))
+    scene = Scene([glass], [], top_camera(1.0, 8, 5.0), world=World())
+    accel = Accelerator(scene.objects, scene.extent(), threads=1)
+    materials = Materials.of(scene.objects)
+    n = pixels * spp
+    origins = np.column_stack([np.zeros((n, 2)), np.ones(n)])
+    dirs = np.tile([0.0, 0.0, -1.0], (n, 1))
+    weight = np.ones((n, 3))
+    paths = Paths.start(origins, dirs, weight, np.arange(n), MISS, relative_floor(weight), camera=True)
+    hits = accel.intersect(paths.origins, paths.dirs, paths.medium, paths.kind, paths.surface)
+    surface = orient(accel, hits, paths.dirs, materials, paths.medium)
+    fresnel = ((1.5 - 1.0) / (1.5 + 1.0)) ** 2
+    np.testing.assert_allclose(surface.fresnel, fresnel, rtol=1e-9)
+    for strata in (spp, 1):
+        roulette = Roulette(ROULETTE_WEIGHT, np.arange(n), stream_key(7, 0), strata)
+        branches = split(accel, materials, paths, hits, surface, carries_light=False, roulette=roulette)
+        reflected = branches.kind == REFLECTED
+        kept = np.bincount(branches.ids[reflected] // spp, minlength=pixels)
+        assert branches.weight[reflected, 0].sum() / n == pytest.approx(fresnel, rel=0.02)
+        if strata == spp:
+            assert set(np.unique(kept)) == {3, 4}
+            assert kept.mean() == pytest.approx(spp * fresnel / ROULETTE_WEIGHT, rel=0.02)
+        else:  # one draw a sample: the binomial count a pixel would speckle with
+            assert (kept <= 2).mean() > 0.1
+    accel.close()
