@@ -278,21 +278,60 @@ def edge_pixels(first: np.ndarray, shown: np.ndarray, contrast: float = EDGE_CON
     or an edge seen through glass). `first (h,w,s)` the object each of a
     pixel's s camera rays meets first; `shown (h,w)` the pixels' light (max
     channel), but for the caustic of a receiver seen directly, which is
-    already the mean over the pixel's footprint."""
-    edge = (first != first[..., :1]).any(axis=2)
-    head = first[..., 0]
-    for axis in (0, 1):
-        a, b = (np.take(head, range(0, head.shape[axis] - 1), axis=axis),
-                np.take(head, range(1, head.shape[axis]), axis=axis))
-        da, db = (np.take(shown, range(0, shown.shape[axis] - 1), axis=axis),
-                  np.take(shown, range(1, shown.shape[axis]), axis=axis))
-        differ = (a != b) | (np.abs(da - db) > contrast * np.maximum(da, db))
-        lo = [slice(None)] * 2
-        hi = [slice(None)] * 2
-        lo[axis], hi[axis] = slice(0, -1), slice(1, None)
-        edge[tuple(lo)] |= differ
-        edge[tuple(hi)] |= differ
+    already the mean over the pixel's footprint (`shown_light`)."""
+    edge = np.zeros(shown.shape, dtype=bool)
+    _edge_pixels(np.ascontiguousarray(first, dtype=np.int64), np.ascontiguousarray(shown, dtype=np.float64),
+                 float(contrast), edge)
     return edge
+
+
+@kernel("void(i8[:, :, ::1], f8[:, ::1], f8, b1[:, ::1])")
+def _edge_pixels(first, shown, contrast, edge):
+    """edge_pixels into `edge (h,w)`, all False on entry: a pixel's own
+    samples, then each pair of neighbours across and down."""
+    h, w, spp = first.shape
+    for y in range(h):
+        for x in range(w):
+            for k in range(1, spp):
+                if first[y, x, k] != first[y, x, 0]:
+                    edge[y, x] = True
+            for dy, dx in ((0, 1), (1, 0)):
+                v, u = y + dy, x + dx
+                if v < h and u < w:
+                    a, b = shown[y, x], shown[v, u]
+                    if first[y, x, 0] != first[v, u, 0] or abs(a - b) > contrast * max(a, b):
+                        edge[y, x] = edge[v, u] = True
+
+
+def shown_light(first: np.ndarray, buffers: dict[str, np.ndarray], specular_surface: np.ndarray) -> np.ndarray:
+    """(m,) what each of m pixels shows (max channel of its passes' sum),
+    its caustic counted only in the share of its samples `first (m,s)`
+    that met a specular surface first (`specular_surface (objects,)`): the
+    caustic a camera ray sees on a receiver is already its footprint's mean."""
+    out = np.empty(len(first))
+    _shown_light(np.ascontiguousarray(first, dtype=np.int64), buffers["direct"], buffers["ambient"],
+                 buffers["caustic"], np.ascontiguousarray(specular_surface, dtype=bool), out)
+    return out
+
+
+@kernel("void(i8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1])")
+def _shown_light(first, direct, ambient, caustic, specular_surface, out):
+    """shown_light into `out (m,)`; a channel that is not a number makes
+    the pixel's light not a number, as numpy's max would."""
+    spp = first.shape[1]
+    for p in range(len(first)):
+        through = 0.0
+        for k in range(spp):
+            o = first[p, k]
+            if o != MISS and specular_surface[o]:
+                through += 1.0
+        share = through / spp
+        light = direct[p, 0] + ambient[p, 0] + caustic[p, 0] * share
+        for c in range(1, 3):
+            v = direct[p, c] + ambient[p, c] + caustic[p, c] * share
+            if v > light or v != v:
+                light = v
+        out[p] = light
 
 
 def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
@@ -350,12 +389,9 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
 
     buffers, first = trace_pixels(np.arange(pixels), settings.spp, start, main_share, "eye pass", False)
     if edges and pixels > 1:
-        # the caustic a camera ray sees on a receiver is already its footprint's mean
-        seen_through = np.append(materials.specular_surface, False)[first]  # MISS (-1) takes the False
-        through = np.add.reduceat(seen_through.astype(np.float64), np.arange(0, len(first), settings.spp))
-        shown = (buffers["direct"] + buffers["ambient"] + buffers["caustic"] * (through / settings.spp)[:, None])
-        refine = np.flatnonzero(edge_pixels(first.reshape(cam.pixy, cam.pixx, settings.spp),
-                                            shown.max(axis=1).reshape(cam.pixy, cam.pixx)))
+        first = first.reshape(cam.pixy, cam.pixx, settings.spp)
+        shown = shown_light(first.reshape(pixels, settings.spp), buffers, materials.specular_surface)
+        refine = np.flatnonzero(edge_pixels(first, shown.reshape(cam.pixy, cam.pixx)))
         if len(refine):
             extra, _ = trace_pixels(refine, settings.edge_samples, start + main_share, 1.0 - start - main_share,
                                     "eye pass", True)

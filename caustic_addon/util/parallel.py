@@ -45,10 +45,12 @@ def run_chunks(jobs: list[Callable[[], T]], threads: int, monitor: Monitor, star
     with ThreadPoolExecutor(threads) as pool:
         pending = {}
 
-        def collect(futures) -> None:
-            nonlocal consumed
+        def finished(futures) -> None:
             for future in futures:
                 done[pending.pop(future)] = future.result()
+
+        def consume_ready() -> None:
+            nonlocal consumed
             while consumed in done:
                 consume(done.pop(consumed))
                 consumed += 1
@@ -56,11 +58,15 @@ def run_chunks(jobs: list[Callable[[], T]], threads: int, monitor: Monitor, star
 
         try:
             for index, job in enumerate(jobs):
+                # the next chunk starts before the last results are consumed,
+                # so that no core waits while this thread sums them
                 pending[pool.submit(job)] = index
+                consume_ready()
                 if len(pending) >= threads:
-                    collect(wait(pending, return_when=FIRST_COMPLETED)[0])
-            while pending:
-                collect(wait(pending, return_when=FIRST_COMPLETED)[0])
+                    finished(wait(pending, return_when=FIRST_COMPLETED)[0])
+            while consumed < len(jobs):
+                finished(wait(pending, return_when=FIRST_COMPLETED)[0])
+                consume_ready()
         except BaseException:
             for future in pending:
                 future.cancel()
