@@ -12,7 +12,7 @@ import numpy as np
 from ..sampling.warps import orthonormal_basis
 from ..scene import Mesh
 from ..tracing.topology import mesh_pieces
-from ..util.jit import kernel
+from ..util.jit import inline, kernel
 from ..util.rows import row_ids
 from ..util.vectors import DIVISION_FLOOR, dot1, float_rows, row, subrow, sum1, transferred1
 from .raster import rasterise_triangles
@@ -129,9 +129,12 @@ class PlaneChart(Chart):
         d_origins, d_dirs = float_rows(d_origins, d_dirs)
         lo, hi = np.empty((len(origins), 2)), np.empty((len(origins), 2))
         ok = np.empty(len(origins), dtype=bool)
-        frame = np.array([self.point, self.normal, self.axis_x, self.axis_y], dtype=np.float64)
-        _plane_footprints(origins, dirs, d_origins, d_dirs, float(stratum), frame, lo, hi, ok)
+        _plane_footprints(origins, dirs, d_origins, d_dirs, float(stratum), self.frame(), lo, hi, ok)
         return lo, hi, ok
+
+    def frame(self) -> np.ndarray:
+        """(4,3): a point on the plane, its unit normal, the chart's x and y axes."""
+        return np.array([self.point, self.normal, self.axis_x, self.axis_y], dtype=np.float64)
 
     def image_frame(self, corner, extent):
         rotation = np.stack([self.axis_x, self.axis_y, self.normal], axis=1)
@@ -148,26 +151,37 @@ class PlaneChart(Chart):
         "b1[::1])")
 def _plane_footprints(origins, dirs, d_origins, d_dirs, stratum, frame, lo, hi, ok):
     """PlaneChart.footprint's rectangles `lo, hi (n,2)` and `ok (n,)` on
-    the plane of `frame (4,3)`: a point on it, its unit normal, its chart's
-    x and y axes."""
-    p, n, x, y = row(frame, 0), row(frame, 1), row(frame, 2), row(frame, 3)
+    the plane of `frame` (PlaneChart.frame)."""
     for i in range(len(origins)):
-        o, d = row(origins, i), row(dirs, i)
-        along = dot1(d, n)
-        s = dot1(sum1(1.0, p, -1.0, o), n) / along if along != 0.0 else math.inf
-        ok[i] = math.isfinite(s)
-        if not ok[i]:
-            continue
-        var_x = var_y = 0.0
-        for k in range(2):
-            d_point = transferred1(subrow(d_origins, i, k), subrow(d_dirs, i, k), d, s, n)
-            var_x += dot1(d_point, x) ** 2
-            var_y += dot1(d_point, y) ** 2
-        rel = sum1(1.0, sum1(1.0, o, s, d), -1.0, p)
-        centre_x, centre_y = dot1(rel, x), dot1(rel, y)
-        half_x, half_y = 0.5 * stratum * math.sqrt(var_x), 0.5 * stratum * math.sqrt(var_y)
-        lo[i, 0], lo[i, 1] = centre_x - half_x, centre_y - half_y
-        hi[i, 0], hi[i, 1] = centre_x + half_x, centre_y + half_y
+        ok[i] = plane_footprint1(row(origins, i), row(dirs, i), subrow(d_origins, i, 0), subrow(d_dirs, i, 0),
+                                 subrow(d_origins, i, 1), subrow(d_dirs, i, 1), stratum, frame, lo, hi, i)
+
+
+@inline
+def plane_footprint1(o, d, d_origin_x, d_dir_x, d_origin_y, d_dir_y, stratum, frame, lo, hi, i):
+    """Row i of PlaneChart.footprint's rectangles `lo, hi (n,2)`, for the
+    ray `o, d` whose changes per pixel step right and down are
+    `d_origin_x, d_dir_x` and `d_origin_y, d_dir_y`, on the plane of
+    `frame (4,3)`: a point on it, its unit normal, its chart's x and y
+    axes. Returns whether the ray meets the plane (not parallel to it);
+    the row is left as it was where it does not."""
+    p, n, x, y = row(frame, 0), row(frame, 1), row(frame, 2), row(frame, 3)
+    along = dot1(d, n)
+    s = dot1(sum1(1.0, p, -1.0, o), n) / along if along != 0.0 else math.inf
+    if not math.isfinite(s):
+        return False
+    var_x = var_y = 0.0
+    for k in range(2):
+        d_point = transferred1(d_origin_x if k == 0 else d_origin_y, d_dir_x if k == 0 else d_dir_y, d, s, n)
+        var_x += dot1(d_point, x) ** 2
+        var_y += dot1(d_point, y) ** 2
+    rel = sum1(1.0, sum1(1.0, o, s, d), -1.0, p)
+    centre_x, centre_y = dot1(rel, x), dot1(rel, y)
+    half_x, half_y = 0.5 * stratum * math.sqrt(var_x), 0.5 * stratum * math.sqrt(var_y)
+    lo[i, 0], lo[i, 1] = centre_x - half_x, centre_y - half_y
+    hi[i, 0], hi[i, 1] = centre_x + half_x, centre_y + half_y
+    return True
+
 
 class UVChart(Chart):
     """A curved receiver, through its UV map scaled to metres: one UV unit is

@@ -28,9 +28,9 @@ from typing import Optional
 
 import numpy as np
 
-from ..util.vectors import DIVISION_FLOOR
+from ..util.jit import inline, kernel
+from ..util.vectors import DIVISION_FLOOR, float_rows
 from .charts import Chart, ImageFrame
-from ..util.jit import kernel
 from .grid import as_rgb, bilinear_sample, bilinear_splat, box_sum, channel_tables, rect_means, summed_area_table
 
 # Half-width, in cells, of the largest window the adaptive estimate tries. It
@@ -114,7 +114,7 @@ class IlluminationMap:
         if self.estimate.k_nearest is None:
             out = bilinear_sample(self._cells[1:], self._cell_coords(xy)) / self.cell ** 2
         else:
-            out = self._adaptive(xy)
+            out = self._adaptive(xy, xy)
         lo, hi = self.chart.origin, self.chart.origin + self.chart.size
         outside = (xy[:, 0] < lo[0]) | (xy[:, 1] < lo[1]) | (xy[:, 0] > hi[0]) | (xy[:, 1] > hi[1])
         out[outside] = 0.0
@@ -141,8 +141,7 @@ class IlluminationMap:
         self.prepare()
         if self.estimate.k_nearest is None:
             return as_rgb(rect_means(self._tables[1], self.origin_rc, self.cell, lo, hi)) / self.cell ** 2
-        half = 0.5 * np.maximum(hi[:, 0] - lo[:, 0], hi[:, 1] - lo[:, 1]) / self.cell
-        return self._adaptive(0.5 * (lo + hi), np.ceil(half - 0.5).astype(np.int64))
+        return self._adaptive(lo, hi)
 
     def seen_mean(self, pixels: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """Mean caustic irradiance (n,3) W/m^2 that the camera rays
@@ -160,48 +159,62 @@ class IlluminationMap:
         """(2,) chart (y, x) of the grid's first corner."""
         return self.chart.origin[::-1]
 
-    def _adaptive(self, xy: np.ndarray, min_radius: np.ndarray | int = 0) -> np.ndarray:
-        """(n,3) `_adaptive_estimate` at chart points `xy (n,2)`, windows of
-        at least `min_radius` cells ((n,) or one for all)."""
+    def _adaptive(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """(n,3) `_adaptive_estimate` over chart rectangles [lo, hi] ((n,2)
+        each; lo = hi: at points)."""
         count_table, flux_table = self._tables
-        h, w = self.shape
-        rc = np.floor(self._cell_coords(xy) + 0.5).astype(np.int64)
-        i, j = np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)
         covered = np.zeros((0, 1, 1)) if self._covered is None else self._covered
-        return as_rgb(_adaptive_estimate(count_table[0], flux_table, covered, i, j,
-                                         np.broadcast_to(np.asarray(min_radius, dtype=np.int64), i.shape).copy(),
-                                         float(self.estimate.k_nearest), self.cell))
+        out = np.empty((len(lo), 3))
+        _adaptive_estimate(count_table[0], flux_table, covered, *float_rows(lo, hi),
+                           np.ascontiguousarray(self.chart.origin, dtype=np.float64), float(self.estimate.k_nearest),
+                           self.cell, out)
+        return out
 
 
-@kernel("f8[:, ::1](f8[:, ::1], f8[:, :, ::1], f8[:, :, ::1], i8[::1], i8[::1], i8[::1], f8, f8)")
-def _adaptive_estimate(count_table, flux_tables, covered, i, j, min_radius, k_nearest, cell):
-    """(n,c) irradiance W/m^2 of the adaptive estimate at cells `i, j (n,)`:
-    the flux in the smallest square window about the cell, of half-width
-    up to _MAX_WINDOW_RADIUS and at least `min_radius (n,)`, that holds
-    `k_nearest` photons (a binary search, since the count only grows with
-    the radius), over the window's area, the area the receiver covers in
-    it where `covered (1, h+1, w+1)` (summed-area table of the covered
-    share; (0,1,1): all) is given. Tables: `count_table (h+1, w+1)`,
-    `flux_tables (c, h+1, w+1)`."""
+@inline
+def _window_cell1(v, origin, cell, size):
+    """The cell, of `size`, whose centre is nearest chart coordinate `v`
+    along an axis from `origin` (continuous cell coordinate, centres at
+    integers, rounded half up), clamped to the grid."""
+    return min(max(int(np.floor(((v - origin) / cell - 0.5) + 0.5)), 0), size - 1)
+
+
+@kernel("void(f8[:, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8, f8, f8[:, ::1])")
+def _adaptive_estimate(count_table, flux_tables, covered, lo, hi, origin, k_nearest, cell, out):
+    """Into `out (n,3)`, the irradiance W/m^2 of the adaptive estimate over
+    each chart rectangle [lo, hi] ((n,2) each): the flux in the smallest
+    square window about the cell nearest its centre, of half-width up to
+    _MAX_WINDOW_RADIUS and at least the rectangle's (half its longer side
+    in cells, less half a cell, rounded up), that holds `k_nearest`
+    photons (a binary search, since the count only grows with the radius),
+    over the window's area, the area the receiver covers in it where
+    `covered (1, h+1, w+1)` (summed-area table of the covered share;
+    (0,1,1): all) is given. Tables: `count_table (h+1, w+1)`, `flux_tables
+    (c, h+1, w+1)` (c = 1: white, the same in each channel of `out`);
+    the grid's first corner is chart point `origin (2,)` (x, y)."""
     h, w = count_table.shape[0] - 1, count_table.shape[1] - 1
-    out = np.zeros((len(i), len(flux_tables)))
-    for n in range(len(i)):
-        lo, hi = min(min_radius[n], _MAX_WINDOW_RADIUS), _MAX_WINDOW_RADIUS
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if box_sum(count_table, i[n], j[n], mid) >= k_nearest:
-                hi = mid
+    channels = len(flux_tables)
+    for n in range(len(lo)):
+        half = 0.5 * max(hi[n, 0] - lo[n, 0], hi[n, 1] - lo[n, 1]) / cell
+        min_radius = int(np.ceil(half - 0.5))
+        i = _window_cell1(0.5 * (lo[n, 1] + hi[n, 1]), origin[1], cell, h)
+        j = _window_cell1(0.5 * (lo[n, 0] + hi[n, 0]), origin[0], cell, w)
+        low, high = min(min_radius, _MAX_WINDOW_RADIUS), _MAX_WINDOW_RADIUS
+        while low < high:
+            mid = (low + high) // 2
+            if box_sum(count_table, i, j, mid) >= k_nearest:
+                high = mid
             else:
-                lo = mid + 1
-        r = max(lo, min_radius[n])
+                low = mid + 1
+        r = max(low, min_radius)
         if len(covered) == 0:
-            cells = float((min(i[n] + r + 1, h) - max(i[n] - r, 0)) * (min(j[n] + r + 1, w) - max(j[n] - r, 0)))
+            cells = float((min(i + r + 1, h) - max(i - r, 0)) * (min(j + r + 1, w) - max(j - r, 0)))
         else:
-            cells = box_sum(covered[0], i[n], j[n], r)
-        if cells > 0:
-            for c in range(len(flux_tables)):
-                out[n, c] = box_sum(flux_tables[c], i[n], j[n], r) / (cells * cell ** 2)
-    return out
+            cells = box_sum(covered[0], i, j, r)
+        for c in range(3):
+            out[n, c] = 0.0
+            if cells > 0:
+                out[n, c] = box_sum(flux_tables[min(c, channels - 1)], i, j, r) / (cells * cell ** 2)
 
 
 def auto_cell_size(chart: Chart, limit: int) -> float:

@@ -15,10 +15,12 @@ import math
 
 import numpy as np
 
+from ..maps.charts import PlaneChart, plane_footprint1
 from ..maps.screen_layer import ImageView
 from ..sampling.sequences import r2_sequence
 from ..scene import Camera
-from ..util.jit import kernel
+from ..util.jit import inline, kernel
+from ..util.vectors import float_rows, row, set_subrow
 
 
 def _viewfac(camera: Camera) -> int:
@@ -119,8 +121,20 @@ def ray_differentials(camera: Camera, dirs: np.ndarray) -> tuple[np.ndarray, np.
 
 @kernel("void(f8[:, :, ::1], f8[:, :, ::1], f8[:, ::1], f8[:, ::1], f8, f8, b1)")
 def _ray_differentials(d_origins, d_dirs, dirs, frame, pixsize, clip, ortho):
-    """Fill `d_origins, d_dirs (n,2,3)`, the change of each ray `dirs (n,3)`
-    per pixel step right and down (steps X and -Y of the camera's frame).
+    """Fill `d_origins, d_dirs (n,2,3)`, ray_differential1 of each ray
+    `dirs (n,3)` per pixel step right and down."""
+    for i in range(len(dirs)):
+        for j in range(2):
+            d_origin, d_dir = ray_differential1(row(dirs, i), frame, pixsize, clip, ortho, j)
+            set_subrow(d_origins, i, j, d_origin)
+            set_subrow(d_dirs, i, j, d_dir)
+
+
+@inline
+def ray_differential1(d, frame, pixsize, clip, ortho, j):
+    """(d_origin, d_dir), 3-tuples: the change of the camera ray of unit
+    direction `d` per pixel step right (j = 0, step X of the camera's
+    `frame`) or down (j = 1, step -Y).
 
     Perspective: d = D / |D| with D = sx p X + sy p Y - Z (p the pixel size
     at unit distance), so dD = p X per step right and -p Y per step down,
@@ -128,21 +142,39 @@ def _ray_differentials(d_origins, d_dirs, dirs, frame, pixsize, clip, ortho):
     forward). The origin o = e + d c / (d.F) (c the clip start) moves by
     c (dd (d.F) - d (dd.F)) / (d.F)^2.
     Orthographic: d = F throughout, and o moves by p X and -p Y."""
+    sign = 1.0 if j == 0 else -1.0
+    if ortho:
+        return ((sign * pixsize * frame[j, 0], sign * pixsize * frame[j, 1], sign * pixsize * frame[j, 2]),
+                (0.0, 0.0, 0.0))
+    along = -(d[0] * frame[2, 0] + d[1] * frame[2, 1] + d[2] * frame[2, 2])
+    d_along = ((0.0 + d[0] * sign * pixsize * frame[j, 0]) + d[1] * sign * pixsize * frame[j, 1]
+               + d[2] * sign * pixsize * frame[j, 2])
+    dd = ((sign * pixsize * frame[j, 0] - d[0] * d_along) * along,
+          (sign * pixsize * frame[j, 1] - d[1] * d_along) * along,
+          (sign * pixsize * frame[j, 2] - d[2] * d_along) * along)
+    d_forward = ((0.0 - dd[0] * frame[2, 0]) - dd[1] * frame[2, 1]) - dd[2] * frame[2, 2]
+    scale = along * along
+    return ((clip * (dd[0] * along - d[0] * d_forward) / scale, clip * (dd[1] * along - d[1] * d_forward) / scale,
+             clip * (dd[2] * along - d[2] * d_forward) / scale), dd)
+
+
+def camera_footprints(camera: Camera, chart: PlaneChart, origins: np.ndarray, dirs: np.ndarray,
+                      stratum: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """chart.footprint of camera rays `origins, dirs (n,3)` with their
+    differentials (ray_differentials), worked out ray by ray: (lo (n,2),
+    hi (n,2), ok (n,))."""
+    frame, pixsize = _view(camera)
+    origins, dirs = float_rows(origins, dirs)
+    lo, hi, ok = np.empty((len(dirs), 2)), np.empty((len(dirs), 2)), np.empty(len(dirs), dtype=bool)
+    _camera_footprints(origins, dirs, frame, pixsize, camera.clip_start, camera.kind == "ORTHO", float(stratum),
+                       chart.frame(), lo, hi, ok)
+    return lo, hi, ok
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8, f8, b1, f8, f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1])")
+def _camera_footprints(origins, dirs, frame, pixsize, clip, ortho, stratum, plane, lo, hi, ok):
     for i in range(len(dirs)):
-        along = -(dirs[i, 0] * frame[2, 0] + dirs[i, 1] * frame[2, 1] + dirs[i, 2] * frame[2, 2])
-        for j in range(2):
-            sign = 1.0 if j == 0 else -1.0
-            if ortho:
-                for k in range(3):
-                    d_origins[i, j, k] = sign * pixsize * frame[j, k]
-                    d_dirs[i, j, k] = 0.0
-                continue
-            d_along = 0.0
-            for k in range(3):
-                d_along += dirs[i, k] * sign * pixsize * frame[j, k]
-            d_forward = 0.0
-            for k in range(3):
-                d_dirs[i, j, k] = (sign * pixsize * frame[j, k] - dirs[i, k] * d_along) * along
-                d_forward -= d_dirs[i, j, k] * frame[2, k]
-            for k in range(3):
-                d_origins[i, j, k] = clip * (d_dirs[i, j, k] * along - dirs[i, k] * d_forward) / (along * along)
+        d = row(dirs, i)
+        d_origin_x, d_dir_x = ray_differential1(d, frame, pixsize, clip, ortho, 0)
+        d_origin_y, d_dir_y = ray_differential1(d, frame, pixsize, clip, ortho, 1)
+        ok[i] = plane_footprint1(row(origins, i), d, d_origin_x, d_dir_x, d_origin_y, d_dir_y, stratum, plane, lo, hi, i)

@@ -51,9 +51,9 @@ from ..tracing.accelerator import CAMERA, Accelerator
 from ..tracing.hits import MISS, Hits
 from ..util.jit import kernel
 from ..util.parallel import Monitor, chunk_size, run_chunks
-from ..util.rows import take_rows
+from ..util.rows import take, take_rows
 from .bounce import Interface, Roulette, facets, multiscatter, split, trace
-from .camera_rays import eye_rays, pixel_offsets, ray_differentials
+from .camera_rays import camera_footprints, eye_rays, pixel_offsets, ray_differentials
 from .direct_light import direct_radiance, rough_specular_radiance, strata, world_light
 from .paths import Paths, relative_floor
 from .world_paths import WorldThroughCasters
@@ -194,9 +194,8 @@ class EyeTracer:
         if isinstance(imap.chart, PlaneChart):
             primary = np.flatnonzero(~rays.specular)
             if len(primary):
-                origins, dirs = np.take(rays.origins, primary, axis=0), np.take(rays.dirs, primary, axis=0)
-                lo, hi, ok = imap.chart.footprint(origins, dirs, *ray_differentials(self.scene.camera, dirs),
-                                                  self.stratum)
+                lo, hi, ok = camera_footprints(self.scene.camera, imap.chart, take(rays.origins, primary),
+                                               take(rays.dirs, primary), self.stratum)
                 spread[primary[ok]] = True
                 irradiance[primary[ok]] = imap.seen_mean(np.take(pixel, primary[ok]), lo[ok], hi[ok])
             if rays.d_origins is not None and rays.specular.any():
