@@ -55,6 +55,8 @@ def register_addon() -> None:
     sys.modules["caustics"] = module
     spec.loader.exec_module(module)
     module.register()
+    # the frames are timed with the kernels compiled, as a user's are after the first start
+    module.jobs.kernels.wait()
 
 
 def node_material(name: str, kind: str, **inputs):

@@ -147,12 +147,12 @@ def ray_differential1(d, frame, pixsize, clip, ortho, j):
         return ((sign * pixsize * frame[j, 0], sign * pixsize * frame[j, 1], sign * pixsize * frame[j, 2]),
                 (0.0, 0.0, 0.0))
     along = -(d[0] * frame[2, 0] + d[1] * frame[2, 1] + d[2] * frame[2, 2])
-    d_along = ((0.0 + d[0] * sign * pixsize * frame[j, 0]) + d[1] * sign * pixsize * frame[j, 1]
+    d_along = (d[0] * sign * pixsize * frame[j, 0] + d[1] * sign * pixsize * frame[j, 1]
                + d[2] * sign * pixsize * frame[j, 2])
     dd = ((sign * pixsize * frame[j, 0] - d[0] * d_along) * along,
           (sign * pixsize * frame[j, 1] - d[1] * d_along) * along,
           (sign * pixsize * frame[j, 2] - d[2] * d_along) * along)
-    d_forward = ((0.0 - dd[0] * frame[2, 0]) - dd[1] * frame[2, 1]) - dd[2] * frame[2, 2]
+    d_forward = -dd[0] * frame[2, 0] - dd[1] * frame[2, 1] - dd[2] * frame[2, 2]
     scale = along * along
     return ((clip * (dd[0] * along - d[0] * d_forward) / scale, clip * (dd[1] * along - d[1] * d_forward) / scale,
              clip * (dd[2] * along - d[2] * d_forward) / scale), dd)
@@ -177,4 +177,5 @@ def _camera_footprints(origins, dirs, frame, pixsize, clip, ortho, stratum, plan
         d = row(dirs, i)
         d_origin_x, d_dir_x = ray_differential1(d, frame, pixsize, clip, ortho, 0)
         d_origin_y, d_dir_y = ray_differential1(d, frame, pixsize, clip, ortho, 1)
-        ok[i] = plane_footprint1(row(origins, i), d, d_origin_x, d_dir_x, d_origin_y, d_dir_y, stratum, plane, lo, hi, i)
+        ok[i] = plane_footprint1(row(origins, i), d, d_origin_x, d_dir_x, d_origin_y, d_dir_y, stratum, plane,
+                                 lo, hi, i)
