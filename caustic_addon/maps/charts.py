@@ -170,11 +170,9 @@ def plane_footprint1(o, d, d_origin_x, d_dir_x, d_origin_y, d_dir_y, stratum, fr
     s = dot1(sum1(1.0, p, -1.0, o), n) / along if along != 0.0 else math.inf
     if not math.isfinite(s):
         return False
-    var_x = var_y = 0.0
-    for k in range(2):
-        d_point = transferred1(d_origin_x if k == 0 else d_origin_y, d_dir_x if k == 0 else d_dir_y, d, s, n)
-        var_x += dot1(d_point, x) ** 2
-        var_y += dot1(d_point, y) ** 2
+    right, down = transferred1(d_origin_x, d_dir_x, d, s, n), transferred1(d_origin_y, d_dir_y, d, s, n)
+    var_x = dot1(right, x) ** 2 + dot1(down, x) ** 2
+    var_y = dot1(right, y) ** 2 + dot1(down, y) ** 2
     rel = sum1(1.0, sum1(1.0, o, s, d), -1.0, p)
     centre_x, centre_y = dot1(rel, x), dot1(rel, y)
     half_x, half_y = 0.5 * stratum * math.sqrt(var_x), 0.5 * stratum * math.sqrt(var_y)

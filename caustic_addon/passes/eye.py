@@ -388,9 +388,9 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
 
     buffers, first = trace_pixels(np.arange(pixels), settings.spp, start, main_share, "eye pass", False)
     if edges and pixels > 1:
-        first = first.reshape(cam.pixy, cam.pixx, settings.spp)
         shown = shown_light(first.reshape(pixels, settings.spp), buffers, materials.specular_surface)
-        refine = np.flatnonzero(edge_pixels(first, shown.reshape(cam.pixy, cam.pixx)))
+        refine = np.flatnonzero(edge_pixels(first.reshape(cam.pixy, cam.pixx, settings.spp),
+                                            shown.reshape(cam.pixy, cam.pixx)))
         if len(refine):
             extra, _ = trace_pixels(refine, settings.edge_samples, start + main_share, 1.0 - start - main_share,
                                     "eye pass", True)
