@@ -10,7 +10,14 @@ The stages, in the order data flows through them: scene (the model), tracing
 (Embree), emission (the lamps), passes (photons, beams, eye rays), maps (the
 illumination maps), renderer (all of it, in one call); beneath them util,
 sampling and optics; beside them cli, the command line.
+
+Importing it sets glibc's malloc to reuse what a render frees
+(util.heap.reuse_freed_memory), before any of its threads start.
 """
+
+from .util.heap import reuse_freed_memory
+
+reuse_freed_memory()
 
 from .cli.image_io import write_exr_channels
 from .errors import Cancelled, SceneError
