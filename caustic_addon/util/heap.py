@@ -15,8 +15,9 @@ kernel; set as below, from its third frame on, as few as 6,000 faults and
 `reuse_freed_memory` sets, for the whole process: one arena (M_ARENA_MAX),
 mmap only above 64 MB (M_MMAP_THRESHOLD), and free memory returned to the
 kernel only above 1 GB at the top of the heap (M_TRIM_THRESHOLD). The
-process then keeps up to 1 GB it no longer uses, as jemalloc, which Blender
-links on Linux in place of glibc's malloc, keeps its freed pages for a while.
+process then keeps up to 1 GB it no longer uses, much as jemalloc keeps
+its freed pages for a while: Blender's Linux builds link jemalloc in place
+of glibc's malloc (the bpy module does not), and there this changes nothing.
 It does nothing where malloc is not glibc's (Windows, macOS), and leaves
 alone a process whose environment already tunes glibc's malloc. Threads that
 have an arena keep it, and a new thread may be handed one of theirs, so it
@@ -27,7 +28,6 @@ threads start before any add-on, the engine's may share one of Blender's."""
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 import os
 
 # mallopt's parameters (glibc, malloc.h)
@@ -39,14 +39,12 @@ _TUNED_BY = ("GLIBC_TUNABLES", "MALLOC_ARENA_MAX", "MALLOC_MMAP_THRESHOLD_", "MA
 
 
 def _glibc():
-    """The C library if it is glibc (it has mallopt and says its version), else None."""
-    name = ctypes.util.find_library("c")
-    if name is None:
-        return None
+    """The process's C library if it is glibc (it says its version and has
+    mallopt), else None."""
     try:
-        libc = ctypes.CDLL(name)
+        libc = ctypes.CDLL(None)
         libc.gnu_get_libc_version, libc.mallopt
-    except (OSError, AttributeError):
+    except (OSError, TypeError, AttributeError):
         return None
     return libc
 
