@@ -4,26 +4,28 @@ chunk freed rather than fresh pages from the kernel.
 Every bounce of every chunk allocates its arrays anew, a few MB each, from
 two worker threads. glibc by default gives each thread an arena of its own,
 hands back to the kernel the top of an arena that frees more than a few MB
-(at most 2 x 32 MB), and serves anything larger than its adaptive threshold
-(128 kB at start, 32 MB at most) with mmap, which is unmapped on free. So the
-same arrays keep coming back as new pages, and each page costs a fault that
-the kernel zeroes. On this project's virtual machine a frame of the
-animated pool took 150,000 to 400,000 faults and 0.3 to 4.6 CPU s in the
-kernel; set as below, from its third frame on, as few as 6,000 faults and
-0.1 s (README, Measured).
+(at most 2 x 32 MB) and a thread arena's 64 MB heaps once empty, and serves
+anything larger than its adaptive threshold (128 kB at start, 32 MB at
+most) with mmap, which is unmapped on free. So the same arrays keep coming
+back as new pages, each a fault that the kernel zeroes: on this project's
+virtual machine 150,000 to 400,000 faults and 0.3 to 4.6 CPU s in the
+kernel a frame of the animated pool (README, Measured).
 
 `reuse_freed_memory` sets, for the whole process: one arena (M_ARENA_MAX),
-mmap only above 64 MB (M_MMAP_THRESHOLD), and free memory returned to the
-kernel only above 1 GB at the top of the heap (M_TRIM_THRESHOLD). The
-process then keeps up to 1 GB it no longer uses, much as jemalloc keeps
-its freed pages for a while: Blender's Linux builds link jemalloc in place
-of glibc's malloc (the bpy module does not), and there this changes nothing.
-It does nothing where malloc is not glibc's (Windows, macOS), and leaves
-alone a process whose environment already tunes glibc's malloc. Threads that
-have an arena keep it, and a new thread may be handed one of theirs, so it
-runs when the engine is imported, before the engine starts any thread. The
-command line's threads then all share the main arena; in Blender, whose own
-threads start before any add-on, the engine's may share one of Blender's."""
+mmap only above 64 MB (M_MMAP_THRESHOLD), free memory returned to the
+kernel only above 1 GB at the top of the heap (M_TRIM_THRESHOLD), and
+64 MB kept spare at the top of every heap (M_TOP_PAD), which also keeps an
+arena's heaps mapped once empty. The process then keeps up to 1 GB it no
+longer uses, much as jemalloc keeps its freed pages for a while:
+Blender's Linux builds link jemalloc in place of glibc's malloc (the bpy
+module does not), and there this changes nothing. It does nothing where
+malloc is not glibc's (Windows, macOS), and leaves alone a process whose
+environment already tunes glibc's malloc. Threads that have an arena keep
+it, and a new thread may be handed one of theirs, so it runs when the
+engine is imported, before the engine starts any thread: the command
+line's threads then all share the main arena; in Blender, whose own
+threads start first, the engine's may be handed one of Blender's, which
+the pad keeps from shrinking."""
 
 from __future__ import annotations
 
@@ -31,9 +33,10 @@ import ctypes
 import os
 
 # mallopt's parameters (glibc, malloc.h)
-M_TRIM_THRESHOLD, M_MMAP_THRESHOLD, M_ARENA_MAX = -1, -3, -8
+M_TRIM_THRESHOLD, M_TOP_PAD, M_MMAP_THRESHOLD, M_ARENA_MAX = -1, -2, -3, -8
 MMAP_ABOVE = 64 << 20
 TRIM_ABOVE = 1 << 30
+TOP_PAD = 64 << 20
 # The environment's own tunings of glibc's malloc, which are left as they are.
 _TUNED_BY = ("GLIBC_TUNABLES", "MALLOC_ARENA_MAX", "MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_")
 
@@ -55,4 +58,4 @@ def reuse_freed_memory() -> bool:
     if libc is None or any(name in os.environ for name in _TUNED_BY):
         return False
     return all(libc.mallopt(option, value) == 1 for option, value in (
-        (M_ARENA_MAX, 1), (M_MMAP_THRESHOLD, MMAP_ABOVE), (M_TRIM_THRESHOLD, TRIM_ABOVE)))
+        (M_ARENA_MAX, 1), (M_MMAP_THRESHOLD, MMAP_ABOVE), (M_TRIM_THRESHOLD, TRIM_ABOVE), (M_TOP_PAD, TOP_PAD)))
