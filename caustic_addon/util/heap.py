@@ -38,7 +38,8 @@ MMAP_ABOVE = 64 << 20
 TRIM_ABOVE = 1 << 30
 TOP_PAD = 64 << 20
 # The environment's own tunings of glibc's malloc, which are left as they are.
-_TUNED_BY = ("GLIBC_TUNABLES", "MALLOC_ARENA_MAX", "MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_")
+_TUNED_BY = ("GLIBC_TUNABLES", "MALLOC_ARENA_MAX", "MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_",
+             "MALLOC_TOP_PAD_")
 
 
 def _glibc():
@@ -52,10 +53,15 @@ def _glibc():
     return libc
 
 
+def tuned_by_environment() -> bool:
+    """Does the environment set glibc's malloc itself?"""
+    return any(name in os.environ for name in _TUNED_BY)
+
+
 def reuse_freed_memory() -> bool:
     """Set glibc's malloc as the module says; True if it was set."""
     libc = _glibc()
-    if libc is None or any(name in os.environ for name in _TUNED_BY):
+    if libc is None or tuned_by_environment():
         return False
     return all(libc.mallopt(option, value) == 1 for option, value in (
         (M_ARENA_MAX, 1), (M_MMAP_THRESHOLD, MMAP_ABOVE), (M_TRIM_THRESHOLD, TRIM_ABOVE), (M_TOP_PAD, TOP_PAD)))

@@ -26,7 +26,7 @@ def faults_of(work) -> int:
     return resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
 
 
-@pytest.mark.skipif(any(name in os.environ for name in heap._TUNED_BY), reason="the environment tunes malloc")
+@pytest.mark.skipif(heap.tuned_by_environment(), reason="the environment tunes malloc")
 def test_a_worker_threads_freed_arrays_are_reused_not_faulted_in_again():
     # 40 MB: above the largest size glibc would otherwise serve from its heap (32 MB)
     size, rounds = 40 << 20, 10
