@@ -83,6 +83,8 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         if cached is not None and not all(imap.sees(view) for imap in cached[0].values()):
             cached = None
         if cached is None:
+            if cache is not None:
+                cache.make_room(key)
             warnings += lamps_in_glass(scene, accel)
             maps = build_maps(scene, settings, warnings, view)
             run_lamps = bool(maps) and bool(scene.casters) and settings.lamp_rays > 0

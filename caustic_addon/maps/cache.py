@@ -76,6 +76,15 @@ class MapCache:
         with self._lock:
             self._entries.clear()
 
+    def make_room(self, key: str) -> None:
+        """Before the lamp pass for `key` runs: drop its old entry and the
+        least recently used beyond one fewer than capacity, so that the maps
+        being traced are not held beside as many as `put` will keep."""
+        with self._lock:
+            self._entries.pop(key, None)
+            while len(self._entries) >= self.capacity:
+                self._entries.popitem(last=False)
+
     def put(self, key: str, value) -> None:
         with self._lock:
             self._entries[key] = value

@@ -28,6 +28,7 @@ surface without meeting the first.
 
 from __future__ import annotations
 
+import weakref
 from typing import Optional
 
 import numpy as np
@@ -75,7 +76,9 @@ class Contacts:
     """
 
     def __init__(self, accel):
-        self.accel = accel
+        # weak, as the accelerator owns its contacts: a cycle would keep its
+        # Embree scenes and tables alive until Python's cyclic collector runs
+        self.accel = weakref.proxy(accel)
         self.boxes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self.partners: dict[int, _Subscene] = {}
         touching: dict[int, set[int]] = {}
@@ -95,7 +98,7 @@ class Contacts:
                 for index in (a, b):
                     self.boxes[index] = _union(self.boxes.get(index), box)
         for index, others in touching.items():
-            self.partners[index] = _Subscene(accel, sorted(others))
+            self.partners[index] = _Subscene(self.accel, sorted(others))
         # the boxes as (objects,3) corners, empty (inf, -inf) where an object has none
         self.lo, self.hi = np.full((len(accel.objects), 3), np.inf), np.full((len(accel.objects), 3), -np.inf)
         for index, (lo, hi) in self.boxes.items():

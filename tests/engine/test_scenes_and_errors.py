@@ -171,6 +171,22 @@ def test_a_camera_move_reuses_the_illumination_maps():
     assert not render(scene, quick(lamp_rays=60_000, bands=4), cache=cache).stats["maps_cached"]
 
 
+def test_the_cache_holds_one_fewer_scene_while_a_new_one_traces_and_keeps_the_same_ones_after():
+    """An animation misses the cache at every frame: the frame being traced
+    is held beside the last one only, not the last two (65 MB a map set in
+    the animated pool), and after `put` the cache holds what it held before."""
+    cache = MapCache(capacity=2)
+    cache.put("frame 1", "maps 1")
+    cache.put("frame 2", "maps 2")
+    cache.make_room("frame 3")
+    assert cache.get("frame 1") is None and cache.get("frame 2") == "maps 2"
+    cache.put("frame 3", "maps 3")
+    assert [cache.get(key) for key in ("frame 2", "frame 3")] == ["maps 2", "maps 3"]
+    # a kept scene traced again (its beams cannot serve the new camera) drops only its own old maps
+    cache.make_room("frame 2")
+    assert cache.get("frame 2") is None and cache.get("frame 3") == "maps 3"
+
+
 def test_the_wavy_slab_is_closed_faces_out_and_holds_its_volume():
     """Its height field over [-1, 1]^2 integrates in closed form: depth plus
     a cos(k.x) integrates to a sin(kx L/2) sin(ky L/2) (2 / kx)(2 / ky)."""
