@@ -9,10 +9,10 @@ The pool: an 8 m floor (albedo 0.8) under a 6 m x 6 m body of water
 down to the floor, so the mesh is closed), lit by a sun 20 degrees off the
 vertical, seen at 1280 x 720 with the add-on's default settings.
 
-1. Render Caustic Animation over `frames` frames: seconds per frame (each
-   frame's waves differ, so every frame traces its maps), wall and CPU
-   (all threads; other jobs on a shared machine add wall time, not CPU),
-   the total, and the load average before and after.
+1. Render Caustic Animation over `frames` frames, in one run: seconds per
+   frame (each frame's waves differ, so every frame traces its maps), wall
+   and CPU (all threads; other jobs on a shared machine add wall time, not
+   CPU), the total, and the load average before and after.
 2. Caustics in Cycles, per frame, at 25% resolution and 16 samples: Cycles
    alone (no caustics of ours); Bake Caustic Animation then Cycles
    (a bake step, then the render); Bake While Rendering (the render
@@ -102,17 +102,30 @@ def pool(folder: Path) -> None:
 
 
 def caustic_animation(frames: int) -> dict:
-    seconds, cpu = [], []
+    """One Render Caustic Animation over frames 1 to `frames`, as an artist
+    runs it; a frame's time runs from the operator setting that frame (a
+    frame_change_post handler notes the clocks) to it setting the next, the
+    first from the call, the last to the call's return."""
+    marks = {}
+
+    def mark(scene, *_):
+        marks.setdefault(scene.frame_current, (time.perf_counter(), time.process_time()))
+
     load = [os.getloadavg()[0]]
-    for frame in range(1, frames + 1):
-        clock, process = time.perf_counter(), time.process_time()
-        assert bpy.ops.caustic.render_animation(filepath="//frames/pool_####", frame_start=frame,
-                                                frame_end=frame) == {'FINISHED'}
-        seconds.append(time.perf_counter() - clock)
-        cpu.append(time.process_time() - process)
-        print(f"frame {frame}: {seconds[-1]:.2f} s, {cpu[-1]:.2f} CPU s "
-              f"(engine {bpy.context.scene.caustic.last_seconds:.2f} s)", flush=True)
+    bpy.app.handlers.frame_change_post.append(mark)
+    try:
+        start = time.perf_counter(), time.process_time()
+        assert bpy.ops.caustic.render_animation(filepath="//frames/pool_####", frame_start=1,
+                                                frame_end=frames) == {'FINISHED'}
+        end = time.perf_counter(), time.process_time()
+    finally:
+        bpy.app.handlers.frame_change_post.remove(mark)
     load.append(os.getloadavg()[0])
+    clocks = [start] + [marks[frame] for frame in range(2, frames + 1)] + [end]
+    seconds = [b[0] - a[0] for a, b in zip(clocks, clocks[1:])]
+    cpu = [b[1] - a[1] for a, b in zip(clocks, clocks[1:])]
+    for frame, (wall, process) in enumerate(zip(seconds, cpu), start=1):
+        print(f"frame {frame}: {wall:.2f} s, {process:.2f} CPU s", flush=True)
     return dict(frames=frames, seconds_per_frame=seconds, cpu_seconds_per_frame=cpu, mean=sum(seconds) / frames,
                 max=max(seconds), total=sum(seconds), cpu_total=sum(cpu), load_average=load,
                 resolution=[1280, 720])

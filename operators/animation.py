@@ -9,7 +9,7 @@ import bpy
 
 from ..export import InputError, read_scene, render_settings
 from ..jobs import JobRunner, RenderJob, StepError
-from ..writeback.images import show_image
+from ..writeback.images import show_image, write_image
 from ..writeback.output import OutputError, check_writable, frame_paths, frame_range, save_frame
 from ..writeback.results import RESULT_IMAGE, write_result
 from .engine_run import EngineOperator
@@ -48,7 +48,8 @@ class CAUSTIC_OT_render_animation(FrameRange, EngineOperator, bpy.types.Operator
 
     def _write(self, frame: int, job: RenderJob) -> None:
         context = bpy.context
-        image = write_result(context.scene.caustic, job)
+        # the frame for the format's writer; the last frame's image and passes are kept once the run ends
+        image = write_image(RESULT_IMAGE, job.result.image, pack=False)
         try:
             save_frame(context.scene, context.view_layer.name, image, job.result, self._paths[frame])
         except OutputError as exc:
@@ -63,7 +64,7 @@ class CAUSTIC_OT_render_animation(FrameRange, EngineOperator, bpy.types.Operator
 
     def _done(self, context, runner: JobRunner) -> set:
         if runner.last is not None:
-            show_image(context, bpy.data.images[RESULT_IMAGE])
+            show_image(context, write_result(context.scene.caustic, runner.last))
         done = runner.done
         written = f"{len(done)} of {len(runner.steps)} frames written" + (
             f" ({frames_text(done)}, the last to '{self._paths[done[-1]]}')" if done else "")

@@ -21,12 +21,13 @@ def working_colorspace() -> str:
     return colorspace.working_space if colorspace is not None else "Linear Rec.709"
 
 
-def write_image(name: str, rgba: np.ndarray):
+def write_image(name: str, rgba: np.ndarray, pack: bool = True):
     """Image `name` (float, linear) holding `rgba (h,w,4)`: the existing one
-    if it can take it (a saved one too), else a new one. The pixels are
-    packed as a float EXR: undo and redo rebuild images from the .blend's
-    data, so pixels that are only in memory would come back blank (see
-    `drop_stale_pixels`)."""
+    if it can take it (a saved one too), else a new one. With `pack`, the
+    pixels are packed as a float EXR: undo and redo rebuild images from the
+    .blend's data, so pixels that are only in memory would come back blank
+    (see `drop_stale_pixels`). Without, they are there only for Blender's
+    file writers, until a packed write replaces them."""
     h, w = rgba.shape[:2]
     image = bpy.data.images.get(name)
     if image is not None and image.source == 'GENERATED':
@@ -39,9 +40,10 @@ def write_image(name: str, rgba: np.ndarray):
         image.colorspace_settings.name = working_colorspace()
     image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1], dtype=np.float32).ravel())
     image.update()
-    image.file_format = 'OPEN_EXR'
-    image.pack()
-    image[SERIAL] = _in_memory[image.name] = uuid.uuid4().hex
+    if pack:
+        image.file_format = 'OPEN_EXR'
+        image.pack()
+        image[SERIAL] = _in_memory[image.name] = uuid.uuid4().hex
     return image
 
 

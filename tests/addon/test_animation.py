@@ -114,6 +114,8 @@ def test_undo_after_render_animation_keeps_the_frames(tmp_path):
     files = {name: (tmp_path / name).read_bytes() for name in os.listdir(tmp_path)}
     last = scenes.pixels_of("Caustic Render")
     assert len(files) == 3 and np.array_equal(last, file_pixels(tmp_path / "u_3.exr"))
+    passes = [scenes.pixels_of(f"Caustic Render {name}")[..., :3] for name in ("Direct", "Caustic", "Ambient")]
+    np.testing.assert_allclose(passes[0] + passes[1] + passes[2], last[..., :3], rtol=1e-6, atol=1e-7)
     parts["floor"].location.x += 0.25
     bpy.ops.ed.undo_push(message="Move")
     assert bpy.ops.ed.undo() == {'FINISHED'}
@@ -195,6 +197,7 @@ def test_a_disk_that_fills_up_keeps_the_frames_written_whole(tmp_path, small_dis
     exr_output(multilayer)
     bpy.context.scene.render.image_settings.exr_codec = 'NONE'
     assert bpy.ops.caustic.render_animation(filepath=str(tmp_path / "f_#"), frame_end=2) == {'FINISHED'}
+    second = scenes.pixels_of("Caustic Render")
     disk = small_disk(int(2.5 * (tmp_path / "f_1.exr").stat().st_size))
     with pytest.raises(RuntimeError, match=r"Frame 3 could not write '.*f_3\.exr': No space left on device; "
                                            r"2 of 3 frames written \(frames 1-2"):
@@ -202,3 +205,5 @@ def test_a_disk_that_fills_up_keeps_the_frames_written_whole(tmp_path, small_dis
     assert sorted(os.listdir(disk)) == ["f_1.exr", "f_2.exr"]
     for name in ("f_1.exr", "f_2.exr"):
         assert (disk / name).read_bytes() == (tmp_path / name).read_bytes()
+    # the image shows the last frame written, not the one that did not fit
+    assert np.array_equal(scenes.pixels_of("Caustic Render"), second)

@@ -173,8 +173,8 @@ def test_a_camera_move_reuses_the_illumination_maps():
 
 def test_the_cache_holds_one_fewer_scene_while_a_new_one_traces_and_keeps_the_same_ones_after():
     """An animation misses the cache at every frame: the frame being traced
-    is held beside the last one only, not the last two (65 MB a map set in
-    the animated pool), and after `put` the cache holds what it held before."""
+    is held beside one fewer than the cache keeps (65 MB a map set in the
+    animated pool), and after `put` the cache holds what it held before."""
     cache = MapCache(capacity=2)
     cache.put("frame 1", "maps 1")
     cache.put("frame 2", "maps 2")
@@ -185,6 +185,11 @@ def test_the_cache_holds_one_fewer_scene_while_a_new_one_traces_and_keeps_the_sa
     # a kept scene traced again (its beams cannot serve the new camera) drops only its own old maps
     cache.make_room("frame 2")
     assert cache.get("frame 2") is None and cache.get("frame 3") == "maps 3"
+    # the add-on's cache keeps the last scene only: none is held while another traces
+    last = MapCache()
+    last.put("frame 1", "maps 1")
+    last.make_room("frame 2")
+    assert last.get("frame 1") is None
 
 
 def test_the_wavy_slab_is_closed_faces_out_and_holds_its_volume():
