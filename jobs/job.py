@@ -7,6 +7,7 @@ from __future__ import annotations
 import threading
 import time
 import traceback
+from dataclasses import replace
 
 from ..caustic_addon import Cancelled, MapCache, RenderResult, RenderSettings, Scene, SceneError, render
 
@@ -45,6 +46,13 @@ class RenderJob:
             traceback.print_exc()
             self.error = f"The caustic engine failed: {type(exc).__name__}: {exc}"
         self.seconds = time.perf_counter() - clock
+
+    def drop_maps(self) -> None:
+        """Once the result is written: its maps go, so that a run keeps no
+        frame's maps through the next one (the cache keeps those a later
+        frame can reuse)."""
+        if self.result is not None:
+            self.result = replace(self.result, maps={})
 
     def start(self) -> None:
         self._thread = threading.Thread(target=self.run, name="caustic render", daemon=True)

@@ -57,6 +57,7 @@ class CAUSTIC_OT_render_animation(FrameRange, EngineOperator, bpy.types.Operator
         self._warn(job.result.warnings)
         self._reused += bool(job.result.stats["maps_cached"])
         self._seconds += job.seconds
+        job.drop_maps()
 
     def _status(self, runner: JobRunner) -> str:
         return (f"Caustics: frame {runner.step} ({len(runner.done) + 1} of {len(runner.steps)}), {runner.stage} "

@@ -84,6 +84,7 @@ class BakeFrames(FrameRange, EngineOperator):
         self._warn(self._read.warnings + job.result.warnings)
         self._seconds += job.seconds
         record_run(bpy.context.scene.caustic, job)
+        job.drop_maps()
 
     def _wire(self, frames: list[int]) -> None:
         """Each receiver's material shows its sequence from the first frame baked for len(`frames`) frames."""

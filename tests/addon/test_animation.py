@@ -4,6 +4,7 @@ undo, and the inputs it refuses."""
 
 import os
 import subprocess
+import weakref
 
 import bpy
 import numpy as np
@@ -105,6 +106,38 @@ def test_unchanged_frames_reuse_the_maps_and_a_static_scene_gives_identical_fram
     addon.jobs.MAP_CACHE.clear()
     assert bpy.ops.caustic.render_animation(filepath=str(tmp_path / "again_#"), frame_end=1) == {'FINISHED'}
     assert (tmp_path / "again_1.exr").read_bytes() == first
+
+
+def maps_held_at_each_lamp_pass(cache, monkeypatch, run) -> list[int]:
+    """How many maps of earlier frames are alive as each frame's lamp pass
+    starts (MapCache.make_room), over `run()`."""
+    cache.clear()
+    put, make_room = cache.put, cache.make_room
+    traced, held = [], []
+
+    def keep_track(key, value):
+        traced.extend(weakref.ref(imap) for imap in value[0].values())
+        put(key, value)
+
+    def count_held(key):
+        make_room(key)
+        held.append(sum(ref() is not None for ref in traced))
+
+    monkeypatch.setattr(cache, "put", keep_track)
+    monkeypatch.setattr(cache, "make_room", count_held)
+    run()
+    return held
+
+
+def test_no_frame_s_maps_are_held_while_the_next_frame_traces_its_own(tmp_path, addon, monkeypatch):
+    """Bug: the last frame written kept its result whole for the run's
+    closing report, maps too, so each frame's maps were held while the
+    next one traced its own (85 MB of the pool's peak, and the second
+    frame's page faults)."""
+    moving_glass()
+    held = maps_held_at_each_lamp_pass(addon.jobs.MAP_CACHE, monkeypatch, lambda: bpy.ops.caustic.render_animation(
+        filepath=str(tmp_path / "f_#")))
+    assert held == [0, 0, 0]
 
 
 def test_undo_after_render_animation_keeps_the_frames(tmp_path):

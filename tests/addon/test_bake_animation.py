@@ -13,7 +13,7 @@ import pytest
 
 import blender_scenes as scenes
 from snapshot import material_state, snapshot_file
-from test_animation import file_pixels
+from test_animation import file_pixels, maps_held_at_each_lamp_pass
 from test_render import cycles_render
 
 
@@ -136,3 +136,13 @@ def test_bake_while_rendering_gives_each_frame_its_own_caustic(tmp_path):
     assert np.abs(held[2] - sequence[2])[..., :3].max() > 0.1
     # the last frame's bake stays in the material, as Bake Caustics leaves it
     assert bpy.data.images["Caustic Map Floor"].source != 'SEQUENCE'
+
+
+def test_only_the_first_frame_s_maps_are_held_while_a_frame_traces(tmp_path, addon, monkeypatch):
+    """The bake keeps the first frame's map of each receiver (a later
+    frame's chart is checked against it) and no other: the last frame
+    baked kept its maps until the next was traced (the bug
+    test_animation's test names)."""
+    sliding_ball(tmp_path)
+    held = maps_held_at_each_lamp_pass(addon.jobs.MAP_CACHE, monkeypatch, bpy.ops.caustic.bake_animation)
+    assert held == [0, 1, 1]
