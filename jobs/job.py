@@ -11,7 +11,7 @@ from dataclasses import replace
 
 from ..caustic_addon import Cancelled, MapCache, RenderResult, RenderSettings, Scene, SceneError, render
 
-# Illumination maps of the last renders: a camera move re-runs only the eye pass.
+# Illumination maps of the last scene rendered: a camera move re-runs only the eye pass.
 MAP_CACHE = MapCache()
 
 

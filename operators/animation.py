@@ -2,8 +2,8 @@
 to its own file by Blender's output-path rules, in the scene's format
 (writeback.output). Esc stops after the frame being rendered and keeps the
 frames written; a second Esc stops that frame too. A frame whose
-geometry, lamps and settings of the lamp pass are those of an earlier one
-reuses its maps (jobs.MAP_CACHE). The scene's current frame is put back."""
+geometry, lamps and settings of the lamp pass are those of the frame
+before reuses its maps (jobs.MAP_CACHE keeps the last scene's). The scene's current frame is put back."""
 
 import bpy
 
