@@ -145,25 +145,31 @@ def lobe_sample1(normal, tangent, bitangent, view, alpha, disc_x, disc_y):
 
 
 @inline
-def curve_at1(curve, x):
-    """np.interp(x, nodes, curve) over the nodes i / (k - 1) of a table of
-    k values, 0 <= x <= 1 (Cycles' lookup_table_read), the same arithmetic
-    as numpy's: slope (x - x_j) + y_j between the nodes x_j <= x < x_j+1."""
-    k = len(curve)
-    if x >= 1.0:
-        return curve[k - 1]
-    if x <= 0.0:
-        return curve[0]
-    j = min(int(x * (k - 1)), k - 2)
+def curve_node1(k, x):
+    """The node j of a table of k values at nodes i / (k - 1) that
+    `curve_at1` interpolates from at 0 <= x <= 1: x_j <= x < x_j+1, j <= k - 2."""
+    j = min(max(int(x * (k - 1)), 0), k - 2)
     while j > 0 and j / (k - 1) > x:
         j -= 1
     while j < k - 2 and (j + 1) / (k - 1) <= x:
         j += 1
+    return j
+
+
+@inline
+def curve_at1(y0, y1, j, k, x):
+    """np.interp(x, nodes, curve) over the nodes i / (k - 1) of a table of
+    k values, 0 <= x <= 1 (Cycles' lookup_table_read), from the values y0,
+    y1 at its nodes j, j + 1 (curve_node1), the same arithmetic as numpy's:
+    slope (x - x_j) + y_j between the nodes. The caller reads the table: a
+    helper that reads an array under a branch or a loop costs its kernel an
+    atomic reference count a call (tracing.accelerator.inside1)."""
     lo = j / (k - 1)
-    if lo == x:
-        return curve[j]
-    slope = (curve[j + 1] - curve[j]) / ((j + 1) / (k - 1) - lo)
-    return slope * (x - lo) + curve[j]
+    if x >= 1.0:
+        return y1
+    if x <= lo:
+        return y0
+    return (y1 - y0) / ((j + 1) / (k - 1) - lo) * (x - lo) + y0
 
 
 def _node(value: float, count: int) -> tuple[int, float]:
@@ -290,21 +296,18 @@ def _gain1(fss, e_avg, missing):
 
 
 @inline
-def toward1(cos_v, s_curve, e_curve, f0, fss, e_avg, multiscatter):
-    """(gain (3-tuple), diffuse) of a layer seen from the cosine `cos_v`:
-    the multiple-scattering gain 1 + F_ms (1 - E) / E of the lobe,
+def toward1(mu, s, e, f0, fss, e_avg, multiscatter):
+    """(gain (3-tuple), diffuse) of a layer seen at `mu`, the cosine of
+    its view clamped to 0..1, where its curves read `s` and `e`: the
+    multiple-scattering gain 1 + F_ms (1 - E) / E of the lobe,
     F_ms = F_ss E_avg / (1 - F_ss (1 - E_avg)), (1 without `multiscatter`)
     and the share of the diffuse base the layer leaves,
     1 - max over channels of the layer's albedo F0 + (1 - F0) s times its
     darkening gain / (1 + (1 - E) / E), clamped to 0..1
-    (closure_layering_weight); E and s read from their curves at mu =
-    cos_v (curve_at1), E floored at DIVISION_FLOOR. `f0`, `fss` 3-tuples."""
-    mu = min(max(cos_v, 0.0), 1.0)
-    s = curve_at1(s_curve, mu)
+    (closure_layering_weight), E floored at DIVISION_FLOOR. `f0`, `fss` 3-tuples."""
     albedo = (f0[0] + (1.0 - f0[0]) * s, f0[1] + (1.0 - f0[1]) * s, f0[2] + (1.0 - f0[2]) * s)
     if not multiscatter:
         return (1.0, 1.0, 1.0), min(max(1.0 - max_channel1(albedo), 0.0), 1.0)
-    e = curve_at1(e_curve, mu)
     missing = (1.0 - e) / max(e, DIVISION_FLOOR)
     gain = (_gain1(fss[0], e_avg, missing), _gain1(fss[1], e_avg, missing), _gain1(fss[2], e_avg, missing))
     darkening = 1.0 + missing
@@ -315,8 +318,13 @@ def toward1(cos_v, s_curve, e_curve, f0, fss, e_avg, multiscatter):
 @kernel("void(f8[::1], f8[::1], f8[::1], f8[::1], f8[::1], f8, b1, f8[:, ::1], f8[::1])")
 def _toward(cos_v, s_curve, e_curve, f0, fss, e_avg, multiscatter, gain, diffuse):
     f0_t, fss_t = (f0[0], f0[1], f0[2]), (fss[0], fss[1], fss[2])
+    ks, ke = len(s_curve), len(e_curve)
     for i in range(len(cos_v)):
-        g, diffuse[i] = toward1(cos_v[i], s_curve, e_curve, f0_t, fss_t, e_avg, multiscatter)
+        mu = min(max(cos_v[i], 0.0), 1.0)
+        js, je = curve_node1(ks, mu), curve_node1(ke, mu)
+        s = curve_at1(s_curve[js], s_curve[js + 1], js, ks, mu)
+        e = curve_at1(e_curve[je], e_curve[je + 1], je, ke, mu)
+        g, diffuse[i] = toward1(mu, s, e, f0_t, fss_t, e_avg, multiscatter)
         gain[i, 0], gain[i, 1], gain[i, 2] = g
 
 

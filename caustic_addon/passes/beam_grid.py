@@ -222,10 +222,11 @@ def _boundary_point(row, col, size, j):
 
 @inline
 def _is_traced(traced, key, hint):
-    """(whether vertex `key` is in `traced (n,)`, ascending; where it is or
-    would be), searched from index `hint`."""
+    """(whether vertex `key` is in `traced (n,)`, ascending, which holds
+    at least the cells' corners, so is not empty; where it is or would be),
+    searched from index `hint`."""
     at = _search_from(traced, key, hint)
-    return at < len(traced) and traced[at] == key, at
+    return (at < len(traced)) & (traced[min(at, len(traced) - 1)] == key), at
 
 
 def crack_free_triangles(cells: Cells, width: int, traced: np.ndarray):

@@ -183,7 +183,8 @@ class Contacts:
 @inline
 def in_box1(lo, hi, o, p):
     """The point `p` lies in the box `lo[o]`..`hi[o]` ((objects,3)) of object `o`."""
-    return (lo[o, 0] <= p[0] <= hi[o, 0]) and (lo[o, 1] <= p[1] <= hi[o, 1]) and (lo[o, 2] <= p[2] <= hi[o, 2])
+    return ((lo[o, 0] <= p[0]) & (p[0] <= hi[o, 0]) & (lo[o, 1] <= p[1]) & (p[1] <= hi[o, 1])
+            & (lo[o, 2] <= p[2]) & (p[2] <= hi[o, 2]))
 
 
 @kernel("i8(i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], f8, f8[:, ::1], f8[:, ::1], "

@@ -20,19 +20,23 @@ name: `caustic_addon` for the CLI and the engine's tests,
 engine's source, since numba would not see an edit to a function that a
 kernel calls from another module. Inside, a kernel's files sit by its
 module's folder in the engine, so that a cache made in another place (the
-zip's) is found. Kernels are compiled for the platform's baseline CPU
-(numba's "generic", set for the whole process unless it was set before),
-not for this machine's, so one cache serves every machine of a platform; on this project's kernels, measured as fast as code
-for the host CPU (README, Compiled kernels). Arrays must match the
-signature exactly (`f8[:, ::1]` is C-contiguous float64): a kernel never
-compiles again for other types.
+zip's) is found. Kernels are compiled for the oldest CPU of the platform
+that Blender runs on (set for the whole process unless it was set
+before), not for this machine's, so one cache serves every machine of a
+platform: on x86-64 that is x86-64-v2, SSE4.2 and what comes with it,
+which Blender requires since 4.2 (its creator_cpu_check.cc); elsewhere
+numba's "generic". numba's generic x86-64 has no SSE4.1 rounding, so
+each floor and fmod was a call into numba's helper library (README,
+Compiled kernels). Arrays must match the signature exactly (`f8[:, ::1]`
+is C-contiguous float64): a kernel never compiles again for other types.
 
-Scalar helpers that kernels call (`@inline`) compile into each kernel."""
+Scalar helpers that kernels call (`@inline`) are inlined into each kernel."""
 
 from __future__ import annotations
 
 import functools
 import hashlib
+import platform
 import shutil
 import threading
 from pathlib import Path
@@ -150,7 +154,8 @@ class _EngineCacheLocator(caching._CacheLocator):
 
 caching.CacheImpl._locator_classes.insert(0, _EngineCacheLocator)
 if numba.config.CPU_NAME is None:
-    numba.config.CPU_NAME, numba.config.CPU_FEATURES = "generic", ""
+    numba.config.CPU_NAME = "x86-64-v2" if platform.machine().lower() in ("x86_64", "amd64") else "generic"
+    numba.config.CPU_FEATURES = ""
 
 
 def kernel(*signatures: str):
@@ -163,8 +168,14 @@ def kernel(*signatures: str):
 
 
 def inline(func):
-    """A scalar helper for kernels, compiled into each kernel that calls it."""
-    return numba.njit(nogil=True)(func)
+    """A scalar helper for kernels, inlined into each kernel that calls it
+    in numba's own IR: a call to a compiled function takes an atomic
+    reference count of each array it is passed, which both threads'
+    kernels contend for on a shared table. Inlined, a helper still takes
+    one where it reads an array under a branch or in a loop, so helpers
+    read arrays unconditionally (tracing.accelerator.inside1) or leave the
+    reading to their kernel (optics.principled.curve_at1)."""
+    return numba.njit(nogil=True, inline="always")(func)
 
 
 def compile_kernels() -> int:

@@ -97,3 +97,38 @@ def test_a_kernel_refuses_arrays_its_signatures_do_not_name():
     corners = np.zeros((2, 3, 4))[:, :, :2]
     with pytest.raises(TypeError):
         _accumulate(acc, 4, 4, corners, np.ones((2, 1)))
+
+
+# Every kernel compiled afresh (cached code cannot be inspected), and what
+# its code does per row that it need not.
+INSPECT = """
+import collections, json, platform, re, sys
+from caustic_addon.util import jit
+jit.use_kernel_cache(sys.argv[1])
+jit.compile_kernels()
+counted, helpers = {}, {}
+for declared in jit._KERNELS:
+    for result in declared.compiled().overloads.values():
+        name = f"{declared.func.__module__}.{declared.func.__name__}"
+        increfs = collections.Counter(re.findall(r"@NRT_incref\\(ptr %arg\\.(\\w+)\\.0\\)", result.library.get_llvm_str()))
+        code = declared.func.__code__
+        counted[name] = sorted(arg for arg in code.co_varnames[:code.co_argcount] if increfs[arg] > 1)
+        helpers[name] = sorted(set(re.findall(r"numba_(?:floor|ceil|fmod)", result.library.get_asm_str())))
+print(json.dumps({"x86": platform.machine().lower() in ("x86_64", "amd64"),
+                  "counted": {k: v for k, v in counted.items() if v}, "helpers": {k: v for k, v in helpers.items() if v}}))
+"""
+
+
+def test_no_kernel_takes_an_array_s_reference_again_for_each_row(tmp_path):
+    """A kernel takes one atomic reference count of each array it is
+    passed, as it starts. An inlined helper that read an array under a
+    branch took one more at each call, so at each row: `inside1` did in
+    the bounce's `_oriented`, where the two threads fought over the shared
+    table of bodies, 5% of an animated pool's frame; so did the curves of
+    a Principled layer, the boxes of contacts and the traced vertices of
+    a beam grid (util.jit.inline). And on x86-64 the kernels round with
+    the CPU's own instructions, not calls into numba's helper library."""
+    inspected = compile_in_a_new_process(tmp_path, INSPECT)
+    assert inspected["counted"] == {}
+    if inspected["x86"]:
+        assert inspected["helpers"] == {}
