@@ -99,6 +99,7 @@ class EyeTracer:
         self.accel, self.scene, self.materials, self.maps = accel, scene, materials, maps
         self.holdout, self.adaptive_shadows = holdout, not edge_pass
         self.environment, self.sky_paths, self.settings = environment, sky_paths, settings
+        self.dark_world = scene.world.is_black
         self.energy, self.spp = settings.energy, spp
         self.stratum = 1.0 / math.sqrt(spp)
         self.pixels = np.ascontiguousarray(pixels, dtype=np.int64)
@@ -126,7 +127,8 @@ class EyeTracer:
         self.first[rays.ids[camera]] = hits.obj[camera]
 
     def escaped(self, rays: Paths) -> None:
-        self._add("ambient", rays.ids, rays.weight, self.environment.radiance(rays.dirs))
+        if not self.dark_world:
+            self._add("ambient", rays.ids, rays.weight, self.environment.radiance(rays.dirs))
 
     def _cut_out(self, rays: Paths, hits: Hits) -> np.ndarray:
         """(n,) bool: the camera rays that met a holdout, their weight added
@@ -170,7 +172,7 @@ class EyeTracer:
             irradiance = self._caustic(imap, index, here, at, pixel[on_map])
             caustic[on_map] = irradiance * take_rows(on_map, diffuse)[0] / math.pi
         ambient = self.scene.ambient * diffuse
-        if not self.scene.world.is_black:
+        if not self.dark_world:
             chance = None if self.sky_paths is None else self.sky_paths.chances(diffuse, direct + caustic)
             seen, through = world_light(accel, self.environment, points, shading, facing, view, lobe, self.far,
                                         pixel, stratum, settings.world_samples, settings.seed, self.sky_paths,
