@@ -121,7 +121,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         if bad.any():
             warnings.append(f"{int(bad.sum())} non-finite values in the {name} pass were set to 0")
             buf[bad] = 0.0
-        passes[name] = buf.reshape(cam.pixy, cam.pixx, 3).astype(np.float32)
+        passes[name] = buf.reshape(cam.pixy, cam.pixx, 3)
     image = np.empty((cam.pixy, cam.pixx, 4), dtype=np.float32)
     image[..., :3] = sum(passes[name] for name in PASSES)
     image[..., 3] = 1.0 - buffers[HOLDOUT].mean(axis=1).reshape(cam.pixy, cam.pixx)

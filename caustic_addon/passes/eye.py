@@ -308,14 +308,15 @@ def shown_light(first: np.ndarray, buffers: dict[str, np.ndarray], specular_surf
     """(m,) what each of m pixels shows (max channel of its passes' sum),
     its caustic counted only in the share of its samples `first (m,s)`
     that met a specular surface first (`specular_surface (objects,)`): the
-    caustic a camera ray sees on a receiver is already its footprint's mean."""
+    caustic a camera ray sees on a receiver is already its footprint's mean.
+    `buffers` the pass buffers, (m,3) float32 each."""
     out = np.empty(len(first))
     _shown_light(np.ascontiguousarray(first, dtype=np.int64), buffers["direct"], buffers["ambient"],
                  buffers["caustic"], np.ascontiguousarray(specular_surface, dtype=bool), out)
     return out
 
 
-@kernel("void(i8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1])")
+@kernel("void(i8[:, ::1], f4[:, ::1], f4[:, ::1], f4[:, ::1], b1[::1], f8[::1])")
 def _shown_light(first, direct, ambient, caustic, specular_surface, out):
     """shown_light into `out (m,)`; a channel that is not a number makes
     the pixel's light not a number, as numpy's max would."""
@@ -343,7 +344,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     silhouette, a shadow's edge, an edge seen through glass), which replace
     its first ones and cast all of a small lamp's shadow rays. The world's
     light through the casters is the `sky`'s, the world without its sun.
-    Returns the pass buffers and the holdout's, each (pixels, 3)."""
+    Returns the pass buffers and the holdout's, each (pixels, 3) float32."""
     cam = scene.camera
     pixels = cam.pixx * cam.pixy
     camera_medium = int(accel.medium_at(cam.position[None])[0])
@@ -374,7 +375,8 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
                                                 relative_floor(weight), camera=True), settings.max_depth, tracer)
             return first, tracer
 
-        buffers = {name: np.zeros((len(pixel_list), 3)) for name in (*PASSES, HOLDOUT)}
+        # float32, as the image keeps them: a chunk's tracer sums each pixel's samples in float64
+        buffers = {name: np.zeros((len(pixel_list), 3), dtype=np.float32) for name in (*PASSES, HOLDOUT)}
         first_objects = np.full(len(pixel_list) * spp, MISS)
 
         def add(done) -> None:
