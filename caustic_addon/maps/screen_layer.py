@@ -141,7 +141,9 @@ def _image_triangles(corners, to_camera, inverse_pixel, centre_x, centre_y, clip
     for t in range(len(corners)):
         n = 0
         for k in range(3):
-            a, b = corners[t, k], corners[t, (k + 1) % 3]
+            # the corners' values, not views of `corners`: a view takes a reference to it (util.jit.inline)
+            a = (corners[t, k, 0], corners[t, k, 1])
+            b = (corners[t, (k + 1) % 3, 0], corners[t, (k + 1) % 3, 1])
             da = -(to_camera[2, 0] * a[0] + to_camera[2, 1] * a[1] + to_camera[2, 2]) - clip
             db = -(to_camera[2, 0] * b[0] + to_camera[2, 1] * b[1] + to_camera[2, 2]) - clip
             if da >= 0.0:
