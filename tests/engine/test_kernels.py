@@ -106,16 +106,16 @@ import collections, json, platform, re, sys
 from caustic_addon.util import jit
 jit.use_kernel_cache(sys.argv[1])
 jit.compile_kernels()
-counted, helpers = {}, {}
+counted, helpers = collections.defaultdict(set), collections.defaultdict(set)
 for declared in jit._KERNELS:
+    name, code = f"{declared.func.__module__}.{declared.func.__name__}", declared.func.__code__
     for result in declared.compiled().overloads.values():
-        name = f"{declared.func.__module__}.{declared.func.__name__}"
         increfs = collections.Counter(re.findall(r"@NRT_incref\\(ptr %arg\\.(\\w+)\\.0\\)", result.library.get_llvm_str()))
-        code = declared.func.__code__
-        counted[name] = sorted(arg for arg in code.co_varnames[:code.co_argcount] if increfs[arg] > 1)
-        helpers[name] = sorted(set(re.findall(r"numba_(?:floor|ceil|fmod)", result.library.get_asm_str())))
+        counted[name].update(arg for arg in code.co_varnames[:code.co_argcount] if increfs[arg] > 1)
+        helpers[name].update(re.findall(r"numba_(?:floor|ceil|fmod)", result.library.get_asm_str()))
 print(json.dumps({"x86": platform.machine().lower() in ("x86_64", "amd64"),
-                  "counted": {k: v for k, v in counted.items() if v}, "helpers": {k: v for k, v in helpers.items() if v}}))
+                  "counted": {k: sorted(v) for k, v in counted.items() if v},
+                  "helpers": {k: sorted(v) for k, v in helpers.items() if v}}))
 """
 
 
@@ -126,7 +126,8 @@ def test_no_kernel_takes_an_array_s_reference_again_for_each_row(tmp_path):
     the bounce's `_oriented`, where the two threads fought over the shared
     table of bodies, 5% of an animated pool's frame; so did the curves of
     a Principled layer, the boxes of contacts and the traced vertices of
-    a beam grid (util.jit.inline). And on x86-64 the kernels round with
+    a beam grid, and under Python 3.11 the screen layer's views of a
+    beam's corners (util.jit.inline). And on x86-64 the kernels round with
     the CPU's own instructions, not calls into numba's helper library."""
     inspected = compile_in_a_new_process(tmp_path, INSPECT)
     assert inspected["counted"] == {}
