@@ -68,14 +68,49 @@ def physical_memory() -> Optional[float]:
         return None
 
 
-def refusal(scene: Scene, settings: RenderSettings, memory: Optional[float] = None) -> Optional[str]:
-    """Why the render cannot fit in `memory` bytes (this machine's by
-    default), naming what it needs and what takes most; None if it fits."""
-    memory = physical_memory() if memory is None else memory
+def memory_limit() -> tuple[Optional[float], str]:
+    """(bytes, whose) this process may still take: the machine's memory, or
+    less where a container's memory limit (cgroup v2 memory.max) or an
+    address-space limit (ulimit -v, less what the process has mapped
+    already) says so; (None, "") where nothing says."""
+    limits = []
+    memory = physical_memory()
+    if memory is not None:
+        limits.append((memory, "this machine's"))
+    try:
+        text = open("/sys/fs/cgroup/memory.max", encoding="ascii").read().strip()
+        if text != "max":
+            limits.append((float(text), "this container's"))
+    except (OSError, ValueError):
+        pass
+    try:
+        import resource
+        soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if soft != resource.RLIM_INFINITY:
+            mapped = next((float(line.split()[1]) * 1024.0 for line in open("/proc/self/status", encoding="ascii")
+                           if line.startswith("VmSize:")), 0.0)
+            limits.append((max(float(soft) - mapped, 0.0), "the address space left under this process's limit"))
+    except (ImportError, OSError, ValueError):
+        pass
+    return min(limits, key=lambda limit: limit[0]) if limits else (None, "")
+
+
+def refusal(scene: Scene, settings: RenderSettings, memory: Optional[float] = None,
+            besides: Optional[dict[str, tuple[float, str]]] = None) -> Optional[str]:
+    """Why the render cannot fit in `memory` bytes (memory_limit()'s by
+    default), naming what it needs and what takes most, and what to lower;
+    None if it fits. `besides`: what the caller holds too, by part, in
+    bytes with what to lower for it (the add-on's images of the render)."""
+    whose = "the given"
+    if memory is None:
+        memory, whose = memory_limit()
     parts = needed_bytes(scene, settings)
+    remedy = dict(_REMEDY)
+    for name, (size, lower) in (besides or {}).items():
+        parts[name], remedy[name] = size, lower
     total = sum(parts.values())
     if memory is None or total <= memory:
         return None
     largest = max(parts, key=parts.get)
-    return (f"this render needs about {total / 1e9:,.1f} GB of memory, more than this machine's "
-            f"{memory / 1e9:,.1f} GB; {parts[largest] / 1e9:,.1f} GB of it for {largest}: {_REMEDY[largest]}")
+    return (f"this render needs about {total / 1e9:,.1f} GB of memory, more than {whose} "
+            f"{memory / 1e9:,.1f} GB; {parts[largest] / 1e9:,.1f} GB of it for {largest}: {remedy[largest]}")

@@ -21,10 +21,12 @@ from .passes.camera_rays import image_view
 from .passes.eye import HOLDOUT, PASSES, eye_pass
 from .passes.lamp_pass import LampPassStats, lamps_in_glass
 from .passes.photon import photon_pass
-from .scene import RenderSettings, Scene
+from .scene import AreaLight, RenderSettings, Scene, SunLight
 from .scene.material_table import Materials
 from .scene.validate import rough_caster_warnings, validate_scene
 from .tracing.accelerator import Accelerator
+from .tracing.hits import MISS
+from .util import heap
 from .util.parallel import Cancel, Monitor, Progress
 
 # Share of the progress bar given to the pass from the lamps when both run.
@@ -62,6 +64,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
     too_large = refusal(scene, settings)
     if too_large is not None:
         raise SceneError(too_large)
+    heap.reuse_freed_memory()
     monitor = Monitor(progress, cancel)
     seconds = {}
     # an environment's sun is a lamp, the rest of the world the sky the eye
@@ -85,7 +88,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         if cached is None:
             if cache is not None:
                 cache.make_room(key)
-            warnings += lamps_in_glass(scene, accel)
+            warnings += lamps_in_glass(scene, accel) + lamps_on_surfaces(scene, accel)
             maps = build_maps(scene, settings, warnings, view)
             run_lamps = bool(maps) and bool(scene.casters) and settings.lamp_rays > 0
             share = _LAMP_SHARE if run_lamps else 0.0
@@ -138,3 +141,20 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         "triangles": int(len(accel.owner)),
     }
     return RenderResult(image, passes, {m.name: m for m in maps.values()}, stats, warnings)
+
+
+def lamps_on_surfaces(scene: Scene, accel: Accelerator) -> list[str]:
+    """A warning for each point, spot or area lamp whose centre lies on a
+    surface, within the tracing epsilon: its rays start on that surface and
+    meet it at once, so it sends no light through the casters."""
+    lamps = [light for light in scene.lights if not isinstance(light, SunLight)]
+    if not lamps:
+        return []
+    centres = np.array([light.center if isinstance(light, AreaLight) else light.position for light in lamps])
+    warnings = []
+    for light, obj in zip(lamps, accel.surface_at(centres).tolist()):
+        if obj != MISS:
+            warnings.append(f"lamp '{light.name}' lies on '{scene.objects[obj].body_name}' (within the tracing "
+                            f"epsilon, {accel.epsilon:.2g} m): its rays start on that surface and stop there at "
+                            "once, so it casts no caustics and may light nothing; move it off the surface")
+    return warnings

@@ -14,10 +14,31 @@ def render_size(render) -> tuple[int, int]:
             render.resolution_y * render.resolution_percentage // 100)
 
 
-def read_camera(scene, depsgraph) -> Camera:
-    """The active camera at the render resolution."""
+def check_camera(scene) -> None:
+    """InputError unless the scene has a camera that is a camera object."""
     if scene.camera is None:
         raise InputError("The scene has no active camera")
+    if scene.camera.type != 'CAMERA':
+        kind = (f"{scene.camera.data.type.lower()} light" if scene.camera.type == 'LIGHT'
+                else f"object of type {scene.camera.type.lower()}")
+        kind = ("an " if kind[0] in "aeiou" else "a ") + kind
+        raise InputError(f"The scene's camera '{scene.camera.name}' is {kind}, not a camera: choose a camera "
+                         "object in Scene Properties > Camera")
+
+
+def check_render_size(render) -> None:
+    """InputError unless the render size is at least one pixel each way:
+    Blender would only say "Image too small"."""
+    pixx, pixy = render_size(render)
+    if pixx < 1 or pixy < 1:
+        raise InputError(f"The render size is {pixx} x {pixy} pixels (Resolution {render.resolution_x} x "
+                         f"{render.resolution_y} at {render.resolution_percentage}%): raise Resolution % or the "
+                         "resolution X and Y (Output Properties) to make it at least 1 x 1")
+
+
+def read_camera(scene, depsgraph) -> Camera:
+    """The active camera at the render resolution."""
+    check_camera(scene)
     camera = scene.camera.evaluated_get(depsgraph)
     data = camera.data
     if data.type not in ('PERSP', 'ORTHO'):

@@ -45,15 +45,16 @@ def engine_light(ob_eval, matrix: np.ndarray, name: str, warnings: list[str]):
     # an area lamp's area), so the engine's power is that much more
     normalized = getattr(light, "normalize", True)
     position, down = matrix[:3, 3], -matrix[:3, 2]
+    # Blender keeps angles in float32, whose pi is a hair above math.pi: 180 degrees is math.pi
     if light.type == 'SUN':
-        if not normalized and light.angle > 0.0:
-            power *= math.pi * math.sin(0.5 * light.angle) ** 2
-        return SunLight(down, power, color, name=name, angle=light.angle)
+        angle = min(light.angle, math.pi)
+        if not normalized and angle > 0.0:
+            power *= math.pi * math.sin(0.5 * angle) ** 2
+        return SunLight(down, power, color, name=name, angle=angle)
     if light.type == 'AREA':
         shape, own_y = AREA_SHAPES[light.shape]
         axis_x = matrix[:3, 0] * (0.5 * light.size)
         axis_y = matrix[:3, 1] * (0.5 * (light.size_y if own_y else light.size))
-        # Blender keeps the spread in float32, whose pi is a hair above math.pi
         spread = min(light.spread, math.pi)
         lamp = AreaLight(position, axis_x, axis_y, down, power, shape, spread, color, name=name)
         if not normalized:
@@ -64,5 +65,6 @@ def engine_light(ob_eval, matrix: np.ndarray, name: str, warnings: list[str]):
         power *= 4.0 * math.pi * radius ** 2 if radius > 0 else 4.0
     sized = dict(radius=radius, soft_falloff=light.use_soft_falloff)
     if light.type == 'SPOT':
-        return SpotLight(position, down, power, light.spot_size, light.spot_blend, color, name=name, **sized)
+        return SpotLight(position, down, power, min(light.spot_size, math.pi), light.spot_blend, color, name=name,
+                         **sized)
     return PointLight(position, power, color, name=name, **sized)

@@ -8,7 +8,7 @@ before reuses its maps (jobs.MAP_CACHE keeps the last scene's). The scene's curr
 import bpy
 
 from ..export import InputError, read_scene, render_settings
-from ..jobs import JobRunner, RenderJob, StepError
+from ..jobs import JobRunner, RenderJob, StepError, refusal
 from ..writeback.images import show_image, write_image
 from ..writeback.output import OutputError, check_writable, frame_paths, frame_range, save_frame
 from ..writeback.results import RESULT_IMAGE, write_result
@@ -44,6 +44,9 @@ class CAUSTIC_OT_render_animation(FrameRange, EngineOperator, bpy.types.Operator
     def _prepare(self, frame: int, settings) -> RenderJob:
         read = self._read_frame(frame, read_scene)
         self._warn(read.warnings)
+        too_large = refusal(read.scene, settings)
+        if too_large is not None:
+            raise StepError(f"Frame {frame}: {too_large}")
         return RenderJob(read.scene, settings)
 
     def _write(self, frame: int, job: RenderJob) -> None:

@@ -25,7 +25,7 @@ from bpy.app.handlers import persistent
 from ..export import InputError, render_settings
 from ..export.render_view import ENGINE as READER_ENGINE
 from ..jobs import RenderJob
-from ..writeback.images import write_image
+from ..writeback.images import own_image, write_image
 from ..writeback.bake import IMAGE_PREFIX, bake_maps, map_rgba
 from .bake import read_for_bake
 
@@ -102,7 +102,7 @@ def bake_rendered_frame(scene, depsgraph=None) -> None:
     if traced is None:
         return
     for name, imap in traced[1].maps.items():
-        image = bpy.data.images.get(IMAGE_PREFIX + name)
+        image = own_image(IMAGE_PREFIX + name)
         if image is None or image.source == 'SEQUENCE':
             continue
         if tuple(image.size) != imap.shape[::-1]:

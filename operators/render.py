@@ -8,10 +8,10 @@ execute()."""
 import bpy
 
 from ..export import InputError, read_scene, render_settings
-from ..jobs import JobRunner, RenderJob, StepError
+from ..jobs import JobRunner, RenderJob, StepError, refusal
 from ..writeback.images import show_image
 from ..writeback.output import OutputError, frame_paths, save_frame
-from ..writeback.results import RESULT_IMAGE, write_result
+from ..writeback.results import write_result
 from .engine_run import EngineOperator
 
 
@@ -36,12 +36,17 @@ class CAUSTIC_OT_render(EngineOperator, bpy.types.Operator):
         except InputError as exc:
             self.report({'ERROR'}, str(exc))
             return None
+        too_large = refusal(job.scene, job.settings)
+        if too_large is not None:
+            self.report({'ERROR'}, too_large[0].upper() + too_large[1:])
+            return None
         self._read = read
         return JobRunner([context.scene.frame_current], lambda frame: job, self._write)
 
     def _write(self, frame: int, job: RenderJob) -> None:
         context = bpy.context
         image = write_result(context.scene.caustic, job)
+        self._image = image.name
         show_image(context, image)
         for warning in self._read.warnings + job.result.warnings:
             self.report({'WARNING'}, warning)
@@ -53,7 +58,7 @@ class CAUSTIC_OT_render(EngineOperator, bpy.types.Operator):
                 path = frame_paths(context.scene, [frame], self.filepath)[frame]
             save_frame(context.scene, context.view_layer.name, image, job.result, path)
         except OutputError as exc:
-            raise StepError(f"Rendered into \"{RESULT_IMAGE}\" but {exc}") from exc
+            raise StepError(f"Rendered into \"{image.name}\" but {exc}") from exc
 
     def _done(self, context, runner: JobRunner) -> set:
         if runner.cancelled:
@@ -64,5 +69,5 @@ class CAUSTIC_OT_render(EngineOperator, bpy.types.Operator):
             return {'CANCELLED'}
         props = context.scene.caustic
         self.report({'INFO'}, f"Caustics rendered in {runner.last.seconds:.1f} s from "
-                              f"{props.last_lamp_rays:,} lamp rays into \"{RESULT_IMAGE}\"")
+                              f"{props.last_lamp_rays:,} lamp rays into \"{self._image}\"")
         return {'FINISHED'}

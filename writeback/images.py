@@ -11,6 +11,8 @@ from bpy.app.handlers import persistent
 PASS_NAMES = {"direct": "Direct", "caustic": "Caustic", "ambient": "Ambient"}
 # ID property: which write an image's packed EXR holds
 SERIAL = "caustic_pixels"
+# ID property: the name the add-on writes an image under ("Caustic Render"), whatever Blender named it
+OWNER = "caustic_image"
 # image name -> the write whose pixels are in that image's buffer
 _in_memory: dict[str, str] = {}
 
@@ -21,21 +23,35 @@ def working_colorspace() -> str:
     return colorspace.working_space if colorspace is not None else "Linear Rec.709"
 
 
+def own_image(name: str):
+    """The image the add-on writes under `name`, or None: the image of that
+    name if the add-on made it, else the one it made when another image
+    (the user's) had the name, which Blender then named "<name>.001"."""
+    image = bpy.data.images.get(name)
+    if image is not None and (image.get(OWNER) == name or SERIAL in image):  # SERIAL alone: an earlier version's
+        return image
+    return next((image for image in bpy.data.images if image.get(OWNER) == name), None)
+
+
 def write_image(name: str, rgba: np.ndarray, pack: bool = True):
-    """Image `name` (float, linear) holding `rgba (h,w,4)`: the existing one
-    if it can take it (a saved one too), else a new one. With `pack`, the
+    """The add-on's image `name` (own_image; float, linear) holding `rgba
+    (h,w,4)`, made if there is none; an image of the name that the add-on
+    did not make is never touched, and the one written may then be named
+    otherwise: report `image.name`. With `pack`, the
     pixels are packed as a float EXR: undo and redo rebuild images from the
     .blend's data, so pixels that are only in memory would come back blank
     (see `drop_stale_pixels`). Without, they are there only for Blender's
     file writers, until a packed write replaces them."""
     h, w = rgba.shape[:2]
-    image = bpy.data.images.get(name)
-    if image is not None and image.source == 'GENERATED':
-        if tuple(image.size) != (w, h) or not image.use_generated_float:
-            image.generated_width, image.generated_height = w, h
-            image.use_generated_float = True
-    elif image is None or tuple(image.size) != (w, h) or not image.is_float:
+    image = own_image(name)
+    if image is None:
         image = bpy.data.images.new(name, w, h, alpha=True, float_buffer=True)
+        image[OWNER] = name
+    elif tuple(image.size) != (w, h) or not image.is_float:
+        if image.source != 'GENERATED':  # packed, or saved by the user: a buffer of the new size
+            image.source = 'GENERATED'
+        image.generated_width, image.generated_height = w, h
+        image.use_generated_float = True
     if image.colorspace_settings.name != working_colorspace():
         image.colorspace_settings.name = working_colorspace()
     image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1], dtype=np.float32).ravel())

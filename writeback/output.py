@@ -5,26 +5,40 @@ is none), and the extension and format are the scene's (Output
 Properties); scene.render.frame_path applies all three. OpenEXR MultiLayer
 files hold the image and each pass.
 
-Each frame is written to a temporary file beside its final name and renamed
-once whole, so a write that fails (a full disk) leaves no half frame: a
-frame on disk is either the old file or the whole new one."""
+Each frame is written through the engine's `write_whole`: to a temporary
+file beside its final name, checked whole by its format's structure (some
+of Blender's writers, PNG's among them, say nothing when the disk fills
+up), and renamed, so a write that fails leaves no half frame: a frame on
+disk is either the old file or the whole new one.
+
+A file name whose extension names another image format than the scene's
+(still.exr while the output format is PNG) is written in the format it
+names."""
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import tempfile
-import uuid
 
 import bpy
 import numpy as np
 
-from ..caustic_addon import write_exr_channels
+from ..caustic_addon import WriteError, write_exr_channels
+from ..caustic_addon import write_whole as engine_write_whole
 from ..export.overrides import Overrides
 from .images import PASS_NAMES
 
 # Digits Blender appends to a path with no '#' (BLI_path_frame's default).
 DEFAULT_DIGITS = 4
+# File name extensions -> the image format Blender writes them in (BKE_image_path_ext_from_imformat)
+EXTENSION_FORMATS = {".png": 'PNG', ".jpg": 'JPEG', ".jpeg": 'JPEG', ".exr": 'OPEN_EXR', ".tif": 'TIFF',
+                     ".tiff": 'TIFF', ".bmp": 'BMP', ".tga": 'TARGA', ".rgb": 'IRIS', ".sgi": 'IRIS',
+                     ".hdr": 'HDR', ".jp2": 'JPEG2000', ".j2c": 'JPEG2000', ".dpx": 'DPX', ".cin": 'CINEON',
+                     ".webp": 'WEBP', ".avif": 'AVIF'}
+# Formats that share an extension: either is the format the extension names.
+_SAME_EXTENSION = {'OPEN_EXR_MULTILAYER': 'OPEN_EXR', 'TARGA_RAW': 'TARGA'}
 
 
 class OutputError(Exception):
@@ -59,6 +73,9 @@ def frame_paths(scene, frames: list[int], filepath: str = "") -> dict[int, str]:
     with Overrides() as overrides:
         if filepath:
             overrides.set(scene.render, "filepath", filepath)
+            if os.path.splitext(filepath)[1].lower() in EXTENSION_FORMATS:
+                # the extension given is kept, and names the format (file_format), as Blender would change it
+                overrides.set(scene.render, "use_file_extension", False)
         template = scene.render.filepath
         paths = {frame: scene.render.frame_path(frame=frame) for frame in frames}
     check_saved(template)
@@ -85,21 +102,13 @@ def check_writable(paths) -> None:
             raise OutputError(f"Cannot write the frames into the folder '{folder}': {exc.strerror or exc}") from exc
 
 
-def write_whole(path: str, write) -> None:
-    """`write(temporary path)`, then the file renamed to `path`; on failure
-    the temporary file is removed and OutputError says why."""
-    folder, name = os.path.split(path)
-    temporary = os.path.join(folder, f".{name}.{uuid.uuid4().hex[:8]}.part")
+def write_whole(path: str, write, file_format: str) -> None:
+    """`write(temporary path)` writes a `file_format` file, which the
+    engine's write_whole checks whole and renames to `path`; OutputError says why not."""
     try:
-        write(temporary)
-        if not os.path.isfile(temporary):
-            raise OSError("nothing was written")
-        os.replace(temporary, path)
-    except (OSError, RuntimeError) as exc:
-        if os.path.exists(temporary):
-            os.remove(temporary)
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else blender_reason(exc)
-        raise OutputError(f"could not write '{path}': {reason}") from exc
+        engine_write_whole(path, write, file_format)
+    except WriteError as exc:
+        raise OutputError(str(exc)) from exc
 
 
 def blender_reason(exc: RuntimeError) -> str:
@@ -110,7 +119,10 @@ def blender_reason(exc: RuntimeError) -> str:
 
 def write_float_exr(path: str, rgba: np.ndarray) -> None:
     """`rgba (h,w,4)`, row 0 at the top, as a float32 EXR written whole at `path`."""
-    write_whole(path, lambda temporary: write_exr_channels(temporary, {c: rgba[..., i] for i, c in enumerate("RGBA")}))
+    try:
+        write_exr_channels(path, {c: rgba[..., i] for i, c in enumerate("RGBA")})
+    except WriteError as exc:
+        raise OutputError(str(exc)) from exc
 
 
 def multilayer_channels(layer: str, image: np.ndarray, passes: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -123,12 +135,52 @@ def multilayer_channels(layer: str, image: np.ndarray, passes: dict[str, np.ndar
     return channels
 
 
+def file_format(scene, path: str) -> str:
+    """The image format `path` is written in: the scene's output format,
+    unless the file name's extension names another."""
+    scene_format = scene.render.image_settings.file_format
+    named = EXTENSION_FORMATS.get(os.path.splitext(path)[1].lower())
+    if named is None or named == _SAME_EXTENSION.get(scene_format, scene_format):
+        return scene_format
+    return named
+
+
 def save_frame(scene, layer: str, image, result, path: str) -> None:
-    """The rendered `result` (RenderResult) saved whole at `path` in the
-    scene's format: a multilayer EXR with every pass, or Blender's writer of
-    the format on `image` (the bpy image holding the result)."""
-    if scene.render.image_settings.file_format == 'OPEN_EXR_MULTILAYER':
-        write_whole(path, lambda temporary: write_exr_channels(
-            temporary, multilayer_channels(layer, result.image, result.passes)))
-    else:
-        write_whole(path, lambda temporary: image.save_render(temporary, scene=scene))
+    """The rendered `result` (RenderResult) saved whole at `path` in its
+    format (file_format): a multilayer EXR with every pass, or Blender's
+    writer of the format on `image` (the bpy image holding the result),
+    with the scene's settings of the format (colour depth, codec, colour
+    management)."""
+    settings = scene.render.image_settings
+    written = file_format(scene, path)
+    if written == 'OPEN_EXR_MULTILAYER':
+        channels = multilayer_channels(layer, result.image, result.passes)
+        try:
+            write_exr_channels(path, channels)
+        except WriteError as exc:
+            raise OutputError(str(exc)) from exc
+        return
+    scene_format = settings.file_format
+    with Overrides() as overrides:
+        if written != scene_format:
+            overrides.keep(settings, "color_depth", "color_mode", "exr_codec", "file_format")
+            if hasattr(settings, "media_type"):  # Blender 5: a multilayer EXR is a media type of its own
+                overrides.set(settings, "media_type", 'IMAGE')
+            try:
+                settings.file_format = written
+            except TypeError:
+                raise OutputError(f"'{os.path.basename(path)}' names the {written} format, which this Blender "
+                                  f"cannot write; the scene's output format is {scene_format}: give the "
+                                  "file that format's extension, or choose another output format") from None
+            if written == 'OPEN_EXR':  # the render's floats as they are, whatever depth the scene's format had
+                settings.color_depth = '32'
+
+        def write(temporary: str) -> None:
+            try:
+                image.save_render(temporary, scene=scene)
+            except RuntimeError as exc:
+                reason = blender_reason(exc)
+                full = reason == os.strerror(errno.ENOSPC)
+                raise OSError(errno.ENOSPC if full else errno.EIO, reason) from exc
+
+        write_whole(path, write, written)

@@ -13,7 +13,9 @@ def record_run(props, job) -> None:
 
 
 def write_result(props, job):
-    """The job's image and passes into "Caustic Render" and its passes, its figures into `props`. Returns the image."""
+    """The job's image and passes into "Caustic Render" and its passes (the
+    add-on's own: writeback.images.own_image), its figures into `props`.
+    Returns the image, whose name is the one to report."""
     image = write_image(RESULT_IMAGE, job.result.image)
     write_passes(RESULT_IMAGE, job.result.passes)
     record_run(props, job)

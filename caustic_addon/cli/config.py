@@ -364,8 +364,9 @@ def parse(text: str, name: str = "<config>") -> Config:
         floor=Object("Plane", shapes.plane(plane["size"], (0.0, 0.0, plane["height"])), Diffuse(plane["albedo"])),
         lamp=_lamp(lamp, name),
         material=(Reflector(obj["color"], obj["roughness"]) if obj["material"] == "reflector"
-                  else Dielectric(obj["ior"], obj["color"], _glass_absorption(obj, document, name), obj["abbe"],
-                                  obj["roughness"])),
+                  else Dielectric(obj["ior"], reflection_tint=obj["color"], transmission_tint=obj["color"],
+                                  absorption=_glass_absorption(obj, document, name), abbe=obj["abbe"],
+                                  roughness=obj["roughness"])),
         placement=placement,
         ambient=render["ambient"],
         world=render["world"],

@@ -5,8 +5,13 @@
 scene.toml is described in config.py (and examples/paper.toml); the mesh is
 a Wavefront OBJ file. The image is written as 8-bit sRGB PNG or float32
 OpenEXR by its extension. Progress goes to stderr, as a bar redrawn in place
-on a terminal, then one summary line and any warnings. Bad input prints
-`error: <message>` on stderr and exits with status 2.
+on a terminal, then one summary line and any warnings. Bad input, and an
+image that cannot be written whole (written to a temporary file, checked
+and renamed: files.py), prints `error: <message>` on stderr and exits with
+status 2. Ctrl-C stops the render between chunks (a second stops it at
+once), writes nothing, and exits with status 130, as a shell reports a
+program that SIGINT ended; an earlier image at the output's path is left as
+it was.
 """
 
 from __future__ import annotations
@@ -14,16 +19,19 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import signal
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import Optional, TextIO
 
-from ..errors import SceneError
+from ..errors import Cancelled, SceneError
 from ..renderer import render
-from . import config, image_io, obj
+from . import config, files, image_io, obj
 
 EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 128 + signal.SIGINT
 
 # Exceptions whose message tells the user what to fix; anything else is a bug.
 _BAD_INPUT = (config.ConfigError, obj.ObjError, image_io.ImageFormatError, SceneError)
@@ -95,6 +103,34 @@ class ProgressBar:
             self.stream.write("\n")
 
 
+class Interrupt:
+    """Ctrl-C while a render runs: the first asks it to stop between chunks
+    (the render's `cancel`), a second stops it at once (KeyboardInterrupt).
+    A context manager; Python's own handling is put back on leaving, and
+    left alone off the main thread, where no signal handler can be set."""
+
+    def __init__(self):
+        self.asked = False
+        self._previous = None
+
+    def __call__(self) -> bool:
+        return self.asked
+
+    def _handle(self, signum, frame) -> None:
+        if self.asked:
+            raise KeyboardInterrupt
+        self.asked = True
+
+    def __enter__(self) -> "Interrupt":
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._handle)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+
+
 def run_render(args: argparse.Namespace, err: TextIO) -> None:
     """The `render` command; raises one of _BAD_INPUT for bad input."""
     image_io.check_format(args.output)
@@ -112,7 +148,8 @@ def run_render(args: argparse.Namespace, err: TextIO) -> None:
     clock = time.perf_counter()
     bar = ProgressBar(err)
     try:
-        result = render(scene, settings, progress=bar)
+        with Interrupt() as interrupt:
+            result = render(scene, settings, progress=bar, cancel=interrupt)
     finally:
         bar.close()
     seconds = time.perf_counter() - clock
@@ -137,11 +174,16 @@ def main(argv: Optional[list[str]] = None) -> int:
         run_render(args, sys.stderr)
     except _BAD_INPUT as exc:
         return _fail(str(exc))
-    except OSError as exc:  # reading errors are among _BAD_INPUT: this is the image's folder or file
+    except files.WriteError as exc:
+        return _fail(str(exc))
+    except OSError as exc:  # reading errors are among _BAD_INPUT: this is the image's folder
         return _fail(f"cannot write {args.output}: {exc.filename or args.output}: {exc.strerror or exc}")
+    except (Cancelled, KeyboardInterrupt):
+        earlier = f"; '{args.output}' is as it was" if Path(args.output).exists() else ""
+        return _fail(f"interrupted (Ctrl-C): nothing was written{earlier}", EXIT_INTERRUPTED)
     return 0
 
 
-def _fail(message: str) -> int:
+def _fail(message: str, status: int = EXIT_BAD_INPUT) -> int:
     sys.stderr.write(f"error: {message}\n")
-    return EXIT_BAD_INPUT
+    return status

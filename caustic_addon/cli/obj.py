@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..scene import Mesh
+from .files import write_whole
 
 # Statements the reader stores: keyword -> (name in messages, plural, fewest numbers, numbers kept)
 _ELEMENTS = {"v": ("vertex", "vertices", 3, 3), "vt": ("texture coordinate", "texture coordinates", 1, 2),
@@ -197,7 +198,7 @@ def _unique_rows(rows: np.ndarray, decimals: int) -> tuple[np.ndarray, np.ndarra
 def write_obj(path, mesh: Mesh, comment: str = "", decimals: int = 6) -> None:
     """Write `mesh` as OBJ with `decimals` decimal places, sharing equal
     positions, normals and texture coordinates; vn and vt when the mesh has
-    corner normals and UVs."""
+    corner normals and UVs. Written whole (files.py)."""
     verts, v_index = _unique_rows(mesh.vertices, decimals)
     columns = [v_index[mesh.triangles] + 1]  # each (nt,3), 1-based
     lines = [f"# {line}" for line in comment.splitlines()]
@@ -214,8 +215,12 @@ def write_obj(path, mesh: Mesh, comment: str = "", decimals: int = 6) -> None:
     if mesh.corner_normals is not None and mesh.corner_uvs is None:
         corner = "%d//%d"
     faces = np.stack(columns, axis=-1).reshape(len(mesh.triangles), -1)  # (nt, 3 * attributes)
-    with open(path, "w", encoding="utf-8") as out:
-        out.write("".join(line + "\n" for line in lines))
-        for keyword, rows in blocks:
-            np.savetxt(out, rows, fmt=" ".join([keyword] + [f"%.{decimals}f"] * rows.shape[1]))
-        np.savetxt(out, faces, fmt=" ".join(["f"] + [corner] * 3))
+
+    def write(temporary: str) -> None:
+        with open(temporary, "w", encoding="utf-8") as out:
+            out.write("".join(line + "\n" for line in lines))
+            for keyword, rows in blocks:
+                np.savetxt(out, rows, fmt=" ".join([keyword] + [f"%.{decimals}f"] * rows.shape[1]))
+            np.savetxt(out, faces, fmt=" ".join(["f"] + [corner] * 3))
+
+    write_whole(path, write, None)

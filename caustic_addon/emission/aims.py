@@ -27,6 +27,10 @@ from .lamp_samples import area_point1, facing_disc_point1
 # Rays at an aim's edge count as inside it: cos(theta) this far below the
 # cone's cos_max, or radius^2 this fraction beyond the disc's.
 _EDGE_TOLERANCE = 1e-12
+# A sun's disc aim widens by 1 / cos of the half angle, so that its tilted rays still cover the target; a
+# sun of 180 degrees (a hemisphere) would widen it without end. Directions past acos(0.1), 84 degrees
+# off its axis, carry 1% of a hemisphere's light (cos^2), and they still reach part of the target.
+_SUN_WIDEN_COS = 0.1
 
 
 @dataclass
@@ -107,10 +111,11 @@ class Aim:
 
     A cone (point, spot and area lamps): `axis (3,)` unit and `cos_max`,
     from the lamp's centre, wide enough that rays from any point of the lamp
-    toward the target lie in it. A disc (suns): `axis` is the sun's
-    direction, `center (3,)` and `radius` the disc's, and its rays start
-    `start_distance` upstream of it. `tangent`, `bitangent` (3,) complete
-    the axis to a frame.
+    toward the target lie in it, and `target_distance` from the lamp to the
+    target's centre (its radius from a lamp inside it). A disc (suns):
+    `axis` is the sun's direction, `center (3,)` and `radius` the disc's,
+    and its rays start `start_distance` upstream of it. `tangent`,
+    `bitangent` (3,) complete the axis to a frame.
     """
 
     light: Light
@@ -119,6 +124,7 @@ class Aim:
     center: np.ndarray = None
     radius: float = 0.0
     start_distance: float = 0.0
+    target_distance: float = 0.0
 
     def __post_init__(self):
         self.tangent, self.bitangent = orthonormal_basis(self.axis)
@@ -242,15 +248,16 @@ def aims(light: Light, targets: list[Sphere], scene_sphere: Sphere) -> list[Aim]
     out = []
     for sphere in visible_targets(light, targets):
         if isinstance(light, SunLight):
-            widen = 1.0 / math.cos(0.5 * light.angle)
+            widen = 1.0 / max(math.cos(0.5 * light.angle), _SUN_WIDEN_COS)
             out.append(Aim(light, light.direction, center=sphere.center, radius=sphere.radius * widen,
                            start_distance=upstream_distance(scene_sphere)))
             continue
         axis, cos_max = target_cone(light.position, Sphere(sphere.center, sphere.radius + reach(light)))
+        distance = max(float(np.linalg.norm(sphere.center - light.position)), sphere.radius)
         if cos_max <= -1.0:
-            out += [Aim(light, a, cos_max=0.0) for a in (axis, -axis)]
+            out += [Aim(light, a, cos_max=0.0, target_distance=distance) for a in (axis, -axis)]
         else:
-            out.append(Aim(light, axis, cos_max=cos_max))
+            out.append(Aim(light, axis, cos_max=cos_max, target_distance=distance))
     return out
 
 

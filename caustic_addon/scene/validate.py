@@ -15,6 +15,17 @@ from .materials import Dielectric, Diffuse, Reflector
 from .scene import Scene
 
 
+# The tracing offsets rays by a share of the whole scene's size (tracing.accelerator.EPSILON_FRACTION,
+# 2e-6), so an object that makes the scene far larger than the rest of it moves light on the rest: on the
+# ball lens (2 m) over a floor made larger, direct light moved 1% at 1e3 times and 7% at 1e4 times the
+# ball's size, and went black by 1e6.
+_SCALE_WARNING, _SCALE_ERROR = 1e3, 1e4
+# Embree's triangle test multiplies two of a triangle's edges: coordinates past this (m) overflow float32.
+_MAX_COORDINATE = 1e18
+# A lamp's power (W; a sun's strength, W/m^2) past this overflows the float32 images; the Sun gives 3.8e26 W.
+_MAX_POWER = 1e30
+
+
 def _finite(name: str, what: str, array) -> None:
     if not np.all(np.isfinite(np.asarray(array, dtype=np.float64))):
         raise SceneError(f"{name}: {what} contains NaN or infinite values")
@@ -22,7 +33,8 @@ def _finite(name: str, what: str, array) -> None:
 
 def _material_finite(name: str, material) -> None:
     if isinstance(material, Dielectric):
-        parts = [("its colour", material.color), ("its absorption", material.absorption)]
+        parts = [("its reflection tint", material.reflection_tint),
+                 ("its transmission tint", material.transmission_tint), ("its absorption", material.absorption)]
     elif isinstance(material, Diffuse):
         parts = [("its colour", material.albedo), ("its emission", material.emission)]
     else:
@@ -43,11 +55,9 @@ def validate_scene(scene: Scene) -> list[str]:
         raise SceneError("camera: ortho_scale must be positive")
     _finite("camera", "its matrix", cam.matrix)
 
+    warnings += _check_scale(scene)
     for obj in scene.objects:
         mesh = obj.mesh
-        _finite(obj.name, "its vertex coordinates", mesh.vertices)
-        if len(mesh.triangles) == 0:
-            raise SceneError(f"{obj.name}: the mesh has no triangles")
         if mesh.triangles.min() < 0 or mesh.triangles.max() >= len(mesh.vertices):
             raise SceneError(f"{obj.name}: a triangle refers to a vertex that does not exist")
         if mesh.corner_uvs is not None:
@@ -65,6 +75,8 @@ def validate_scene(scene: Scene) -> list[str]:
                 raise SceneError(f"{obj.name}: IOR must be a positive number (got {material.ior})")
             if np.any(material.absorption < 0):
                 raise SceneError(f"{obj.name}: absorption must not be negative")
+            if np.any(material.reflection_tint < 0) or np.any(material.transmission_tint < 0):
+                raise SceneError(f"{obj.name}: its reflection and transmission tints must not be negative")
             if not material.abbe > 0:
                 raise SceneError(f"{obj.name}: the Abbe number must be > 0, or inf for no dispersion "
                                  f"(got {material.abbe})")
@@ -90,6 +102,66 @@ def validate_scene(scene: Scene) -> list[str]:
     return warnings
 
 
+def _check_scale(scene: Scene) -> list[str]:
+    """Raise SceneError for a vertex that is not a finite number, for an
+    object so far from the rest of the scene, or so large against it, that
+    the tracing's precision, which follows the whole scene's size, would
+    leave the rest black or wrong, and for coordinates past float32's
+    arithmetic; each names the object and its vertex. Warn where the rest's
+    light moves by a percent or so."""
+    for obj in scene.objects:
+        if len(obj.mesh.triangles) == 0:
+            raise SceneError(f"{obj.name}: the mesh has no triangles")
+        bad = ~np.isfinite(obj.mesh.vertices).all(axis=1)
+        if bad.any():
+            vertex = int(bad.argmax())
+            raise SceneError(f"{obj.name}: its vertex {vertex} is not a finite point "
+                             f"{_point(obj.mesh.vertices[vertex])}")
+    warnings = _check_far(scene) if len(scene.objects) > 1 else []
+    for obj in scene.objects:
+        far = np.abs(obj.mesh.vertices).max(axis=1)
+        if far.max() > _MAX_COORDINATE:
+            vertex = int(far.argmax())
+            raise SceneError(f"{obj.name}: its vertex {vertex} lies at {_point(obj.mesh.vertices[vertex])}, past "
+                             f"the {_MAX_COORDINATE:.0e} m from the origin that the tracing's float32 arithmetic "
+                             "holds: move it nearer")
+    return warnings
+
+
+def _check_far(scene: Scene) -> list[str]:
+    """_check_scale's objects far from, or large against, the rest of the
+    scene: every other object and the camera, which the user looks from
+    (so of two objects far apart, the one far from the camera is named)."""
+    lows = np.array([obj.mesh.vertices.min(axis=0) for obj in scene.objects])
+    highs = np.array([obj.mesh.vertices.max(axis=0) for obj in scene.objects])
+    # the bounds of every object but each one: the bounds of those before it and of those after it, and the camera
+    eye = np.asarray(scene.camera.matrix, dtype=np.float64)[None, :3, 3]
+    rest_low = np.minimum(np.minimum.accumulate(np.concatenate([eye, lows[:-1]])),
+                          np.minimum.accumulate(np.concatenate([lows[1:], eye])[::-1])[::-1])
+    rest_high = np.maximum(np.maximum.accumulate(np.concatenate([eye, highs[:-1]])),
+                           np.maximum.accumulate(np.concatenate([highs[1:], eye])[::-1])[::-1])
+    rest = np.maximum(np.linalg.norm(rest_high - rest_low, axis=1), 1e-12)
+    ratio = scene.extent() / rest
+    worst = int(ratio.argmax())
+    if ratio[worst] < _SCALE_WARNING:
+        return []
+    obj = scene.objects[worst]
+    outside = np.maximum(rest_low[worst] - obj.mesh.vertices, obj.mesh.vertices - rest_high[worst]).clip(min=0.0)
+    distance = np.linalg.norm(outside, axis=1)
+    vertex = int(distance.argmax())
+    where = (f"'{obj.name}' reaches {distance[vertex]:.3g} m from the rest of the scene, which is "
+             f"{rest[worst]:.3g} m across (its vertex {vertex} at {_point(obj.mesh.vertices[vertex])})")
+    if ratio[worst] >= _SCALE_ERROR:
+        raise SceneError(f"{where}: the tracing's precision follows the whole scene's size, so the rest would "
+                         "render black or wrong; move it nearer or make it smaller, or leave it out of the render")
+    return [f"{where}: the tracing's precision follows the whole scene's size, {ratio[worst]:.3g} times the rest's, "
+            "so light on the rest may move by a percent or so; move it nearer or make it smaller"]
+
+
+def _point(xyz) -> str:
+    return "(" + ", ".join(f"{float(c):.3g}" for c in xyz) + ")"
+
+
 def _check_specular(name: str, spec) -> None:
     """Raise SceneError for a specular layer outside what a Principled BSDF takes."""
     _finite(name, "its specular layer", [spec.roughness, spec.ior, spec.level, *spec.tint])
@@ -108,9 +180,13 @@ def _check_lamp(light, extent: float) -> list[str]:
     if np.any(light.color < 0):
         raise SceneError(f"{name}: its colour must not be negative")
     power = light.strength if isinstance(light, SunLight) else light.power
+    what = "strength" if isinstance(light, SunLight) else "power"
     if not (math.isfinite(power) and power >= 0):
-        raise SceneError(f"{name}: its {'strength' if isinstance(light, SunLight) else 'power'} must be a finite "
-                         f"number >= 0 (got {power})")
+        raise SceneError(f"{name}: its {what} must be a finite number >= 0 (got {power})")
+    if power * float(np.max(light.color)) > _MAX_POWER:
+        raise SceneError(f"{name}: its {what} of {power:.3g} {'W/m^2' if what == 'strength' else 'W'} (times its "
+                         f"colour) is past the {_MAX_POWER:.0e} that the render's float32 images hold (the Sun "
+                         "gives 3.8e+26 W): lower it")
     warnings = []
     if power == 0 or not np.any(light.color > 0):
         warnings.append(f"{name} gives no light (power 0 or black): it was left out")
@@ -160,16 +236,19 @@ def _check_world(world: World) -> None:
 
 
 def rough_caster_warnings(scene: Scene, density: str) -> list[str]:
-    """What is still approximated about each rough caster, in one warning
-    each: in beam mode the light it scatters lands as photons (the
-    adaptive estimate's noise, not beams: spread beams measured slower and
-    worse, benchmarks/rough_glass.py), and the eye sees through it or in it
-    one microfacet normal per eye sample, grainy at few samples."""
-    warnings = []
-    for obj in scene.casters:
-        roughness = obj.material.roughness
-        if not obj.material.smooth:
-            as_photons = "in beam mode its caustic comes as photons, with their noise; " if density == "beam" else ""
-            warnings.append(f"{obj.name}: rough (Roughness {roughness:.3g}): {as_photons}the view through it or "
-                            "in it takes one microfacet normal per eye sample (more Samples smooth its grain)")
-    return warnings
+    """What is still approximated about the rough casters, in one warning
+    that names them all and their range of Roughness: in beam mode the
+    light they scatter lands as photons (the adaptive estimate's noise, not
+    beams: spread beams measured slower and worse, benchmarks/rough_glass.py),
+    and the eye sees through them or in them one microfacet normal per eye
+    sample, grainy at few samples."""
+    rough = [obj for obj in scene.casters if not obj.material.smooth]
+    if not rough:
+        return []
+    lowest = min(obj.material.roughness for obj in rough)
+    highest = max(obj.material.roughness for obj in rough)
+    roughness = f"{lowest:.3g}" if f"{lowest:.3g}" == f"{highest:.3g}" else f"{lowest:.3g}-{highest:.3g}"
+    its, it, caustic = ("its", "it", "caustic comes") if len(rough) == 1 else ("their", "them", "caustics come")
+    as_photons = f"in beam mode {its} {caustic} as photons, with their noise; " if density == "beam" else ""
+    return [f"{', '.join(obj.name for obj in rough)}: rough (Roughness {roughness}): {as_photons}the view through "
+            f"{it} or in {it} takes one microfacet normal per eye sample (more Samples smooth {its} grain)"]

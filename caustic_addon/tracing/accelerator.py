@@ -22,7 +22,7 @@ from ..util.parallel import threads_here
 from ..util.vectors import dot1, float_rows, length, normalize, normalize1, row, set_row, sum1
 from .contact import Contacts
 from .hits import MISS, Hits
-from .topology import open_edge_count, signed_volume, triangle_normals
+from .topology import open_edges, signed_volume, triangle_normals
 
 _MIN_SPLIT = 8192
 # Origins move this fraction of the scene's diagonal off a surface: well above
@@ -103,19 +103,24 @@ class Accelerator:
         self.surface = np.arange(len(objects), dtype=np.int64)
         self.closed = np.zeros(len(objects), dtype=bool)
         sign = np.ones(len(objects))
+        faces = [triangle_normals(obj.mesh.corners) for obj in objects]  # (normals, areas) of each
+        for name, members in bodies.items():
+            if any(objects[i].is_caster for i in members) and not any(np.any(faces[i][1] > 0) for i in members):
+                self.warnings.append(f"'{name}' has no area (each of its faces is a line or a point): it casts "
+                                     "no caustics and shows nothing")
         for members in bodies.values():
             self.body[members] = members[0]
             for k, index in enumerate(members[1:], 1):
                 self.surface[index] = next(j for j in members[:k + 1]
                                            if _same_material(objects[j].material, objects[index].material))
             glass = [i for i in members if objects[i].is_transparent]
-            if glass:
+            if glass and any(np.any(faces[i][1] > 0) for i in members):
                 self.closed[glass], sign[glass] = self._body_orientation(members)
         all_corners, face_normals, corner_normals, areas, owners, offsets = [], [], [], [], [], [0]
         for index, obj in enumerate(objects):
             mesh = obj.mesh
             corners = mesh.corners
-            normals, area = triangle_normals(corners)
+            normals, area = faces[index]
             normals *= sign[index]
             if mesh.corner_normals is None:
                 shading = np.repeat(normals[:, None, :], 3, axis=1)
@@ -175,9 +180,12 @@ class Accelerator:
         triangles = np.concatenate([m.triangles + start for m, start in zip(meshes, starts)])
         vertices = np.concatenate([m.vertices for m in meshes])
         name = self.objects[members[0]].body_name
-        if open_edge_count(triangles, vertices) != 0:
+        holes = open_edges(triangles, vertices)
+        if len(holes):
+            where = ", ".join(f"{float(c):.3g}" for c in vertices[holes[0]].mean(axis=0))
             self.warnings.append(
-                f"'{name}' is not a closed mesh: inside and outside are guessed per hit "
+                f"'{name}' is not a closed mesh ({len(holes):,} edges have one face or more than two, as Select "
+                f"Non-Manifold shows; the first near ({where})): inside and outside are guessed per hit "
                 "from its normals, so light may leak through its holes")
             return False, 1.0
         if signed_volume(np.take(vertices, triangles, axis=0)) < 0.0:
@@ -307,6 +315,18 @@ class Accelerator:
         a, b, c = votes
         body_a, body_b, body_c = (np.where(v == MISS, MISS, np.take(self.body, np.maximum(v, 0))) for v in votes)
         return np.where((body_a == body_b) | (body_a == body_c), a, b)
+
+    def surface_at(self, points: np.ndarray) -> np.ndarray:
+        """(n,) the object whose surface lies within epsilon of each of
+        `points (n,3)` along one of six fixed directions, MISS if none. A ray
+        that starts on a surface meets it at t = 0 (Embree's tnear is 0),
+        whichever way it goes."""
+        dirs = np.concatenate([_PROBE_DIRS, -_PROBE_DIRS])
+        hits = self._closest(np.repeat(points, len(dirs), axis=0), np.tile(dirs, (len(points), 1)))
+        near = (hits.hit & (hits.t <= self.epsilon)).reshape(len(points), len(dirs))
+        first = near.argmax(axis=1)
+        objects = hits.obj.reshape(len(points), len(dirs))[np.arange(len(points)), first]
+        return np.where(near.any(axis=1), objects, MISS)
 
     def _contradicts(self, hits: Hits, dirs: np.ndarray, medium: np.ndarray) -> np.ndarray:
         """(n,) bool: hits on closed meshes from the side the ray's medium

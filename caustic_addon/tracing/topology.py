@@ -24,10 +24,15 @@ def signed_volume(corners: np.ndarray) -> float:
 
 
 def open_edge_count(triangles: np.ndarray, vertices: np.ndarray) -> int:
-    """Number of edges not shared by exactly two triangles. Vertices at the
-    same position count as one, so meshes split for UVs or sharp edges still
-    read as closed; triangles that repeat a vertex, and copies of a
-    triangle, are left out."""
+    """Number of edges not shared by exactly two triangles (open_edges)."""
+    return len(open_edges(triangles, vertices))
+
+
+def open_edges(triangles: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """(k,2) vertex indices of the edges not shared by exactly two
+    triangles. Vertices at the same position count as one, so meshes split
+    for UVs or sharp edges still read as closed; triangles that repeat a
+    vertex, and copies of a triangle, are left out."""
     weld = row_ids(np.round(vertices, 9))
     a, b, c = np.sort(weld[triangles], axis=1).T
     # sorted, a triangle that repeats a vertex repeats it in neighbours
@@ -39,8 +44,11 @@ def open_edge_count(triangles: np.ndarray, vertices: np.ndarray) -> int:
     first = np.unique(keys, return_index=True)[1]
     a, b, c = a[first], b[first], c[first]
     # with a <= b <= c each edge is already (low, high)
-    _, counts = np.unique(np.concatenate([a * n + b, b * n + c, a * n + c]), return_counts=True)
-    return int(np.count_nonzero(counts != 2))
+    edges, counts = np.unique(np.concatenate([a * n + b, b * n + c, a * n + c]), return_counts=True)
+    edges = edges[counts != 2]
+    vertex_of = np.empty(n, dtype=np.int64)
+    vertex_of[weld] = np.arange(len(weld))
+    return vertex_of[np.stack([edges // n, edges % n], axis=1)]
 
 
 def mesh_pieces(triangles: np.ndarray, corner_keys: np.ndarray, group: np.ndarray) -> np.ndarray:

@@ -3,6 +3,8 @@ Blender would import it, a package with relative imports), and a factory
 fresh empty file for every test."""
 
 import importlib.util
+import shutil
+import subprocess
 import sys
 from pathlib import Path
 
@@ -62,3 +64,37 @@ class Reports:
 @pytest.fixture
 def reports(capfd):
     return Reports(capfd)
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """mount(size in bytes): a folder on a file system of its own (tmpfs) of
+    that size, to fill up part-way through a run; skipped where mounting is
+    not allowed."""
+    folder = tmp_path / "disk"
+    folder.mkdir()
+    mounted = []
+
+    def mount(size):
+        kib = -(-size // 4096) * 4
+        if subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={kib}k", "tmpfs", str(folder)],
+                          capture_output=True).returncode != 0:
+            pytest.skip("mounting a small tmpfs needs root")
+        mounted.append(folder)
+        return folder
+
+    yield mount
+    for path in mounted:
+        subprocess.run(["umount", str(path)], check=True)
+
+
+@pytest.fixture
+def fill_disk():
+    """fill(folder, leave): a file "filler" in `folder` that leaves `leave` bytes free on its file system."""
+
+    def fill(folder, leave: int) -> None:
+        free = shutil.disk_usage(folder).free
+        with open(folder / "filler", "wb") as out:
+            out.write(b"\0" * max(0, free - leave))
+
+    return fill

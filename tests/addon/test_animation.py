@@ -3,7 +3,6 @@ output-path rules, each the render of its frame; Esc-free stops, map reuse,
 undo, and the inputs it refuses."""
 
 import os
-import subprocess
 import weakref
 
 import bpy
@@ -199,28 +198,6 @@ def test_a_movie_format_is_refused(tmp_path):
     with pytest.raises(RuntimeError, match="The output format is a movie"):
         bpy.ops.caustic.render_animation(filepath=str(tmp_path / "f_#"))
     assert os.listdir(tmp_path) == []
-
-
-@pytest.fixture
-def small_disk(tmp_path):
-    """mount(size in bytes): a folder on a file system of its own (tmpfs) of
-    that size, to fill up part-way through a run; skipped where mounting is
-    not allowed."""
-    folder = tmp_path / "disk"
-    folder.mkdir()
-    mounted = []
-
-    def mount(size):
-        kib = -(-size // 4096) * 4
-        if subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={kib}k", "tmpfs", str(folder)],
-                          capture_output=True).returncode != 0:
-            pytest.skip("mounting a small tmpfs needs root")
-        mounted.append(folder)
-        return folder
-
-    yield mount
-    for path in mounted:
-        subprocess.run(["umount", str(path)], check=True)
 
 
 @pytest.mark.parametrize("multilayer", [False, True], ids=["Blender's EXR writer", "multilayer EXR"])

@@ -5,9 +5,14 @@ scene file (config.py), its OBJ reader (obj.py) and its image files
 import importlib.util
 import io
 import math
+import os
+import pty
 import re
+import select
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -189,6 +194,81 @@ def test_bad_command_lines(tmp_path):
     assert_bad_input(run_cli("render", scene, mesh, "-o", tmp_path / "out.png", "--seed", "-1"), "--seed")
     assert_bad_input(run_cli("render", scene, mesh), "-o")
     assert_bad_input(run_cli("render", scene, mesh, "-o", scene / "out.png"), "scene.toml")  # a file as folder
+
+
+def test_a_full_disk_leaves_no_half_image_and_the_earlier_one_whole(tmp_path, small_disk, fill_disk):
+    """Issue 40: a new EXR was left half written, and a larger one written
+    over a good one destroyed it."""
+    scene = write(tmp_path / "scene.toml", SMALL)
+    mesh = EXAMPLES / "round.obj"
+    assert run_cli("render", scene, mesh, "-o", tmp_path / "good.exr").returncode == 0
+    good = (tmp_path / "good.exr").read_bytes()
+    disk = small_disk(8 * len(good))
+    (disk / "out.exr").write_bytes(good)
+    fill_disk(disk, 4096)
+    for name, pixels in (("new.exr", "64"), ("out.exr", "128")):  # a new file, and a larger one over the good one
+        larger = write(tmp_path / "larger.toml", SMALL.replace("pixx = 64", f"pixx = {pixels}"))
+        proc = run_cli("render", larger, mesh, "-o", disk / name)
+        assert_bad_input(proc, f"could not write '{disk / name}': No space left on device")
+        assert sorted(p.name for p in disk.iterdir()) == ["filler", "out.exr"]
+        assert (disk / "out.exr").read_bytes() == good
+
+
+def test_an_exposure_past_float32_is_refused_for_exr_and_clips_in_png(tmp_path):
+    scene = write(tmp_path / "scene.toml", SMALL)
+    mesh = EXAMPLES / "round.obj"
+    proc = run_cli("render", scene, mesh, "-o", tmp_path / "out.exr", "--exposure", "1000")
+    assert_bad_input(proc, "an exposure of 1000 would make the brightest value 2^", "use an exposure of 12")
+    assert not (tmp_path / "out.exr").exists()
+    assert run_cli("render", scene, mesh, "-o", tmp_path / "out.png", "--exposure", "1000").returncode == 0
+    image = read_png(tmp_path / "out.png")
+    assert set(np.unique(image[..., :3])) <= {0, 255}
+
+
+@pytest.mark.parametrize("edit, obj_text, fragment", [
+    (("position = [0.0, 0.0, 0.02]", "position = [0.0, 0.0, 1e30]"), None, "'round' reaches 1e+30 m from the rest"),
+    (None, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1e30\nf 1 2 3\nf 1 2 4\nf 2 3 4\nf 3 1 4\n",
+     "'spike' reaches 1e+29 m from the rest"),
+    (("power = 0.8", "power = 1e300"), None, "its power of 1e+300 W (times its colour) is past the 1e+30"),
+], ids=["object position", "OBJ vertex", "lamp power"])
+def test_huge_values_are_refused_by_name(tmp_path, edit, obj_text, fragment):
+    """Each turned the whole image black, the lit plane included (issue 40)."""
+    scene = write(tmp_path / "scene.toml", SMALL.replace(*edit) if edit else SMALL)
+    mesh = write(tmp_path / "spike.obj", obj_text) if obj_text else EXAMPLES / "round.obj"
+    assert_bad_input(run_cli("render", scene, mesh, "-o", tmp_path / "out.png"), fragment)
+    assert not (tmp_path / "out.png").exists()
+
+
+def test_ctrl_c_stops_cleanly_and_keeps_the_earlier_image(tmp_path):
+    """Ctrl-C once the render runs (its progress bar drawn on a terminal):
+    exit status 130, one line and no traceback, the earlier image whole."""
+    scene = write(tmp_path / "scene.toml", SMALL.replace("lamp_rays = 20000", "lamp_rays = 4000000")
+                  .replace("pixx = 64", "pixx = 320").replace("pixy = 48", "pixy = 240"))
+    out = tmp_path / "out.exr"
+    write_image(out, np.ones((2, 2, 4), dtype=np.float32))
+    earlier = out.read_bytes()
+    leader, follower = pty.openpty()
+    proc = subprocess.Popen([sys.executable, "-m", "caustic_addon", "render", str(scene),
+                             str(EXAMPLES / "round.obj"), "-o", str(out)], cwd=ROOT, stderr=follower)
+    os.close(follower)
+    seen, deadline = b"", time.monotonic() + 120
+    while b"%" not in seen and time.monotonic() < deadline:
+        if select.select([leader], [], [], 1.0)[0]:
+            seen += os.read(leader, 4096)
+    proc.send_signal(signal.SIGINT)
+    status = proc.wait(timeout=120)
+    while select.select([leader], [], [], 0.2)[0]:
+        try:
+            seen += os.read(leader, 4096)
+        except OSError:
+            break
+    os.close(leader)
+    text = seen.decode(errors="replace")
+    assert status == 130, text
+    assert "Traceback" not in text
+    assert f"error: interrupted (Ctrl-C): nothing was written; '{out}' is as it was" in text
+    assert out.read_bytes() == earlier
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.exr", "scene.toml"]
 
 
 def test_engine_scene_errors_take_the_same_path(tmp_path, monkeypatch, capsys):
@@ -425,20 +505,34 @@ def test_exr_keeps_float32_exactly_and_png_quantises(tmp_path):
 
 
 @pytest.mark.skipif(importlib.util.find_spec("bpy") is None, reason="bpy is not installed")
-def test_blender_reads_both_images(tmp_path):
-    """Blender's own readers agree with ours, pixel for pixel."""
+def test_blender_reads_both_images_and_we_read_blender_s_zip_exr(tmp_path):
+    """Blender's own readers agree with ours, pixel for pixel, and ours
+    reads the ZIP, ZIPS and uncompressed EXR files Blender writes."""
     rng = np.random.default_rng(4)
-    image = (rng.random((6, 9, 4)) * 20.0).astype(np.float32)
+    image = (rng.random((37, 9, 4)) * 20.0).astype(np.float32)
+    image[5:30, 2:6] = 0.0  # runs of zeros, as renders have, which ZIP shrinks
     write_image(tmp_path / "b.exr", image)
     write_image(tmp_path / "b.png", image / 20.0)
     script = ("import sys, bpy, numpy as np\n"
-              "for path in sys.argv[1:]:\n"
+              "for path in sys.argv[1:3]:\n"
               "    im = bpy.data.images.load(path)\n"
               "    w, h = im.size\n"
               "    px = np.array(im.pixels[:], dtype=np.float32).reshape(h, w, 4)[::-1]\n"
-              "    np.save(path + '.npy', px)\n")
-    proc = subprocess.run([sys.executable, "-c", script, str(tmp_path / "b.exr"), str(tmp_path / "b.png")],
+              "    np.save(path + '.npy', px)\n"
+              "settings = bpy.context.scene.render.image_settings\n"
+              "settings.file_format, settings.color_depth = 'OPEN_EXR', '32'\n"
+              "im = bpy.data.images.new('x', 9, 37, alpha=True, float_buffer=True)\n"
+              "im.colorspace_settings.name = 'Linear Rec.709'\n"
+              "im.pixels.foreach_set(np.load(sys.argv[3]).ravel())\n"
+              "for codec in ('ZIP', 'ZIPS', 'NONE'):\n"
+              "    settings.exr_codec = codec\n"
+              "    im.save_render(sys.argv[4] + codec + '.exr', scene=bpy.context.scene)\n")
+    np.save(tmp_path / "rows.npy", image[::-1])
+    proc = subprocess.run([sys.executable, "-c", script, str(tmp_path / "b.exr"), str(tmp_path / "b.png"),
+                           str(tmp_path / "rows.npy"), str(tmp_path / "blender_")],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     np.testing.assert_array_equal(np.load(tmp_path / "b.exr.npy"), image)
     np.testing.assert_allclose(np.load(tmp_path / "b.png.npy") * 255.0, read_png(tmp_path / "b.png"), atol=1e-3)
+    for codec in ("ZIP", "ZIPS", "NONE"):
+        np.testing.assert_array_equal(read_exr(tmp_path / f"blender_{codec}.exr"), image, err_msg=codec)

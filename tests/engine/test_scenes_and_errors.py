@@ -88,7 +88,11 @@ def broken(**changes):
 @pytest.mark.parametrize("changes, message", [
     (dict(ior=0.0), "Glass: IOR must be a positive number"),
     (dict(ior=float("nan")), "Glass: IOR must be a positive number"),
-    (dict(vertices=[np.nan, 0, 0]), "Glass: its vertex coordinates contains NaN"),
+    (dict(vertices=[np.nan, 0, 0]), r"Glass: its vertex 3 is not a finite point \(nan, 0, 0\)"),
+    (dict(vertices=[0, 0, np.inf]), r"Glass: its vertex 3 is not a finite point \(0, 0, inf\)"),
+    (dict(vertices=[0, 0, 1e30]), r"'Glass' reaches 1e\+30 m from the rest of the scene, which is 23 m across "
+                                  r"\(its vertex 3 at \(0, 0, 1e\+30\)\): the tracing's precision follows"),
+    (dict(power=1e300), r"lamp 'Lamp': its power of 1e\+300 W \(times its colour\) is past the 1e\+30"),
     (dict(empty=True), "Glass: the mesh has no triangles"),
     (dict(power=-5.0), "lamp 'Lamp': its power must be"),
     (dict(absorption=[np.nan, 0.0, 0.0]), "Glass: its absorption contains NaN"),
@@ -234,3 +238,85 @@ def test_a_render_that_cannot_fit_in_memory_is_refused_up_front_with_the_number(
     with pytest.raises(SceneError, match=r"this render needs about 2,00\d\.\d GB of memory, more than this machine's "
                                          r"[\d,.]+ GB; 2,000.0 GB of it for the image: lower the resolution"):
         render(scene, quick(lamp_rays=1000))
+
+
+# --- issue 40: huge values, degenerate casters, lamps on surfaces, a sun of 180 degrees -----------------------
+
+
+@pytest.mark.parametrize("spoil, culprit", [
+    (lambda scene: scene.objects.append(Object("Far", shapes.uv_sphere(0.5, (1e30, 0, 1), 16, 8), Dielectric(1.5))),
+     r"'Far' reaches 1e\+30 m from the rest of the scene"),
+    (lambda scene: scene.objects[0].mesh.vertices.__imul__(1e20), r"'Floor' reaches 5.66e\+20 m from the rest"),
+    (lambda scene: scene.objects[0].mesh.vertices.__imul__(1e5), r"'Floor' reaches 5.66e\+05 m from the rest"),
+], ids=["a ball 1e30 m away", "the floor scaled by 1e20", "the floor scaled by 1e5"])
+def test_an_object_that_would_black_out_the_rest_is_refused_by_name(spoil, culprit):
+    """The tracing's epsilon follows the scene's size: one object far away,
+    or huge, made every pixel black, the lit floor included (issue 40)."""
+    scene = ball_lens(pixels=8)
+    spoil(scene)
+    with pytest.raises(SceneError, match=culprit + r".*: the tracing's precision follows the whole scene's size, "
+                                                   "so the rest would render black or wrong"):
+        render(scene, quick(lamp_rays=1000))
+
+
+def test_an_object_a_thousand_times_the_rest_renders_with_a_warning():
+    scene = ball_lens(pixels=8)
+    scene.objects[0].mesh.vertices[:] *= 6000.0  # the rest: the ball, and the camera 20 m above the floor
+    warnings = render(scene, quick(lamp_rays=1000)).warnings
+    assert [w for w in warnings if w.startswith("'Floor' reaches 3.39e+04 m from the rest of the scene") and
+            "3.45e+03 times the rest's, so light on the rest may move by a percent or so" in w]
+
+
+def test_a_single_object_past_float32_s_arithmetic_names_its_vertex():
+    scene = ball_lens(pixels=8)
+    scene.objects = scene.objects[:1]
+    scene.objects[0].mesh.vertices[2] = [0.0, 0.0, 1e30]
+    with pytest.raises(SceneError, match=r"Floor: its vertex 2 lies at \(0, 0, 1e\+30\), past the 1e\+18 m"):
+        render(scene, quick(lamp_rays=1000))
+
+
+def test_glass_with_no_area_is_named():
+    scene = ball_lens(pixels=8)
+    scene.objects[1] = Object("Glass", Mesh(np.array([[0, 0, 1.0], [1, 0, 1.0], [2, 0, 1.0]]), np.array([[0, 1, 2]])),
+                              Dielectric(1.5))
+    warnings = render(scene, quick(lamp_rays=1000)).warnings
+    assert warnings == ["'Glass' has no area (each of its faces is a line or a point): it casts no caustics and "
+                        "shows nothing"]
+
+
+def test_a_lamp_on_the_receiver_is_named_and_one_just_above_it_casts_its_caustic():
+    """A lamp exactly on the floor's plane cast nothing, 0.1 mm above it the
+    full caustic: its rays start on the floor and meet it at t = 0."""
+    def lamp_at(z):
+        scene = ball_lens(pixels=16)
+        scene.objects[1] = Object("Glass", shapes.uv_sphere(0.5, (1.0, 0, 0.6), 32, 16), Dielectric(1.5))
+        scene.lights = [PointLight((0, 0, z), 100.0, name="Lamp")]
+        scene.camera = Camera.look_at((0, -6, 5), (1.5, 0, 0), pixx=16, pixy=16)
+        return render(scene, quick(lamp_rays=20_000))
+
+    on, above = lamp_at(0.0), lamp_at(1e-4)
+    assert [w for w in on.warnings if w.startswith("lamp 'Lamp' lies on 'Floor' (within the tracing epsilon")]
+    assert not [w for w in above.warnings if "lies on" in w]
+    assert above.stats["landed"] > 1000
+
+
+def test_a_sun_of_180_degrees_renders_as_one_of_179():
+    """Blender allows a sun's angle up to 180 degrees (a hemisphere of
+    directions); the disc its rays cross would widen without end."""
+    def sun(degrees):
+        scene = ball_lens(pixels=16, segments=32)
+        scene.lights = [SunLight((0, 0, -1), 3.0, angle=math.radians(degrees))]
+        return render(scene, quick(lamp_rays=100_000))
+
+    wide, widest = sun(179.0), sun(180.0)
+    assert np.isfinite(widest.image).all() and widest.passes["caustic"].mean() > 0
+    for name in ("direct", "caustic"):
+        assert abs(widest.passes[name].mean() / wide.passes[name].mean() - 1.0) < 0.1, name
+
+
+def test_open_edges_are_counted_and_placed():
+    scene = ball_lens(pixels=8, segments=32)
+    glass = scene.objects[1].mesh
+    scene.objects[1].mesh = Mesh(glass.vertices, glass.triangles[1:], glass.corner_normals[1:])
+    warnings = render(scene, quick(lamp_rays=1000)).warnings
+    assert [w for w in warnings if w.startswith("'Glass' is not a closed mesh (3 edges have one face or more than two")]
