@@ -242,7 +242,7 @@ def russian_roulette(repeats: int) -> dict:
     roulette. Unbiased: the landed flux agrees within its noise."""
     scene = Scene(
         objects=[Object("Floor", shapes.plane(paper.FLOOR_SIZE), Diffuse(albedo=0.8)),
-                 Object("Gem", paper.glass("pointed"), Dielectric(2.41, color=(0.3, 0.3, 0.3)))],
+                 Object("Gem", paper.glass("pointed"), Dielectric(2.41, reflection_tint=0.3, transmission_tint=0.3))],
         lights=[PointLight(paper.LAMP_POSITION, 100.0)],
         camera=Camera.from_paper(paper.FOV, *PIXELS, 1.0, paper.EYE, paper.TARGET))
     settings = RenderSettings(lamp_rays=500_000, spp=1, density="adaptive")

@@ -1,19 +1,25 @@
-"""The same view rendered by Cycles on the CPU with MNEE shadow caustics
-(the reference the caustic render is compared with), as a step a
-jobs.JobRunner runs. Every setting changed for it is put back."""
+"""The same view rendered by Cycles on the CPU (the reference the caustic
+render is compared with), as a step a jobs.JobRunner runs: the light the
+caustic render computes (whitted.py), the caustics path-traced, or by MNEE
+for the lamps Cycles cannot path-trace them from (sources.py). Every
+setting changed for it is put back."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import bpy
 
 from ..export import SceneRead
 from ..export.cycles_still import StillRender
 from ..export.overrides import Overrides
+from .whitted import black_after_a_diffuse_bounce, whitted_settings
 
 
-def _cycles_settings(overrides: Overrides, scene, samples: int, time_limit: float) -> None:
+def _cycles_settings(overrides: Overrides, scene, samples: int, time_limit: float, seed: int) -> None:
     overrides.set(scene.render, "engine", 'CYCLES')
     for name, value in (("device", 'CPU'), ("samples", samples), ("time_limit", time_limit),
+                        ("use_adaptive_sampling", False), ("seed", seed), ("use_animated_seed", False),
                         ("use_denoising", False), ("pixel_filter_type", 'BOX'), ("filter_width", 1.0)):
         overrides.set(scene.cycles, name, value)
     for name, value in (("film_transparent", False), ("use_motion_blur", False)):
@@ -22,15 +28,42 @@ def _cycles_settings(overrides: Overrides, scene, samples: int, time_limit: floa
     overrides.set(scene.caustic, "use_bake_on_render", False)
 
 
-def _shadow_caustics(overrides: Overrides, read: SceneRead) -> None:
-    """Turn MNEE on for the transparent objects (casters), the receivers and the
-    lamps. Reflectors are neither: MNEE cannot solve for mirrors."""
-    for ob in read.scene.objects:
-        source = bpy.data.objects[read.sources[ob.name]]
-        if ob.is_transparent or ob.is_receiver:
-            overrides.set(source.cycles, "is_caustics_caster" if ob.is_transparent else "is_caustics_receiver", True)
+def _shadow_caustics(overrides: Overrides, scene, read: SceneRead, lamps: frozenset[str]) -> None:
+    """MNEE for the lamps named in `lamps` (Blender objects), through the
+    smooth transparent objects (casters), onto the receivers. Every other
+    lamp, the world and every other object are no part of it, whatever the
+    user set, so that Cycles path-traces their caustics. Reflectors are
+    never casters: MNEE cannot solve for mirrors."""
+    casters = {read.sources[o.name] for o in read.scene.objects if o.is_transparent and o.material.smooth}
+    receivers = {read.sources[o.name] for o in read.scene.objects if o.is_receiver}
+    for name in sorted({read.sources[o.name] for o in read.scene.objects}):
+        settings = bpy.data.objects[name].cycles
+        overrides.set(settings, "is_caustics_caster", bool(lamps) and name in casters)
+        overrides.set(settings, "is_caustics_receiver", bool(lamps) and name in receivers)
     for light in read.scene.lights:
-        overrides.set(bpy.data.objects[read.sources[light.name]].data.cycles, "is_caustics_light", True)
+        name = read.sources[light.name]
+        overrides.set(bpy.data.objects[name].data.cycles, "is_caustics_light", name in lamps)
+    if scene.world is not None:
+        overrides.set(scene.world.cycles, "is_caustics_light", False)
+
+
+def _diffuse_materials(read: SceneRead) -> list:
+    """The Blender materials of the objects that are neither glass nor mirrors."""
+    names = {read.materials[o.name] for o in read.scene.objects if not o.is_caster}
+    return [bpy.data.materials[name] for name in sorted(n for n in names if n is not None)]
+
+
+@dataclass(frozen=True)
+class ReferenceRender:
+    """One Cycles render of the reference: its samples, time limit (s, 0 for
+    none) and seed; with `caustics`, the caustics (path-traced, and by MNEE
+    for the lamps `mnee_lamps` names), without, none."""
+
+    samples: int
+    time_limit: float
+    seed: int
+    caustics: bool = True
+    mnee_lamps: frozenset[str] = frozenset()
 
 
 class CyclesReference:
@@ -42,18 +75,24 @@ class CyclesReference:
 
     stage = "Cycles reference"
 
-    def __init__(self, scene, read: SceneRead, samples: int, time_limit: float):
-        self._scene, self._read, self._samples, self._time_limit = scene, read, samples, time_limit
+    def __init__(self, scene, read: SceneRead, render: ReferenceRender, max_depth: int):
+        self._scene, self._read, self.render, self._max_depth = scene, read, render, max_depth
         self.fraction, self.seconds = 0.0, 0.0
         self.result = self.error = None
         self.cancelled = False
         self._overrides: Overrides | None = None
         self._still: StillRender | None = None
+        self._take_out: list = []
 
     def _begin(self, wait: bool) -> None:
         self._overrides = Overrides()
-        _cycles_settings(self._overrides, self._scene, self._samples, self._time_limit)
-        _shadow_caustics(self._overrides, self._read)
+        render = self.render
+        _cycles_settings(self._overrides, self._scene, render.samples, render.time_limit, render.seed)
+        whitted_settings(self._overrides, self._scene, self._max_depth, render.caustics)
+        _shadow_caustics(self._overrides, self._scene, self._read, render.mnee_lamps if render.caustics
+                         else frozenset())
+        self._take_out = [take_out for material in _diffuse_materials(self._read)
+                          if (take_out := black_after_a_diffuse_bounce(material)) is not None]
         self._still = StillRender(self._scene, self._overrides)
         try:
             if not self._still.start(wait=wait):
@@ -68,6 +107,9 @@ class CyclesReference:
             pixels = None if self.cancelled or self.error else still.pixels()
         finally:
             still.close()
+            for take_out in reversed(self._take_out):
+                take_out()
+            self._take_out = []
             self._overrides.restore()
         self.seconds = still.seconds
         if pixels is not None:

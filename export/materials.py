@@ -10,9 +10,13 @@ is black, as Cycles renders it. A Volume Absorption node on the Volume
 output gives glass its absorption. What is read approximately comes back as
 a warning naming the material.
 
-No Glass or Principled BSDF has a Dispersion input in Blender 4.2, 4.5 or 5.3
-(checked with each bpy module of the test matrix), so dispersion comes only from the object's
-Abbe number (Object.caustic.abbe)."""
+Dispersion comes from a Principled BSDF's Transmission Dispersion Scale and
+Abbe Number (OpenPBR's; Blender 5.3 has them, 4.2 and 4.5 and every Glass BSDF
+do not) where its scale is above 0, as the Abbe number abbe / scale, which is
+exactly what Cycles renders (Cauchy's law through the IOR at 587.6 nm,
+measured: benchmarks/cycles_dispersion.py); elsewhere from the object's Abbe
+Number (Object.caustic.abbe). Where both are set and differ, the material's
+is used and a warning names the object and the material."""
 
 from __future__ import annotations
 
@@ -42,31 +46,39 @@ UNRENDERED = {"Coat Weight": 0.0, "Sheen Weight": 0.0, "Subsurface Weight": 0.0,
 OTHER_DISTRIBUTIONS = {'BECKMANN': "Beckmann", 'ASHIKHMIN_SHIRLEY': "Ashikhmin-Shirley"}
 # Inputs that make a microfacet lobe anisotropic, which the engine's is not.
 ANISOTROPY_INPUTS = ("Anisotropy", "Anisotropic")
+# A Principled BSDF's dispersion (Blender 5.3 on): OpenPBR's scale and Abbe number.
+DISPERSION_SCALE, DISPERSION_ABBE = "Transmission Dispersion Scale", "Transmission Dispersion Abbe Number"
 
 
 @dataclass
 class Surface:
     """How a material reads: `transparent` (glass) or `reflector` (mirror,
     metal) pick the engine material; neither is a diffuse receiver.
-    `color` is the glass tint or the reflectance; `roughness` Blender's
+    `color` is a reflector's reflectance; `tints` glass's (reflection,
+    transmission) colours, `fresnel` False for a Refraction BSDF, which
+    reflects nothing (the engine's Dielectric); `roughness` Blender's
     Roughness of glass or metal, `multiscatter` whether its distribution is
     Multiscatter GGX; `emission` the radiance it gives off (an Emission
     shader, or a Principled BSDF's emission), which the engine shows but
     does not yet light anything with; `texture` the nodes that drive a
     receiver's colour (textures.py), if read; `specular` a Principled
     receiver's specular layer. `black` says why a material renders black,
-    as Cycles renders it: no output node, or no shader connected to it."""
+    as Cycles renders it: no output node, or no shader connected to it.
+    `abbe` is the Abbe number of glass's own dispersion (inf: none)."""
 
     transparent: bool
     reflector: bool = False
     emission: np.ndarray = field(default_factory=lambda: np.zeros(3))
     ior: float = 1.5
     color: np.ndarray = field(default_factory=lambda: np.ones(3))
+    tints: tuple[np.ndarray, np.ndarray] = field(default_factory=lambda: (np.ones(3), np.ones(3)))
+    fresnel: bool = True
     albedo: np.ndarray = field(default_factory=lambda: np.full(3, DEFAULT_ALBEDO))
     texture: Optional[Recipe] = None
     absorption: np.ndarray = field(default_factory=lambda: np.zeros(3))
     roughness: float = 0.0
     multiscatter: bool = True
+    abbe: float = math.inf
     specular: Specular | None = None
     warnings: list[str] = field(default_factory=list)
     black: Optional[str] = None
@@ -137,12 +149,11 @@ def read_surface(material) -> Surface:
     kind = shader.bl_idname
     if kind in GLASS_NODES or (kind == 'ShaderNodeBsdfPrincipled'
                                and _value(shader, "Transmission Weight", what, warnings) > 0.5):
-        color_input = "Color" if kind in GLASS_NODES else "Base Color"
         roughness, multiscatter = _microfacets(shader, what, warnings)
         return Surface(transparent=True, ior=_value(shader, "IOR", what, warnings),
-                       color=_value(shader, color_input, what, warnings),
+                       tints=_glass_tints(shader, what, warnings), fresnel=kind != 'ShaderNodeBsdfRefraction',
                        absorption=_read_volume(material, what, warnings), roughness=roughness,
-                       multiscatter=multiscatter, warnings=warnings)
+                       multiscatter=multiscatter, abbe=_dispersion(shader, what, warnings), warnings=warnings)
     if kind in GLOSSY_NODES:
         return _mirror(shader, "Color", what, warnings)
     if kind == 'ShaderNodeBsdfPrincipled' and _value(shader, "Metallic", what, warnings) > 0.5:
@@ -162,6 +173,34 @@ def read_surface(material) -> Surface:
     return Surface(transparent=False, albedo=viewport,
                    warnings=[f"{what}: a '{shader.name}' shader is not understood; it is rendered as diffuse "
                              "with the material's viewport colour"])
+
+
+def _glass_tints(shader, what: str, warnings: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """(reflection, transmission) colours of a glass shader, as Cycles sets
+    its Fresnel's tints (svm/closure.h): a Glass BSDF's Color for both; a
+    Refraction BSDF's Color where it refracts and no reflection; a
+    Principled BSDF's white reflection and the square root of its Base
+    Color at each refraction, so that a thin shell, crossed twice, takes
+    its Base Color once, both times its Transmission Weight t (Cycles'
+    glass closure's weight; the base under the rest, 1 - t, is not
+    rendered, which a warning says). A Principled BSDF's Specular Tint,
+    which colours its glass's Fresnel reflectance, is read as white, with
+    a warning."""
+    if shader.bl_idname == 'ShaderNodeBsdfGlass':
+        color = np.maximum(_value(shader, "Color", what, warnings), 0.0)
+        return color, color
+    if shader.bl_idname == 'ShaderNodeBsdfRefraction':
+        return np.zeros(3), np.maximum(_value(shader, "Color", what, warnings), 0.0)
+    if not np.allclose(_value(shader, "Specular Tint", what, warnings), 1.0):
+        warnings.append(f"{what}: its Specular Tint is not rendered on glass; its reflections are white")
+    if "Thin Wall" in shader.inputs and _value(shader, "Thin Wall", what, warnings):
+        warnings.append(f"{what}: its Thin Wall is not rendered; it is rendered as solid glass")
+    base = np.clip(_value(shader, "Base Color", what, warnings), 0.0, 1.0)
+    weight = min(_value(shader, "Transmission Weight", what, warnings), 1.0)
+    if weight < 1.0:
+        warnings.append(f"{what}: its Transmission Weight {weight:.3g} is rendered as glass of {weight:.3g} of the "
+                        "light; the base under the rest is not rendered")
+    return np.full(3, weight), weight * np.sqrt(base)
 
 
 def _specular_layer(shader, what: str, warnings: list[str]) -> Specular:
@@ -202,6 +241,22 @@ def _microfacets(shader, what: str, warnings: list[str]) -> tuple[float, bool]:
     return roughness, distribution == 'MULTI_GGX'
 
 
+def _dispersion(shader, what: str, warnings: list[str]) -> float:
+    """The Abbe number V_d of a glass shader's own dispersion: OpenPBR's
+    abbe_number / scale, with which Cycles refracts by Cauchy's law through
+    the IOR at 587.6 nm, as the engine does (cauchy_ior); inf (none) where
+    the shader has no such inputs, its scale is 0, or its Abbe number is not
+    above 0 (Cycles renders no dispersion then either); a scale above 1 is
+    1, as Cycles clamps it."""
+    if DISPERSION_SCALE not in shader.inputs:
+        return math.inf
+    scale = min(_value(shader, DISPERSION_SCALE, what, warnings), 1.0)
+    if not scale > 0.0:
+        return math.inf
+    abbe = _value(shader, DISPERSION_ABBE, what, warnings)
+    return abbe / scale if abbe > 0.0 else math.inf
+
+
 def _read_volume(material, what: str, warnings: list[str]) -> np.ndarray:
     """Absorption (3,) per metre of the material's volume: a Volume
     Absorption node's density x (1 - colour), as Cycles; none without one."""
@@ -222,7 +277,9 @@ def engine_material(surface: Surface, settings,
                     texture: Optional[nodes.Node] = None) -> Dielectric | Diffuse | Reflector:
     """The engine material for an object of `Object.caustic` `settings`
     whose material reads as `surface`, its colour from `texture` (the
-    surface's recipe bound to the object) if it has one."""
+    surface's recipe bound to the object) if it has one. A glass's
+    dispersion is its material's where that has one, else the object's
+    Abbe Number (0: none)."""
     role = settings.role
     if role == 'REFLECTOR' or (role == 'AUTO' and surface.reflector):
         return Reflector(surface.color if surface.reflector else np.ones(3), surface.roughness, surface.multiscatter)
@@ -232,13 +289,34 @@ def engine_material(surface: Surface, settings,
         return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO, emission=surface.emission,
                        texture=texture if opaque else None, specular=surface.specular if opaque else None)
     ior = settings.ior if settings.use_ior else (surface.ior if surface.transparent else 1.5)
-    color = surface.color if surface.transparent else np.ones(3)
+    reflection_tint, transmission_tint = surface.tints if surface.transparent else (np.ones(3), np.ones(3))
     if settings.absorption_from == 'COLOR':
         absorption = absorption_from_color(settings.absorption_color[:], settings.absorption_distance)
     elif settings.absorption_from == 'COEFFICIENT':
         absorption = np.array(settings.absorption[:], dtype=np.float64)
     else:
         absorption = surface.absorption if surface.transparent else np.zeros(3)
-    return Dielectric(ior=ior, color=color, absorption=absorption,
-                      abbe=settings.abbe if settings.abbe > 0 else math.inf, roughness=surface.roughness,
+    return Dielectric(ior=ior, reflection_tint=reflection_tint, transmission_tint=transmission_tint,
+                      fresnel=surface.fresnel or not surface.transparent, absorption=absorption,
+                      abbe=_abbe(surface, settings), roughness=surface.roughness,
                       multiscatter=surface.multiscatter)
+
+
+def _abbe(surface: Surface, settings) -> float:
+    """The Abbe number a glass object disperses with: its material's own
+    where set, else its Object.caustic.abbe (0: none)."""
+    if surface.transparent and math.isfinite(surface.abbe):
+        return surface.abbe
+    return settings.abbe if settings.abbe > 0 else math.inf
+
+
+def abbe_conflict(surface: Surface, settings, name: str, material: Optional[str]) -> Optional[str]:
+    """A warning where glass object `name`'s Abbe Number and its material's
+    own dispersion are both set and differ (the material's is used), else None."""
+    if not (surface.transparent and math.isfinite(surface.abbe) and settings.abbe > 0):
+        return None
+    if math.isclose(settings.abbe, surface.abbe, rel_tol=1e-6):
+        return None
+    return (f"'{name}': its Abbe Number {settings.abbe:.4g} differs from the dispersion of its material "
+            f"'{material}' (Abbe Number {surface.abbe:.4g}, its Transmission Dispersion Abbe Number over its "
+            "Scale); the material's is used")

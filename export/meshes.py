@@ -13,7 +13,7 @@ import numpy as np
 
 from ..caustic_addon import Dielectric, Mesh, Object, Reflector, Visibility
 from ..caustic_addon.scene.geometry import with_area
-from .materials import engine_material, read_surface
+from .materials import abbe_conflict, engine_material, read_surface
 from .textures import ObjectFrame, bind
 
 # Faces of an empty slot: Cycles renders them with its default surface, a
@@ -188,8 +188,11 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
                                 np.linalg.pinv(matrix), np.array(data.texspace_location[:], dtype=np.float64),
                                 np.array(data.texspace_size[:], dtype=np.float64))
             texture = bind(surfaces[key].texture, frame, f"'{part}'", warnings)
-        objects.append((Object(part, world.subset(rows) if several else world,
-                               engine_material(surfaces[key], ob.original.caustic, texture), visibility,
+        engine = engine_material(surfaces[key], ob.original.caustic, texture)
+        conflict = abbe_conflict(surfaces[key], ob.original.caustic, name, key)
+        if conflict is not None and isinstance(engine, Dielectric):
+            warnings.append(conflict)
+        objects.append((Object(part, world.subset(rows) if several else world, engine, visibility,
                                body=name if several else None), key))
     if not ob.visible_diffuse and any(obj.is_caster for obj, _ in objects):
         warnings.append(f"'{name}': its Diffuse ray visibility is off, which hides it from Cycles' diffuse "

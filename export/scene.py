@@ -12,7 +12,7 @@ import bpy
 import numpy as np
 
 from ..caustic_addon import Scene
-from .camera import camera_warnings, dummy_camera, read_camera
+from .camera import camera_warnings, check_camera, check_render_size, dummy_camera, read_camera
 from .errors import InputError
 from .lamps import engine_light
 from .materials import Surface
@@ -51,16 +51,17 @@ def read_scene(context, with_camera: bool = True, depsgraph=None) -> SceneRead:
     render, is read as the viewport shows it, and a warning names what a
     render would see otherwise."""
     scene, view_layer = (context.scene, context.view_layer) if depsgraph is None else (depsgraph.scene, None)
+    if with_camera:
+        check_camera(scene)
     if depsgraph is not None:
         read = _read_objects(scene, depsgraph, with_camera)
     elif scene.camera is not None and view_layer.use:
+        check_render_size(scene.render)
         read = read_as_render(scene, view_layer, lambda depsgraph: _read_objects(scene, depsgraph, with_camera))
         adaptive = sorted({read.sources[name] for name in read.materials
                            if adaptive_subdivision(scene, bpy.data.objects[read.sources[name]])})
         read.warnings += [f"'{name}': Cycles subdivides it adaptively when it renders; the caustic render uses "
                           "its Subdivision Surface's Render levels" for name in adaptive]
-    elif with_camera and scene.camera is None:
-        raise InputError("The scene has no active camera")
     else:
         renderable = renderable_objects(view_layer)
         read = _read_objects(scene, context.evaluated_depsgraph_get(), with_camera, renderable)

@@ -1,11 +1,13 @@
 """CAUSTIC_OT_compare_cycles: the caustic render next to a Cycles render of
-the same camera (CPU, MNEE shadow caustics), with the error between them
-(comparison.run). Writes "Caustic Render" (with its passes), "Cycles
-Reference" and "Difference"; leaves every render setting as it was. Cycles
-cannot render reflectors' caustics, and the report says so. In the UI both
-halves run like Render: the caustics on a worker thread, then Cycles as
-Blender's own render job (its progress bar and render view, as F12); Esc
-stops either, and a stopped comparison writes nothing."""
+the same camera (CPU; the light the caustic render computes, its caustics
+path-traced, or by MNEE for lamps without a size), with the error between
+them (comparison.run). Writes "Caustic Render" (with its passes), "Cycles
+Reference" and "Difference"; leaves every render setting as it was. Where
+the reference lacks part of the caustic, or is too noisy to judge it, the
+report says so and measures no error there. In the UI both halves run like
+Render: the caustics on a worker thread, then Cycles as Blender's own
+render job (its progress bar and render view, as F12); Esc stops either,
+and a stopped comparison writes nothing."""
 
 import bpy
 
@@ -19,8 +21,8 @@ from .engine_run import EngineOperator
 class CAUSTIC_OT_compare_cycles(EngineOperator, bpy.types.Operator):
     bl_idname = "caustic.compare_cycles"
     bl_label = "Compare with Cycles"
-    bl_description = ("Render the camera with caustics and with Cycles (CPU, shadow caustics) and measure "
-                      "the difference")
+    bl_description = ("Render the camera with caustics and with Cycles (CPU, path-traced caustics, or MNEE for "
+                      "lamps without a size) and measure the difference")
     # As caustic.render: an undo step keeps the images, and no redo panel re-runs both renders.
     bl_options = {'UNDO'}
 
@@ -40,8 +42,9 @@ class CAUSTIC_OT_compare_cycles(EngineOperator, bpy.types.Operator):
         return self._comparison.runner
 
     def _status(self, runner: JobRunner) -> str:
-        if runner.step == "cycles":
-            return "Caustics done; Cycles renders the reference (its progress on the right; Esc to cancel)"
+        if runner.step != "caustics":
+            return (f"Caustics done; Cycles render {len(runner.done)} of {len(runner.steps) - 1} for the reference "
+                    "(its progress on the right; Esc to cancel)")
         return f"Caustics, then Cycles: {runner.stage}, {runner.fraction:.0%} (Esc to cancel)"
 
     def _done(self, context, runner: JobRunner) -> set:
@@ -53,8 +56,5 @@ class CAUSTIC_OT_compare_cycles(EngineOperator, bpy.types.Operator):
             return {'CANCELLED'}
         for warning in self._comparison.warnings:
             self.report({'WARNING'}, warning)
-        props = context.scene.caustic
-        self.report({'INFO'}, f"Caustics {self._comparison.caustics.seconds:.1f} s, Cycles "
-                              f"{props.cycles_seconds:.1f} s: relative L2 {props.cycles_relative_l2:.3f} over the "
-                              f"caustics, PSNR {props.cycles_psnr:.1f} dB")
+        self.report({'INFO'}, self._comparison.summary)
         return {'FINISHED'}

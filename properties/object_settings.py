@@ -28,7 +28,8 @@ class CausticObjectSettings(bpy.types.PropertyGroup):
         name="Abbe Number",
         description="Dispersion: the Abbe number V_d of the glass, whose IOR is the one at 587.6 nm "
                     "(55 diamond, 58 crown glass, 33 cubic zirconia, 56 water; lower disperses more). "
-                    "0: no dispersion",
+                    "0: no dispersion. A Principled BSDF's own Transmission Dispersion, where its scale is set, "
+                    "is used instead",
         default=0.0, min=0.0, soft_min=10.0, soft_max=100.0)
     absorption_from: EnumProperty(
         name="Absorption",

@@ -116,14 +116,45 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
                                                 "where neighbouring rays part ways", default=0, min=0)
     cycles_seconds: FloatProperty(
         name="Cycles Time", description="Seconds the last Cycles reference render took", default=0.0, min=0.0)
+    cycles_reference: EnumProperty(
+        name="Cycles Reference",
+        description="How the last comparison's Cycles reference rendered the caustics",
+        items=(('PATH_TRACED', "Path Traced", "Cycles path-traced every caustic: the reference contains them"),
+               ('MNEE', "MNEE", "A lamp without a size lights a smooth caster: Cycles renders its caustic only "
+                                "by MNEE (refraction, inside the shadow), so the reference lacks part of it"),
+               ('NONE', "No Caustics", "The scene has no glass or mirror: the error is over the whole image")),
+        default='PATH_TRACED')
     cycles_relative_l2: FloatProperty(
         name="Relative L2",
-        description="|caustic render - Cycles| / |Cycles| over the pixels the caustics light, last comparison",
+        description="|caustic render - Cycles| over the pixels the caustics light, over the Cycles reference's "
+                    "caustic light there (over the whole image, over |Cycles|, without caustics), last comparison; "
+                    "not a number where the reference lacks part of the caustic",
+        default=0.0, min=0.0)
+    cycles_noise: FloatProperty(
+        name="Cycles Noise",
+        description="The Cycles reference's own noise over the caustics, relative as the relative L2 is, from "
+                    "its two renders of half the samples with different seeds, last comparison; the relative L2 "
+                    "squared is, on average, the caustic render's own error squared plus this one's",
+        default=0.0, min=0.0)
+    cycles_caustic_ratio: FloatProperty(
+        name="Caustic Light",
+        description="The caustic render's caustic light over the caustics divided by the Cycles reference's "
+                    "(its render less one without caustics), last comparison",
+        default=0.0, min=0.0)
+    cycles_caustic_noise: FloatProperty(
+        name="Caustic Light Noise",
+        description="The standard deviation of the caustic light's ratio from the Cycles reference's noise, "
+                    "last comparison (not a number where the reference lacks part of the caustic)",
         default=0.0, min=0.0)
     cycles_psnr: FloatProperty(
         name="PSNR (dB)", description="Peak signal-to-noise ratio of the caustic render against Cycles, "
                                       "peak = brightest Cycles pixel, last comparison",
         default=0.0)
+    cycles_psnr_outside: BoolProperty(
+        name="PSNR outside the Caustics",
+        description="The last comparison's PSNR leaves the caustics out: its reference lacks part of them, or "
+                    "its noise there is most of the error",
+        default=False)
 
 
 def register():

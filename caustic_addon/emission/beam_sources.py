@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Optional
 
 import numpy as np
 
@@ -19,13 +20,17 @@ class BeamSource:
     """A grid of `grid` x `grid` points over one aim of a lamp, the disc
     turned by `roll` radians about the aim's axis. `overlap` lists every
     aim of the same lamp with its grid's sample density (points per unit
-    measure), to share the rays that several aims hold."""
+    measure), to share the rays that several aims hold. `cell (4,3)`: the
+    corners, less the lamp's position (a sun's: its direction), of the cell
+    of a lamp with a size that the lamp (one of its points,
+    lamp_points.lamp_cells) stands for (None: a lamp of size 0)."""
 
     aim: Aim
     energy: float
     grid: int
     overlap: list[tuple[Aim, float]] = field(default_factory=list)
     roll: float = 0.0
+    cell: Optional[np.ndarray] = None
 
     @property
     def light(self) -> Light:
@@ -51,12 +56,64 @@ class BeamSource:
         weight *= ((1.0 / self.cell_measure) / balance_density(others, np.array(density), origins, dirs))[:, None]
         return origins, dirs, weight
 
+    def cell_frame(self) -> tuple[np.ndarray, np.ndarray]:
+        """(axes (2,3), corners (4,2)): two orthonormal axes in the plane of
+        the lamp's `cell` (along its first edges), and its corners in them;
+        zeros for a lamp of size 0."""
+        if self.cell is None:
+            return np.zeros((2, 3)), np.zeros((4, 2))
+        c = self.cell
+        along = c[1] - c[0] + c[2] - c[3]
+        across = c[3] - c[0] + c[2] - c[1]
+        t = along / np.linalg.norm(along)
+        b = across - t * (t @ across)
+        axes = np.stack([t, b / np.linalg.norm(b)])
+        return axes, c @ axes.T
+
+    def differentials(self, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(d_origins (n,2,3), d_dirs (n,2,3)): how rays along `dirs (n,3)`
+        change per metre (a sun's: per radian) along each of the lamp's
+        `cell_frame` axes, each toward the same point of the caster's aim
+        (ray differentials, Igehy 1999; passes/differentials.py carries them
+        through the bounces). From a point of a lamp moved by e, the ray
+        through the point at the target's distance s along it turns by -(e
+        - d (d.e)) / s; a sun's direction turns by e, the ray pivoting
+        where it crosses the aim's disc, its origin `start_distance`
+        upstream moving by minus that times the turn. Zero for a lamp of
+        size 0."""
+        n = len(dirs)
+        if self.cell is None:
+            return np.zeros((n, 2, 3)), np.zeros((n, 2, 3))
+        edges = np.broadcast_to(self.cell_frame()[0], (n, 2, 3))
+        across = edges - dirs[:, None, :] * np.einsum("nkc,nc->nk", edges, dirs)[:, :, None]
+        if self.aim.is_disc:
+            return -self.aim.start_distance * across, across
+        return edges.copy(), -across / self.aim.target_distance
+
+
+def disc_shares(rc: np.ndarray, grid: int) -> np.ndarray:
+    """(k,) the share of the unit disc that the flat triangle of the
+    concentric_disc points of grid positions `rc (k,3,2)` (row, col) on a
+    grid of `grid` x `grid` points covers: times an aim's measure, the
+    measure of the grid triangle's beam. The map is equal-area, but it
+    bends along the square's diagonals and about its centre: the cell about
+    the centre of a grid of an even number of points has its corners on a
+    circle, and the square they span covers 2/pi of its disc, so with the
+    cell's measure its beams are pi/2 times too bright (a patch one cell
+    wide at the aim's centre, where every point of a lamp with a size puts
+    it). The flat triangles tile the disc but for slivers at its rim."""
+    disc = concentric_disc(rc.reshape(-1, 2) / (grid - 1)).reshape(-1, 3, 2)
+    (ax, ay), (bx, by) = (disc[:, 1] - disc[:, 0]).T, (disc[:, 2] - disc[:, 0]).T
+    return np.abs(ax * by - ay * bx) / (2.0 * math.pi)
+
 
 def beam_sources(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere, energy: float,
-                 lamp_rays: int, phases: np.ndarray) -> list[BeamSource]:
+                 lamp_rays: int, phases: np.ndarray, cells: list[Optional[np.ndarray]]) -> list[BeamSource]:
     """Grids over every lamp's aims, about `lamp_rays` grid points in all,
     shared in proportion to the flux each aim receives; none over an aim
-    that receives none (a lamp of power 0).
+    that receives none (a lamp of power 0). `cells` (by lamp): the corners
+    (4,3) of the cell of a lamp with a size that each lamp stands for, less
+    its point (lamp_points.point_lamps), or None.
 
     `phases (lights, 2)` in [0,1)^2 shift each lamp's grids
     against its casters: the aim widened so that its rings of grid points
@@ -67,17 +124,17 @@ def beam_sources(lights: list[Light], targets: list[Sphere], scene_sphere: Spher
     lamp with a size, whose grids would land alike, then sample what lies
     between one grid's points (the light of a glass's rim, say) between
     them."""
-    every = [(aim, phase) for light, phase in zip(lights, phases) for aim in aims(light, targets, scene_sphere)
-             if aim.flux(energy) > 0]
+    every = [(aim, phase, cell) for light, phase, cell in zip(lights, phases, cells)
+             for aim in aims(light, targets, scene_sphere) if aim.flux(energy) > 0]
     if not every:
         return []
-    points = share(lamp_rays, [aim.flux(energy) for aim, _ in every], minimum=9)
+    points = share(lamp_rays, [aim.flux(energy) for aim, _, _ in every], minimum=9)
     sources = []
-    for (aim, phase), n in zip(every, points):
+    for (aim, phase, cell), n in zip(every, points):
         grid = int(round(math.sqrt(n)))
         # rings of the concentric map 2 / (grid - 1) apart in rho
         sources.append(BeamSource(aim.widened(1.0 + 2.0 * phase[0] / (grid - 1)), energy, grid,
-                                  roll=2.0 * math.pi * phase[1]))
+                                  roll=2.0 * math.pi * phase[1], cell=cell))
     for source in sources:
         source.overlap = [(other.aim, 1.0 / other.cell_measure) for other in sources
                           if other.aim.light is source.aim.light]

@@ -73,13 +73,18 @@ class _LayerGrid:
 
     def add_jobs(self, corners: np.ndarray, irradiance: np.ndarray, share: np.ndarray, white: bool,
                  bands: int) -> list[Callable[[], None]]:
-        """Jobs that add beams `corners (m,3,2)` chart metres, `irradiance
+        """Jobs that add beams `corners (m,k,2)` chart metres, `irradiance
         (m,3)` W/m^2, times `share (m,)`, all `white` or not, a band of the
         grid's rows each (Coverage.add_jobs); parts outside the box are
         dropped."""
         if not white:
             self.coverage.widen(3)
         return self.coverage.add_jobs(corners, irradiance, self.lo, self.cell, share, bands)
+
+
+def _split(values: np.ndarray, groups: list) -> list[np.ndarray]:
+    """`values (m,)` cut into the parts of `groups` (of m in all, in order)."""
+    return np.split(values, np.cumsum([len(group) for group in groups])[:-1])
 
 
 def _weighted_quantiles(values: np.ndarray, weights: np.ndarray, q) -> np.ndarray:
@@ -103,26 +108,31 @@ def layer_shares(size: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 @kernel("Tuple((f8[::1], f8[:, ::1]))(f8[:, :, ::1])")
 def _spans(corners):
-    """(span (m,), centre (m,2)) of triangles `corners (m,3,2)`: the longer
-    side of each one's bounding box, and the mean of its corners."""
+    """(span (m,), centre (m,2)) of triangles `corners (m,3,2)` (or
+    polygons, (m,k,2)): the longer side of each one's bounding box, and the
+    mean of its corners."""
     span, centre = np.empty(len(corners)), np.empty((len(corners), 2))
+    count = corners.shape[1]
     for t in range(len(corners)):
         span[t] = 0.0
         for a in range(2):
             c0, c1, c2 = corners[t, 0, a], corners[t, 1, a], corners[t, 2, a]
-            span[t] = max(span[t], max(max(c0, c1), c2) - min(min(c0, c1), c2))
-            centre[t, a] = (c0 + c1 + c2) / 3.0
+            low, high, total = min(min(c0, c1), c2), max(max(c0, c1), c2), c0 + c1 + c2
+            for k in range(3, count):
+                low, high, total = min(low, corners[t, k, a]), max(high, corners[t, k, a]), total + corners[t, k, a]
+            span[t] = max(span[t], high - low)
+            centre[t, a] = total / count
     return span, centre
 
 
 @kernel("UniTuple(f8[::1], 2)(f8[:, :, ::1], b1[::1])")
 def _bounding_box(corners, chosen):
-    """(lo (2,), hi (2,)) the box around the `chosen (m,)` triangles of
-    `corners (m,3,2)`."""
+    """(lo (2,), hi (2,)) the box around the `chosen (m,)` triangles (or
+    polygons) of `corners (m,k,2)`."""
     lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
     for t in range(len(corners)):
         if chosen[t]:
-            for k in range(3):
+            for k in range(corners.shape[1]):
                 for a in range(2):
                     lo[a], hi[a] = min(lo[a], corners[t, k, a]), max(hi[a], corners[t, k, a])
     return lo, hi
@@ -188,27 +198,34 @@ class BeamMap(IlluminationMap):
         self._grids: Optional[list[Optional[_LayerGrid]]] = None
         self._layers: list[_Layer] = []
         self.beams = 0
+        self._held = 0
 
     def add_beams(self, corners: np.ndarray, irradiance: np.ndarray) -> None:
-        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2.
+        """Beams `corners (m,k,2)` chart metres (triangles, or convex
+        polygons: beams spread over a lamp's cell), `irradiance (m,3)` W/m^2.
         Past FLUSH_BEAMS pending, they are rasterised into layers laid out
         over the whole chart (but the fine one, laid over the first ones'
-        flux), so that later beams find a layer wherever they land."""
+        flux), so that later beams find a layer wherever they land. Beams
+        are counted for FLUSH_BEAMS and KEPT_BEAMS as the triangles their
+        memory holds, a polygon of k corners as k / 3."""
+        size = len(corners) * corners.shape[1] // 3
         with self._lock:
             self._beam_parts.append((corners, irradiance))
-            self._pending_beams += len(corners)
+            self._pending_beams += size
+            self._held += size
             self.beams += len(corners)
-            if self._kept is not None and self.beams > self.KEPT_BEAMS:
+            if self._kept is not None and self._held > self.KEPT_BEAMS:
                 self._kept = None
             elif self._kept is not None:
                 self._kept.append((corners, irradiance))
             if self._pending_beams >= self.FLUSH_BEAMS:
                 self._rasterise_pending(whole_chart=True)
 
-    def _layout(self, corners: np.ndarray, centres: np.ndarray, irradiance: np.ndarray, fine: np.ndarray,
+    def _layout(self, groups: list[np.ndarray], centres: np.ndarray, irradiance: np.ndarray, fine: np.ndarray,
                 coarse: np.ndarray, whole_chart: bool) -> list[Optional[_LayerGrid]]:
-        """The (fine, own, coarse) layer grids for beams `corners (m,3,2)`
-        (their `centres (m,2)`) with `fine, coarse (m,)` shares of the fine
+        """The (fine, own, coarse) layer grids for beams `groups` (their
+        corners (m_i,k_i,2), in order; `centres (m,2)` of them all) with
+        `fine, coarse (m,)` shares of the fine
         and coarse layers: the fine one over where the bright ones' flux
         lands (FINE_BRIGHTNESS, FINE_TAIL), the others over the chart, or
         over their beams' bounding box unless `whole_chart`; None for a
@@ -219,7 +236,9 @@ class BeamMap(IlluminationMap):
         if small.any():
             centre = np.take(centres, np.flatnonzero(small), axis=0)
             brightness = np.take(irradiance[:, 0] + irradiance[:, 1] + irradiance[:, 2], np.flatnonzero(small))
-            flux = fine[small] * brightness * np.abs(signed_areas(np.take(corners, np.flatnonzero(small), axis=0)))
+            areas = np.concatenate([signed_areas(np.take(corners, np.flatnonzero(chosen), axis=0))
+                                    for corners, chosen in zip(groups, _split(small, groups))])
+            flux = fine[small] * brightness * np.abs(areas)
             bright = brightness >= self.FINE_BRIGHTNESS * _weighted_quantiles(brightness, flux, 0.99)
             tails = (self.FINE_TAIL, 1.0 - self.FINE_TAIL)
             bounds = np.array([_weighted_quantiles(centre[bright, a], flux[bright], tails) for a in (0, 1)])
@@ -242,7 +261,9 @@ class BeamMap(IlluminationMap):
             if whole_chart:
                 grids[k] = _LayerGrid(lo, hi, cell, lo)
             elif chosen.any():
-                box_lo, box_hi = _bounding_box(corners, chosen)
+                boxes = [_bounding_box(corners, part) for corners, part in zip(groups, _split(chosen, groups))]
+                box_lo = np.min([box[0] for box in boxes], axis=0)
+                box_hi = np.max([box[1] for box in boxes], axis=0)
                 grids[k] = _LayerGrid(np.maximum(lo, box_lo), np.minimum(hi, box_hi), cell, lo)
         return grids
 
@@ -251,14 +272,21 @@ class BeamMap(IlluminationMap):
         (`layer_shares`) and add them to the layers' grids, laying those out
         first if there are none; a beam whose centre is outside the fine
         grid's box gives its fine share to the map's own grid. Each layer
-        is rasterised on a thread of its own (of `threads`)."""
-        corners = np.ascontiguousarray(np.concatenate([c for c, _ in self._beam_parts]), dtype=np.float64)
-        irradiance = np.ascontiguousarray(np.concatenate([e for _, e in self._beam_parts]), dtype=np.float64)
+        is rasterised on a thread of its own (of `threads`); triangles and
+        polygons of each number of corners one kind after another, each
+        kind in an array of its own."""
+        kinds = sorted({c.shape[1] for c, _ in self._beam_parts})
+        groups = [[part for part in self._beam_parts if part[0].shape[1] == k] for k in kinds]
+        groups = [(np.ascontiguousarray(np.concatenate([c for c, _ in group]), dtype=np.float64),
+                   np.ascontiguousarray(np.concatenate([e for _, e in group]), dtype=np.float64)) for group in groups]
         self._beam_parts, self._pending_beams = [], 0
-        span, centres = _spans(corners)
+        spans = [_spans(corners) for corners, _ in groups]
+        span, centres = np.concatenate([s for s, _ in spans]), np.concatenate([c for _, c in spans])
+        irradiance = np.concatenate([e for _, e in groups])
         fine, coarse = layer_shares(span / self.cell)
         if self._grids is None:
-            self._grids = self._layout(corners, centres, irradiance, fine, coarse, whole_chart)
+            self._grids = self._layout([corners for corners, _ in groups], centres, irradiance, fine, coarse,
+                                       whole_chart)
         grid = self._grids[0]
         if grid is not None:
             lo = grid.lo + 4.0 * self.cell
@@ -266,16 +294,18 @@ class BeamMap(IlluminationMap):
             x, y = centres[:, 0], centres[:, 1]
             fine = np.where((x >= lo[0]) & (y >= lo[1]) & (x <= hi[0]) & (y <= hi[1]), fine, 0.0)
         else:
-            fine = np.zeros(len(corners))
-        shares = (fine, (1.0 - fine) * (1.0 - coarse), coarse)
-        coloured = (irradiance[:, 0] != irradiance[:, 1]) | (irradiance[:, 0] != irradiance[:, 2])
+            fine = np.zeros(len(span))
         bands = self.RASTER_BANDS * self.threads
-        work = [job for g, share in zip(self._grids, shares) if g is not None and (share > 0).any()
-                for job in g.add_jobs(corners, irradiance, share, not (coloured & (share > 0.0)).any(), bands)]
-        if self.screen is not None:
-            work += self.screen.add_jobs(corners, irradiance, bands)
-        with ThreadPoolExecutor(max(1, min(self.threads, len(work)))) as pool:
-            list(pool.map(lambda job: job(), work))
+        arrays = [corners for corners, _ in groups]
+        for (corners, light), fine_k, coarse_k in zip(groups, _split(fine, arrays), _split(coarse, arrays)):
+            shares = (fine_k, (1.0 - fine_k) * (1.0 - coarse_k), coarse_k)
+            coloured = (light[:, 0] != light[:, 1]) | (light[:, 0] != light[:, 2])
+            work = [job for g, share in zip(self._grids, shares) if g is not None and (share > 0).any()
+                    for job in g.add_jobs(corners, light, share, not (coloured & (share > 0.0)).any(), bands)]
+            if self.screen is not None:
+                work += self.screen.add_jobs(corners, light, bands)
+            with ThreadPoolExecutor(max(1, min(self.threads, len(work)))) as pool:
+                list(pool.map(lambda job: job(), work))
 
     def prepare(self) -> None:
         """Rasterise the pending beams and turn the layers' grids into

@@ -1,4 +1,5 @@
-"""Exact-area rasterisation of flat-shaded triangles onto a grid.
+"""Exact-area rasterisation of flat-shaded triangles (and convex polygons)
+onto a grid.
 
 Each cell receives value x (area of the triangle inside the cell), exactly,
 with work proportional to the triangles' perimeters in cells rather than
@@ -13,7 +14,9 @@ the cell left of its midpoint,
 
 (dy = y1 - y0, signed). A running sum along each row then gives, in every
 cell, the signed area between the polygon's edges and the row's far end,
-which over a closed polygon is its coverage of the cell.
+which over a closed polygon is its coverage of the cell. A polygon of k
+corners is k edges, whatever its shape; corners (m,k,2) may repeat a
+polygon's last corner to pad it to k (an edge of no length adds nothing).
 """
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ def signed_area1(a, b, c):
 
 
 def signed_areas(corners: np.ndarray) -> np.ndarray:
-    """(m,) `signed_area1` of 2D triangles `corners (m,3,2)`."""
+    """(m,) `polygon_area1` of 2D triangles or convex polygons `corners (m,k,2)`."""
     return _signed_areas(np.ascontiguousarray(corners, dtype=np.float64))
 
 
@@ -42,8 +45,18 @@ def signed_areas(corners: np.ndarray) -> np.ndarray:
 def _signed_areas(corners):
     out = np.empty(len(corners))
     for t in range(len(corners)):
-        out[t] = signed_area1(corners[t, 0], corners[t, 1], corners[t, 2])
+        out[t] = polygon_area1(corners, t)
     return out
+
+
+@inline
+def polygon_area1(corners, t):
+    """Signed area of the convex polygon `corners[t] (k,2)` (k >= 3): the sum
+    of its fan's `signed_area1`, a triangle's own for k = 3."""
+    area = 0.0
+    for k in range(1, corners.shape[1] - 1):
+        area += signed_area1(corners[t, 0], corners[t, k], corners[t, k + 1])
+    return area
 
 
 def rasterise_triangles(shape: tuple[int, int], corners: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -52,8 +65,8 @@ def rasterise_triangles(shape: tuple[int, int], corners: np.ndarray, values: np.
 
     shape    (h, w) rows and columns; cell (r, c) spans x in [c, c+1], y in
              [r, r+1]
-    corners  (m,3,2) triangle corners (x, y) in cell units, either winding;
-             parts outside the grid are dropped
+    corners  (m,3,2) triangle corners (x, y) in cell units, either winding,
+             or (m,k,2) convex polygons'; parts outside the grid are dropped
     """
     buffer = Coverage(shape, values.shape[1])
     buffer.add(corners, values)
@@ -74,7 +87,7 @@ class Coverage:
 
     def add(self, corners: np.ndarray, values: np.ndarray, origin=(0.0, 0.0), cell: float = 1.0,
             share: np.ndarray | None = None) -> None:
-        """Add triangles `corners (m,3,2)`, cell units or, given the
+        """Add triangles `corners (m,3,2)` (or convex polygons, (m,k,2)), cell units or, given the
         grid's first corner `origin (2,)` and its `cell` edge, in those
         units, of `values (m,c)` times `share (m,)` (None: 1; a triangle of
         share 0 is skipped); one channel of buffer takes the first."""
@@ -109,25 +122,27 @@ class Coverage:
 
 @kernel("void(f8[:, ::1], i8, i8, f8[:, :, ::1], f8[:, ::1], f8[::1], f8, f8[::1], i8, i8)")
 def _accumulate(acc, h, w, corners, values, origin, cell, share, first_row, end_row):
-    """Add every edge piece of triangles `corners (m,3,2)` (in units of
-    `cell` from `origin (2,)`) of `values (m,c)` times `share (m,)` to the
+    """Add every edge piece of triangles `corners (m,3,2)`, or convex
+    polygons (m,k,2), (in units of `cell` from `origin (2,)`) of `values
+    (m,c)` times `share (m,)` to the
     accumulation buffer `acc (c, h (w+2))`: each sloped edge is cut at the
     lines y = k into rows first_row..end_row-1 of 0..h-1, and each row
     piece at the lines x = k into columns -1..w-1 (everything left of the
     grid joins column -1; pieces right of it are dropped)."""
-    channels = acc.shape[0]
-    local = np.empty((3, 2))
+    channels, count = acc.shape[0], corners.shape[1]
+    local = np.empty((1, count, 2))
     for t in range(corners.shape[0]):
         if share[t] == 0.0:
             continue
-        for k in range(3):
-            local[k, 0], local[k, 1] = (corners[t, k, 0] - origin[0]) / cell, (corners[t, k, 1] - origin[1]) / cell
-        # a counter-clockwise (y up) triangle accumulates minus its coverage
-        area = signed_area1(local[0], local[1], local[2])
+        for k in range(count):
+            local[0, k, 0] = (corners[t, k, 0] - origin[0]) / cell
+            local[0, k, 1] = (corners[t, k, 1] - origin[1]) / cell
+        # a counter-clockwise (y up) polygon accumulates minus its coverage
+        area = polygon_area1(local, 0)
         sign = -1.0 if area > 0.0 else (1.0 if area < 0.0 else 0.0)
-        for e in range(3):
-            xs, ys = local[e, 0], local[e, 1]
-            xe, ye = local[(e + 1) % 3, 0], local[(e + 1) % 3, 1]
+        for e in range(count):
+            xs, ys = local[0, e, 0], local[0, e, 1]
+            xe, ye = local[0, (e + 1) % count, 0], local[0, (e + 1) % count, 1]
             if ys == ye:
                 continue
             lo, hi = min(ys, ye), max(ys, ye)

@@ -26,7 +26,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..util.jit import kernel
+from ..util.jit import inline, kernel
 from .grid import as_rgb
 from .raster import Coverage
 
@@ -80,16 +80,19 @@ class ScreenLayer:
 
     def _image_triangles(self, corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(image triangles (k,3,2) pixels (x right, y down), source (k,)
-        row of `corners (m,3,2)` chart metres each comes from)."""
+        row of `corners (m,3,2)` chart metres each comes from); of convex
+        polygons `corners (m,j,2)`, j > 3, image polygons (k,j+1,2)."""
         corners = np.ascontiguousarray(corners, dtype=np.float64)
-        out, source = np.empty((2 * len(corners), 3, 2)), np.empty(2 * len(corners), dtype=np.int64)
+        fan = corners.shape[1] == 3
+        shape = (2 * len(corners), 3, 2) if fan else (len(corners), corners.shape[1] + 1, 2)
+        out, source = np.empty(shape), np.empty(shape[0], dtype=np.int64)
         view = self.view
         count = _image_triangles(corners, self._to_camera, 1.0 / view.pixel, float(view.centre[0]),
-                                 float(view.centre[1]), float(view.clip), bool(view.ortho), out, source)
+                                 float(view.centre[1]), float(view.clip), bool(view.ortho), fan, out, source)
         return out[:count], source[:count]
 
     def add(self, corners: np.ndarray, irradiance: np.ndarray) -> None:
-        """Beams `corners (m,3,2)` chart metres, `irradiance (m,3)` W/m^2."""
+        """Beams `corners (m,k,2)` chart metres (BeamMap.add_beams), `irradiance (m,3)` W/m^2."""
         for job in self.add_jobs(corners, irradiance, bands=1):
             job()
 
@@ -125,25 +128,33 @@ class ScreenLayer:
         return as_rgb(np.take(self._values, pixels, axis=0))
 
 
-@kernel("i8(f8[:, :, ::1], f8[:, ::1], f8, f8, f8, f8, b1, f8[:, :, ::1], i8[::1])")
-def _image_triangles(corners, to_camera, inverse_pixel, centre_x, centre_y, clip, ortho, out, source):
-    """Write into `out (2m,3,2)` the image triangles of the plane triangles
-    `corners (m,3,2)` (chart metres) and into `source (2m,)` the row each
-    comes from; returns how many. Camera space q = A [x, y, 1] (`to_camera`
-    A (3,3)) and depth -q_z are affine in the chart, so each triangle is cut
-    to depth >= `clip` there first (Sutherland and Hodgman 1974, one plane:
-    3 or 4 corners left, 1 or 2 triangles). A point at depth d shows at
+@kernel("i8(f8[:, :, ::1], f8[:, ::1], f8, f8, f8, f8, b1, b1, f8[:, :, ::1], i8[::1])")
+def _image_triangles(corners, to_camera, inverse_pixel, centre_x, centre_y, clip, ortho, fan, out, source):
+    """Write into `out (2m,3,2)` the image triangles of the plane
+    triangles `corners (m,3,2)` (chart metres), or unless `fan` into `out
+    (m,j+1,2)` the image polygons of convex polygons (m,j,2), each padded by
+    repeating its last corner, and into `source` the row each comes from;
+    returns how many. Camera space q = A [x, y, 1] (`to_camera` A (3,3)) and
+    depth -q_z are affine in the chart, so each polygon is cut to depth >=
+    `clip` there first (Sutherland and Hodgman 1974, one plane: a triangle
+    keeps 3 or 4 corners, 1 or 2 triangles; a corner that repeats the one
+    before it is dropped). A point at depth d shows at
     x = centre_x + q_x / (d p), y = centre_y - q_y / (d p) pixels (p the
     pixel at unit distance, `inverse_pixel` 1/p; `ortho`: q / p, no d),
     the inverse of camera_rays._eye_rays."""
-    kept = np.empty((4, 2))
+    sides = corners.shape[1]
+    kept, image = np.empty((sides + 1, 2)), np.empty((sides + 1, 2))
+    camera = (to_camera[0, 0], to_camera[0, 1], to_camera[0, 2], to_camera[1, 0], to_camera[1, 1],
+              to_camera[1, 2], to_camera[2, 0], to_camera[2, 1], to_camera[2, 2])
     count = 0
     for t in range(len(corners)):
         n = 0
-        for k in range(3):
+        for k in range(sides):
             # the corners' values, not views of `corners`: a view takes a reference to it (util.jit.inline)
             a = (corners[t, k, 0], corners[t, k, 1])
-            b = (corners[t, (k + 1) % 3, 0], corners[t, (k + 1) % 3, 1])
+            b = (corners[t, (k + 1) % sides, 0], corners[t, (k + 1) % sides, 1])
+            if a[0] == b[0] and a[1] == b[1]:
+                continue
             da = -(to_camera[2, 0] * a[0] + to_camera[2, 1] * a[1] + to_camera[2, 2]) - clip
             db = -(to_camera[2, 0] * b[0] + to_camera[2, 1] * b[1] + to_camera[2, 2]) - clip
             if da >= 0.0:
@@ -153,17 +164,33 @@ def _image_triangles(corners, to_camera, inverse_pixel, centre_x, centre_y, clip
                 s = da / (da - db)
                 kept[n, 0], kept[n, 1] = a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])
                 n += 1
-        for fan in range(n - 2):
+        if not fan and n >= 3:
+            for k in range(out.shape[1]):
+                if k < n:
+                    image[k, 0], image[k, 1] = _image_point1(kept[k, 0], kept[k, 1], camera, inverse_pixel, centre_x,
+                                                             centre_y, ortho)
+                out[count, k, 0], out[count, k, 1] = image[min(k, n - 1), 0], image[min(k, n - 1), 1]
+            source[count] = t
+            count += 1
+            continue
+        for first in range(n - 2):
             for k in range(3):
-                corner = 0 if k == 0 else fan + k
-                x, y = kept[corner, 0], kept[corner, 1]
-                qx = to_camera[0, 0] * x + to_camera[0, 1] * y + to_camera[0, 2]
-                qy = to_camera[1, 0] * x + to_camera[1, 1] * y + to_camera[1, 2]
-                scale = inverse_pixel
-                if not ortho:
-                    scale /= -(to_camera[2, 0] * x + to_camera[2, 1] * y + to_camera[2, 2])
-                out[count, k, 0] = centre_x + qx * scale
-                out[count, k, 1] = centre_y - qy * scale
+                corner = 0 if k == 0 else first + k
+                out[count, k, 0], out[count, k, 1] = _image_point1(kept[corner, 0], kept[corner, 1], camera,
+                                                                   inverse_pixel, centre_x, centre_y, ortho)
             source[count] = t
             count += 1
     return count
+
+
+@inline
+def _image_point1(x, y, camera, inverse_pixel, centre_x, centre_y, ortho):
+    """(x, y) pixels of the plane point (x, y) (_image_triangles), `camera`
+    the 9-tuple of to_camera's rows (values, not a view of the array:
+    util.jit.inline)."""
+    qx = camera[0] * x + camera[1] * y + camera[2]
+    qy = camera[3] * x + camera[4] * y + camera[5]
+    scale = inverse_pixel
+    if not ortho:
+        scale /= -(camera[6] * x + camera[7] * y + camera[8])
+    return centre_x + qx * scale, centre_y - qy * scale

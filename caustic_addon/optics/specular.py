@@ -72,6 +72,17 @@ def fresnel_dielectric1(cos_i, eta):
     return min(max(0.5 * (rs * rs + rp * rp), 0.0), 1.0)
 
 
+@inline
+def radiance_scale1(eta):
+    """What radiance keeps of itself, beyond the Fresnel transmittance, where
+    a ray of eta = eta_i / eta_t refracts and radiance flows back along it:
+    eta^2. Radiance over eta^2 is what a refraction conserves (Veach 1997,
+    sec. 5.2, L_i / eta_i^2 = T L_t / eta_t^2), so a floor under water seen
+    from the air is 1 / 1.33^2 as bright as under the air. Along a path the
+    factors telescope: a closed glass's entry and exit cancel."""
+    return eta * eta
+
+
 @kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1])")
 def _reflect_rows(d, n, out):
     for i in range(len(d)):

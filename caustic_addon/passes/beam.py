@@ -20,6 +20,15 @@ Triangles whose three paths still disagree fall back to photons: each
 landed corner carries a third of the triangle's flux into the map's ordinary
 density estimate.
 
+A lamp with a size is points of it, each standing for a cell of the lamp
+(lamp_points.py). Their paths carry ray differentials across the cell,
+toward the same point of the aim (BeamSource.differentials, carried through
+the bounces by differentials.py), and each beam of theirs is spread over
+where its cell's light lands, the landing's image of the cell
+(`_spread_beams`): the points' caustics, each sharp, then sum to the soft
+one rather than to a lattice of dots, one a point. Their grids' triangles
+carry their flat triangles' share of the aim (beam_sources.disc_shares).
+
 A lamp that can light a rough caster sends photons instead
 (`photon_lamps`); grid paths that meet a rough surface all the same (a
 spot's light turned toward one by another caster) scatter about microfacet
@@ -32,13 +41,14 @@ different bands land apart, which is the colour of a dispersive caustic.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
+from typing import Optional
 
 import numpy as np
 
 from ..emission.aims import Sphere, casters_and_bounds, visible_targets
-from ..emission.beam_sources import BeamSource, beam_sources
+from ..emission.beam_sources import BeamSource, beam_sources, disc_shares
 from ..emission.lamp_points import beam_lamps
 from ..emission.photons import make_emitters
 from ..maps.deposits import Deposits
@@ -56,6 +66,7 @@ from ..util.rows import take, take_rows
 from ..util.vectors import DIVISION_FLOOR, max_channel1, row
 from .beam_grid import Cells, LandingIndex, coherent_triangles, crack_free_triangles, diverging, fallback_shares
 from .bounce import Interface, facets, on_maps, split, trace
+from .differentials import landing_differentials
 from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
 from .paths import MIN_BRANCH_WEIGHT, Paths, relative_floor
 from .photon import FACET_STREAM, photon_jobs
@@ -77,6 +88,17 @@ _MIN_AREA_FRACTION = 1e-16
 # bowl's bottom to its rim, over the wall, which lies in other islands): it
 # falls back to photons.
 _MAX_STRETCH = 1.5
+# A beam's hull (_spread_beams) drops corners whose turn's sine is under
+# this: rounding would keep points in the middle of an edge as corners.
+_COLLINEAR = 1e-9
+# A beam from a point of a lamp with a size is SPREAD_COPIES^2 copies over
+# its lamp cell's image (_spread_beams); their moves are halved along a
+# direction where the beam is MOVE_RATIO times as wide as the image, and
+# copies that move less than _STILL of that are one, and a part kept less
+# than _STILL is none.
+SPREAD_COPIES = 2
+MOVE_RATIO = 4.0
+_STILL = 0.02
 # A beam across a box chart's seam is copied into each island when it is
 # shorter than the gutter between islands less this many cells (a bilinear
 # look-up's reach, and rounding).
@@ -92,7 +114,10 @@ class Landings:
     world, xy (n,2) chart metres, scale (n,) chart area per world area,
     weight (n,3) the path's starting weight times its Fresnel, tint and
     absorption factors, throughput (n,) that product of factors (max
-    channel)."""
+    channel), d_xy (n,k,2) chart metres: how the landing moves with the
+    path's differentials (BeamTracer: k = 2, per unit along the lamp cell's
+    axes; band_beams: k = 4, to each corner of the cell), or None where no
+    path stands for a lamp's cell (lamps of size 0)."""
 
     vertex: np.ndarray
     family: np.ndarray
@@ -103,6 +128,7 @@ class Landings:
     scale: np.ndarray
     weight: np.ndarray
     throughput: np.ndarray
+    d_xy: Optional[np.ndarray] = None
 
     @staticmethod
     def concat(parts: list["Landings"]) -> "Landings":
@@ -111,9 +137,14 @@ class Landings:
             return Landings(empty.astype(np.int64), empty.astype(np.uint64), empty.astype(np.int64),
                             empty.astype(np.int64), np.zeros((0, 3)), np.zeros((0, 2)), empty, np.zeros((0, 3)),
                             empty)
-        return Landings(*(np.concatenate([getattr(p, f) for p in parts])
-                          for f in ("vertex", "family", "obj", "island", "points", "xy", "scale", "weight",
-                                    "throughput")))
+        out = Landings(*(np.concatenate([getattr(p, f) for p in parts])
+                         for f in ("vertex", "family", "obj", "island", "points", "xy", "scale", "weight",
+                                   "throughput")))
+        shapes = [p.d_xy.shape[1:] for p in parts if p.d_xy is not None]
+        if shapes:
+            out.d_xy = np.concatenate([np.zeros((len(p.vertex),) + shapes[0]) if p.d_xy is None else p.d_xy
+                                       for p in parts])
+        return out
 
 
 class BeamTracer:
@@ -135,8 +166,23 @@ class BeamTracer:
             weight, floor = take(paths.weight, rows), take(paths.floor, rows)
             throughput = np.empty(len(rows))
             _throughputs(weight, floor, throughput)
-            self.landed.append(Landings(take(paths.ids, rows), take(paths.family, rows), np.full(len(rows), obj),
-                                        island, take(hits.points, rows), xy, scale, weight, throughput))
+            points = take(hits.points, rows)
+            landed = Landings(take(paths.ids, rows), take(paths.family, rows), np.full(len(rows), obj),
+                              island, points, xy, scale, weight, throughput)
+            if paths.d_origins is not None:
+                landed.d_xy = self._chart_differentials(obj, paths.take(rows), hits.take(rows), points, xy)
+            self.landed.append(landed)
+
+    def _chart_differentials(self, obj: int, paths: Paths, hits: Hits, points: np.ndarray,
+                             xy: np.ndarray) -> np.ndarray:
+        """(n,2,2) chart metres: how the landings `xy (n,2)` of `paths` at
+        `hits` (world `points (n,3)`) on receiver `obj` move with the
+        paths' two differentials: every chart is affine on each triangle."""
+        dp, duv = landing_differentials(self.accel, paths, hits)
+        local = hits.prim - self.accel.prim_offset[obj]
+        chart = self.maps[obj].chart
+        return np.stack([chart.coords(local, hits.u + duv[:, k, 0], hits.v + duv[:, k, 1], points + dp[:, k]) - xy
+                         for k in (0, 1)], axis=1)
 
     def scattered(self, paths: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:
         if surface.rough.any():
@@ -157,15 +203,21 @@ def _throughputs(weight, floor, out):
 
 def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap], origins: np.ndarray,
                 dirs: np.ndarray, weight: np.ndarray, vertex: np.ndarray, max_depth: int, start_medium: int = MISS,
-                band: int = 0, seed: int = 0) -> Landings:
+                band: int = 0, seed: int = 0, differentials: Optional[tuple[np.ndarray, np.ndarray]] = None
+                ) -> Landings:
     """Follow every branch of the vertex paths `vertex (n,)`, starting
     inside object `start_medium` (MISS: in air), until it lands on a
     receiver (after at least one specular event), leaves, or fades below
     MIN_BRANCH_WEIGHT. Dielectrics refract with their IOR in wavelength band
-    `band`; rough surfaces scatter by random numbers of `seed`."""
+    `band`; rough surfaces scatter by random numbers of `seed`. The paths
+    carry `differentials` (d_origins, d_dirs (n,2,3)) through their bounces
+    where given (their landings' d_xy)."""
     tracer = BeamTracer(accel, materials, maps, seed)
     paths = Paths.start(origins, dirs, weight, vertex, start_medium, relative_floor(weight),
                         np.full(len(vertex), band, dtype=np.int64), family=True)
+    if differentials is not None:
+        paths = replace(paths, d_origins=differentials[0].astype(np.float32),
+                        d_dirs=differentials[1].astype(np.float32))
     trace(accel, materials, paths, max_depth, tracer)
     return Landings.concat(tracer.landed)
 
@@ -185,6 +237,9 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
     width = (grid - 1) * scale + 1
     keys = width * width
 
+    spreading = any(source.cell is not None for source in sources)
+    cell_corners = np.stack([source.cell_frame()[1] for source in sources]) if spreading else None
+
     def trace_vertices(vertex: np.ndarray) -> Landings:
         which, local = np.divmod(vertex, keys)
         rays = [source.rays_at(np.stack([local[which == k] // width, local[which == k] % width], axis=1) / scale)
@@ -192,8 +247,18 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
         origins, dirs, weight = (np.concatenate(parts) for parts in zip(*rays))
         weight *= materials.band_weights[band]
         order = np.argsort(which, kind="stable")
-        return trace_paths(accel, materials, maps, origins, dirs, weight, vertex[order], max_depth, start_medium,
-                           band, seed)
+        if not spreading:
+            return trace_paths(accel, materials, maps, origins, dirs, weight, vertex[order], max_depth,
+                               start_medium, band, seed)
+        differentials = tuple(np.concatenate(parts) for parts in zip(*(
+            source.differentials(d) for source, (_, d, _) in zip(sources, rays))))
+        landed = trace_paths(accel, materials, maps, origins, dirs, weight, vertex[order], max_depth, start_medium,
+                             band, seed, differentials)
+        if landed.d_xy is not None:
+            # per unit along the cell's axes, to each of its corners
+            landed.d_xy = np.einsum("nkj,njc->nkc", np.take(cell_corners, landed.vertex // keys, axis=0),
+                                    landed.d_xy)
+        return landed
 
     row, col = (a.ravel() * scale for a in np.meshgrid(np.arange(first_row, end_row - 1), np.arange(grid - 1),
                                                          indexing="ij"))
@@ -216,7 +281,15 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
     triangles, area, centres = crack_free_triangles(cells, width, traced)
     landings = Landings.concat([landings, trace_vertices(centres)])
     cell_measure = np.array([source.cell_measure for source in sources])
-    measure = cell_measure[triangles[:, 0] // keys] * area / scale ** 2
+    owner = triangles[:, 0] // keys
+    measure = cell_measure[owner] * area / scale ** 2
+    if spreading:
+        # a lamp point's beams by their flat triangles' share of the aim (beam_sources.disc_shares)
+        local = triangles % keys
+        shares = disc_shares(np.stack([local // width, local % width], axis=-1) / scale, grid)
+        exact = np.array([source.cell is not None for source in sources])
+        aim_measure = np.array([source.aim.measure for source in sources])
+        measure = np.where(exact[owner], aim_measure[owner] * shares, measure)
     deposits, beams, flux_landed = _beams_and_photons(LandingIndex(landings, maps), triangles, measure, maps)
     refined = len(traced) + len(centres) - on_grid
     return JobResult(deposits, LampPassStats(owned + refined, refined, beams, flux_landed))
@@ -245,8 +318,21 @@ def _beams_and_photons(lookup: LandingIndex, triangles: np.ndarray, measure: np.
     photon_flux = share[holders, None] * np.take(land.weight, holders, axis=0)
 
     deposits = Deposits()
+    spread = None
+    if land.d_xy is not None:
+        d_xy = land.d_xy
+        spread = (np.take(d_xy, idx[:, 0], axis=0) + np.take(d_xy, idx[:, 1], axis=0)
+                  + np.take(d_xy, idx[:, 2], axis=0)) / 3.0
     for o in np.unique(obj[good]):
-        deposits.add_beams(int(o), *take_rows(good & (obj == o), corners, irradiance))
+        if spread is None:
+            deposits.add_beams(int(o), *take_rows(good & (obj == o), corners, irradiance))
+        else:
+            # the copies that stay triangles apart from the hulls: each holds the memory of its corners
+            spread_triangles, triangle_light, hulls, hull_light = _spread_beams(
+                *take_rows(good & (obj == o), corners, irradiance, spread), SPREAD_COPIES)
+            for part, light in ((spread_triangles, triangle_light), (hulls, hull_light)):
+                if len(part):
+                    deposits.add_beams(int(o), part, light)
     for k in range(3):
         rows = np.flatnonzero(copies[:, k])
         for o in np.unique(obj[rows]):
@@ -334,6 +420,173 @@ def _beam_geometry(tri, idx, measure, xy, weight, scale, points, island, obj, mi
     return corners, flux, irradiance, world_area, good, copies
 
 
+@inline
+def _turns_right(a, b, c):
+    """Whether the 2D path a, b, c ((2,) each) turns clockwise or goes
+    straight on (_COLLINEAR)."""
+    return 2.0 * signed_area1(a, b, c) <= _COLLINEAR * _distance_2d(a, b) * _distance_2d(a, c)
+
+
+@inline
+def _distance_2d(a, b):
+    """|b - a| of 2D points."""
+    return np.sqrt((b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2)
+
+
+@inline
+def _taper(corners, b, ux, uy, ratio):
+    """1 / (1 + (w / (ratio |u|))^4), w the width of beam `b` of `corners
+    (b,3,2)` along (ux, uy): 1 for a beam much narrower than u, 1/2 at
+    `ratio` times as wide, 0 for a far wider one (and for u = 0)."""
+    size = np.sqrt(ux * ux + uy * uy)
+    if size == 0.0:
+        return 0.0
+    lo, hi = np.inf, -np.inf
+    for k in range(3):
+        along = (corners[b, k, 0] * ux + corners[b, k, 1] * uy) / size
+        lo, hi = min(lo, along), max(hi, along)
+    return 1.0 / (1.0 + ((hi - lo) / (ratio * size)) ** 4)
+
+
+@inline
+def _bilinear(spread, b, s, t, axis):
+    """Coordinate `axis` of the point (s, t) of the unit square on the
+    quadrilateral `spread[b] (4,2)` (corners at (0,0), (1,0), (1,1), (0,1))."""
+    return ((1.0 - s) * (1.0 - t) * spread[b, 0, axis] + s * (1.0 - t) * spread[b, 1, axis]
+            + s * t * spread[b, 2, axis] + (1.0 - s) * t * spread[b, 3, axis])
+
+
+@inline
+def _in_axes(x, y, ux, uy, vx, vy, det, keep_u, keep_v):
+    """The 2D vector (x, y) = a u + c v with a times `keep_u` and c times
+    `keep_v` (det = u x v, not 0)."""
+    a = keep_u * (x * vy - y * vx) / det
+    c = keep_v * (ux * y - uy * x) / det
+    return a * ux + c * vx, a * uy + c * vy
+
+
+@inline
+def _spread_plan1(corners, spread, b, copies):
+    """How `_spread_beams` spreads beam `b`: (u, v (2 each), det, the
+    moves' tapers along u and v, the parts along u and v, the parts'
+    tapers along u and v, whether the parts are hulls)."""
+    ux = 0.5 * (spread[b, 1, 0] + spread[b, 2, 0] - spread[b, 0, 0] - spread[b, 3, 0])
+    uy = 0.5 * (spread[b, 1, 1] + spread[b, 2, 1] - spread[b, 0, 1] - spread[b, 3, 1])
+    vx = 0.5 * (spread[b, 2, 0] + spread[b, 3, 0] - spread[b, 0, 0] - spread[b, 1, 0])
+    vy = 0.5 * (spread[b, 2, 1] + spread[b, 3, 1] - spread[b, 0, 1] - spread[b, 1, 1])
+    det = ux * vy - uy * vx
+    move_u, move_v = _taper(corners, b, ux, uy, MOVE_RATIO), _taper(corners, b, vx, vy, MOVE_RATIO)
+    split_u = copies if move_u > _STILL else 1
+    split_v = copies if move_v > _STILL else 1
+    keep_u = _taper(corners, b, ux / split_u, uy / split_u, 1.0)
+    keep_v = _taper(corners, b, vx / split_v, vy / split_v, 1.0)
+    hulled = det != 0.0 and keep_u > _STILL and keep_v > _STILL
+    return ux, uy, vx, vy, det, move_u, move_v, split_u, split_v, keep_u, keep_v, hulled
+
+
+@kernel("Tuple((f8[:, :, ::1], f8[:, ::1], f8[:, :, ::1], f8[:, ::1]))(f8[:, :, ::1], f8[:, ::1], f8[:, :, ::1], i8)")
+def _spread_beams(corners, irradiance, spread, copies):
+    """Beams of `corners (b,3,2)` chart metres and `irradiance (b,3)`
+    spread over the image of the lamp's cell their paths stand for, the
+    quadrilateral `spread (b,4,2)` (where the cell's corners move the
+    landing, the mean of the beam's corners'; u, v its mean edges): to
+    first order the cell's light through the grid triangle, the beam
+    convolved with the image.
+
+    The convolution is `copies` x `copies` copies of the beam, each moved
+    to the centre of its part of the image (its split into as many parts)
+    with a share of the light: copies of a tiling tile, so light that is
+    even stays even. A beam much smaller than its part (a focus, where a
+    lamp point's light gathers) is spread over it: uniformly over the
+    Minkowski sum of the beam and the part (the convex hull of the 12
+    points corner + part's corner, Andrew's monotone chain, at most 7
+    corners; irradiance times the beam's area over the hull's), so that
+    the parts tile. The hulls of wider neighbouring beams overlap at their
+    corners, so the part is kept along u and along v by `_taper`(1) of the
+    beam's width that way; and the copies' moves by `_taper`(MOVE_RATIO),
+    copies that no longer move (a beam wider than many images, where a
+    lamp point's light is as smooth as the lamp's) being one.
+
+    Returns the copies that stay triangles (k,3,2) and their irradiance
+    (k,3), and the hulls (h,7,2), each padded by repeating its last corner
+    (raster.py), and theirs (h,3): each kind in arrays of its own size."""
+    count = len(corners)
+    triangles = hulls = 0
+    for b in range(count):
+        plan = _spread_plan1(corners, spread, b, copies)
+        if plan[11]:
+            hulls += plan[7] * plan[8]
+        else:
+            triangles += plan[7] * plan[8]
+    out_t, values_t = np.empty((triangles, 3, 2)), np.empty((triangles, 3))
+    out_h, values_h = np.empty((hulls, 7, 2)), np.empty((hulls, 3))
+    points, hull = np.empty((12, 2)), np.empty((24, 2))
+    t = h_row = 0
+    for b in range(count):
+        ux, uy, vx, vy, det, move_u, move_v, split_u, split_v, keep_u, keep_v, hulled = _spread_plan1(
+            corners, spread, b, copies)
+        moved = det != 0.0 and split_u * split_v > 1
+        beam_area = abs(signed_area1(corners[b, 0], corners[b, 1], corners[b, 2]))
+        for i in range(split_u):
+            for j in range(split_v):
+                s0, s1 = i / split_u, (i + 1) / split_u
+                r0, r1 = j / split_v, (j + 1) / split_v
+                cx = _bilinear(spread, b, 0.5 * (s0 + s1), 0.5 * (r0 + r1), 0)
+                cy = _bilinear(spread, b, 0.5 * (s0 + s1), 0.5 * (r0 + r1), 1)
+                # the copy's move: to its part's centre, each way kept by its taper
+                mx, my = _in_axes(cx, cy, ux, uy, vx, vy, det, move_u, move_v) if moved else (0.0, 0.0)
+                n = 0
+                for q in range(4 if hulled else 1):
+                    qx, qy = 0.0, 0.0
+                    if hulled:
+                        # the part's corner about its centre, each way kept by its taper
+                        s, r = s1 if q == 1 or q == 2 else s0, r1 if q >= 2 else r0
+                        qx, qy = _in_axes(_bilinear(spread, b, s, r, 0) - cx, _bilinear(spread, b, s, r, 1) - cy,
+                                          ux, uy, vx, vy, det, keep_u, keep_v)
+                    for k in range(3):
+                        x, y = corners[b, k, 0] + mx + qx, corners[b, k, 1] + my + qy
+                        # sorted by (x, y) as they come
+                        p = n
+                        while p > 0 and (points[p - 1, 0] > x or (points[p - 1, 0] == x and points[p - 1, 1] > y)):
+                            points[p, 0], points[p, 1] = points[p - 1, 0], points[p - 1, 1]
+                            p -= 1
+                        points[p, 0], points[p, 1] = x, y
+                        n += 1
+                h = 0
+                for sweep in range(2):
+                    # the lower chain left to right, then the upper one back, from its last point
+                    floor = h + 2
+                    for e in range(n):
+                        p = e if sweep == 0 else n - 1 - e
+                        while h >= floor and _turns_right(hull[h - 2], hull[h - 1], points[p]):
+                            h -= 1
+                        hull[h, 0], hull[h, 1] = points[p, 0], points[p, 1]
+                        h += 1
+                    h -= 1
+                area = 0.0
+                for k in range(1, h - 1):
+                    area += signed_area1(hull[0], hull[k], hull[k + 1])
+                if h > 7 or not area > 0.0:
+                    h = 3
+                    for k in range(3):
+                        hull[k, 0], hull[k, 1] = corners[b, k, 0] + mx, corners[b, k, 1] + my
+                    area = beam_area
+                share = beam_area / area / (split_u * split_v)
+                if hulled:
+                    for k in range(7):
+                        out_h[h_row, k, 0], out_h[h_row, k, 1] = hull[min(k, h - 1), 0], hull[min(k, h - 1), 1]
+                    for c in range(3):
+                        values_h[h_row, c] = irradiance[b, c] * share
+                    h_row += 1
+                else:
+                    for k in range(3):
+                        out_t[t, k, 0], out_t[t, k, 1] = hull[k, 0], hull[k, 1]
+                    for c in range(3):
+                        values_t[t, c] = irradiance[b, c] * share
+                    t += 1
+    return out_t, values_t, out_h, values_h
+
+
 def photon_lamps(lights: list[Light], scene: Scene) -> list[Light]:
     """The lamps whose light beam mode sends as photons: those that can
     light a rough caster (aims.visible_targets). Its light scatters about
@@ -366,9 +619,9 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
     beamed = [light for light in lights if not any(light is other for other in as_photons)]
     # each wavelength band's share of the lamp rays that photons leave
     band_rays = (settings.lamp_rays - sum(e.count for e in emitters)) // count
-    lamps, phases = beam_lamps(beamed, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
-                               min(imap.cell for imap in maps.values()), band_rays)
-    sources = beam_sources(lamps, targets, scene_sphere, settings.energy, band_rays, phases)
+    lamps, phases, cells = beam_lamps(beamed, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
+                                      min(imap.cell for imap in maps.values()), band_rays)
+    sources = beam_sources(lamps, targets, scene_sphere, settings.energy, band_rays, phases, cells)
     stacks: dict[tuple[int, int], list[BeamSource]] = {}
     for source in sources:
         stacks.setdefault((source.grid, lamp_medium(accel, source.light)), []).append(source)

@@ -32,7 +32,7 @@ import numpy as np
 from ..optics.media import beer_lambert1
 from ..optics.microfacet import shadowing_weight1, visible_normal_about1
 from ..optics.multiscatter import albedo_at1, multiscatter_factor1
-from ..optics.specular import fresnel_dielectric1, reflect1, refract1
+from ..optics.specular import fresnel_dielectric1, radiance_scale1, reflect1, refract1
 from ..sampling.hash import hash_uniform1
 from ..sampling.warps import concentric_disc1, orthonormal_basis1
 from ..scene.material_table import Materials
@@ -100,11 +100,21 @@ def oriented1(d, face, shading):
     return facing, (facing if dot1(d, shading) >= 0.0 else shading)
 
 
+@inline
+def reflectance1(reflector, reflects, cos_i, eta):
+    """The share of light an interface reflects: all at a reflector,
+    none where its Fresnel is none (a Refraction BSDF), else exact Fresnel."""
+    if reflector:
+        return 1.0
+    return fresnel_dielectric1(cos_i, eta) if reflects else 0.0
+
+
 @kernel("void(i8[::1], f8[::1], f8[::1], i8[::1], f8[:, ::1], i8[::1], i8[::1], f8[:, ::1], f8[:, :, ::1], "
-        "b1[::1], i8[::1], f8[:, ::1], b1[::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1])")
+        "b1[::1], i8[::1], f8[:, ::1], b1[::1], b1[::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1])")
 def _oriented(prim, u, v, obj, dirs, medium, band, face_normal, corner_normal, closed, body, ior, reflector,
-              facing, shading, entering, eta, fresnel):
-    """orient's rows: `ior (m,K)` per object and band, `band (n,)` each row's."""
+              reflects, facing, shading, entering, eta, fresnel):
+    """orient's rows: `ior (m,K)` per object and band, `band (n,)` each
+    row's; `reflects (m,)` False where an object's Fresnel is none."""
     for i in range(len(prim)):
         d, o, face = row(dirs, i), obj[i], row(face_normal, prim[i])
         entered = (not inside1(medium[i], o, body)) if closed[o] else dot1(d, face) < 0.0
@@ -113,13 +123,13 @@ def _oriented(prim, u, v, obj, dirs, medium, band, face_normal, corner_normal, c
         set_row(facing, i, f)
         set_row(shading, i, s)
         entering[i], eta[i] = entered, e
-        fresnel[i] = 1.0 if reflector[o] else fresnel_dielectric1(-dot1(d, s), e)
+        fresnel[i] = reflectance1(reflector[o], reflects[o], -dot1(d, s), e)
 
 
 def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, materials: Materials, medium: np.ndarray,
            band=None) -> Interface:
     """Orient the hits' normals against `dirs (n,3)` and evaluate Fresnel
-    (1 at reflectors, which reflect everything). Dielectrics refract with
+    (reflectance1: 1 at reflectors, which reflect everything). Dielectrics refract with
     their IOR in wavelength band `band` ((n,) per ray), or at 587.6 nm (n_d)
     when it is None.
 
@@ -137,7 +147,7 @@ def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, materials: Material
               contiguous(hits.obj, np.int64), contiguous(dirs, np.float64), contiguous(medium, np.int64),
               np.zeros(n, dtype=np.int64) if band is None else contiguous(band, np.int64), accel.face_normal,
               accel.corner_normal, accel.closed, accel.body, contiguous(ior, np.float64), materials.reflector,
-              facing, shading, entering, eta, fresnel)
+              materials.fresnel, facing, shading, entering, eta, fresnel)
     return Interface(hits.points, facing, shading, entering, eta, fresnel, np.take(materials.alpha, hits.obj),
                      shading)
 
@@ -148,21 +158,22 @@ def facets(surface: Interface, dirs: np.ndarray, materials: Materials, obj: np.n
     normals visible from the ray `dirs (n,3)` at objects `obj (n,)`, by
     `uv (n,2)` in [0,1)^2 through the concentric disc, in the frame
     (sampling.warps.orthonormal_basis1) of the shading normal
-    (optics.microfacet.visible_normal_about1), and its Fresnel there (1 at
-    reflectors). Smooth rows are left as they are."""
+    (optics.microfacet.visible_normal_about1), and its Fresnel there
+    (reflectance1). Smooth rows are left as they are."""
     rough = np.flatnonzero(surface.rough)
     if len(rough) == 0:
         return surface
     scattering, fresnel = contiguous(surface.scattering, np.float64).copy(), surface.fresnel.copy()
     _facets(rough, contiguous(dirs, np.float64), contiguous(surface.shading, np.float64), contiguous(uv, np.float64),
             contiguous(surface.alpha, np.float64), contiguous(surface.eta, np.float64), materials.reflector,
-            contiguous(obj, np.int64), scattering, fresnel)
+            materials.fresnel, contiguous(obj, np.int64), scattering, fresnel)
     return Interface(surface.points, surface.facing, surface.shading, surface.entering, surface.eta, fresnel,
                      surface.alpha, scattering)
 
 
-@kernel("void(i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], b1[::1], i8[::1], f8[:, ::1], f8[::1])")
-def _facets(rough, dirs, shading, uv, alpha, eta, reflector, obj, scattering, fresnel):
+@kernel("void(i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], b1[::1], b1[::1], i8[::1], f8[:, ::1], "
+        "f8[::1])")
+def _facets(rough, dirs, shading, uv, alpha, eta, reflector, reflects, obj, scattering, fresnel):
     """facets' rough rows `rough (m,)`."""
     for j in range(len(rough)):
         i = rough[j]
@@ -171,7 +182,7 @@ def _facets(rough, dirs, shading, uv, alpha, eta, reflector, obj, scattering, fr
         x, y = concentric_disc1(uv[i, 0], uv[i, 1])
         h = visible_normal_about1(scale1(-1.0, d), normal, tangent, bitangent, alpha[i], x, y)
         set_row(scattering, i, h)
-        fresnel[i] = 1.0 if reflector[obj[i]] else fresnel_dielectric1(-dot1(d, h), eta[i])
+        fresnel[i] = reflectance1(reflector[obj[i]], reflects[obj[i]], -dot1(d, h), eta[i])
 
 
 def multiscatter(surface: Interface, materials: Materials, obj: np.ndarray, dirs: np.ndarray, out: np.ndarray,
@@ -197,7 +208,7 @@ def multiscatter(surface: Interface, materials: Materials, obj: np.ndarray, dirs
     _multiscatter_factors(rough, contiguous(obj, np.int64), contiguous(surface.entering, bool),
                           contiguous(crossed, bool), contiguous(out if carries_light else dirs, np.float64),
                           contiguous(surface.shading, np.float64), carries_light, materials.facet_albedo,
-                          materials.facet_albedo_avg, materials.color, factor)
+                          materials.facet_albedo_avg, materials.energy_tint, factor)
     return factor
 
 
@@ -310,19 +321,20 @@ def _own_families(surface: Interface) -> np.ndarray:
 
 @kernel("i8(f8[:, ::1], f8[:, ::1], i8[::1], f8[::1], u8[::1], i8[::1], i8[::1], i8[::1], "
         "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1], f8[::1], b1[::1], "
-        "f8[:, ::1], b1[::1], i8[::1], f8[:, ::1], f8, f8, i8[::1], i8, u8, "
+        "f8[:, ::1], f8[:, ::1], b1[::1], i8[::1], f8[:, ::1], b1, f8, f8, i8[::1], i8, u8, "
         "f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], u8[::1], i1[::1], i8[::1], i8[::1])")
 def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
               points, facing, shading, scattering, entering, eta, fresnel, alpha, own,
-              color, dielectric, surface_of, factor, epsilon, roulette, draws, strata, key,
-              out_origins, out_dirs, out_weight, out_medium, out_family, out_kind, out_surface, source):
+              reflection_tint, transmission_tint, dielectric, surface_of, factor, radiance, epsilon, roulette, draws,
+              strata, key, out_origins, out_dirs, out_weight, out_medium, out_family, out_kind, out_surface, source):
     """split's branches, all reflected ones, then all refracted ones, into
     the out_ arrays (2n rows); returns how many there are. `source` is the
     path each comes from; `factor (2n,3)` the multiscatter factors of the
-    reflected then the refracted branches, or (0,3): none; `family` (0,)
-    where the paths have none; `draws (n,)` the ids the roulette of each
-    path's branches hashes, or (0,): no roulette, `strata` how many
-    draws share one stratified set (Roulette)."""
+    reflected then the refracted branches, or (0,3): none; `radiance` where
+    the paths carry radiance (eye rays), whose refracted branches take
+    radiance_scale1; `family` (0,) where the paths have none; `draws (n,)`
+    the ids the roulette of each path's branches hashes, or (0,): no
+    roulette, `strata` how many draws share one stratified set (Roulette)."""
     n, count = len(dirs), 0
     for event in range(2):
         mirror = event == 0
@@ -330,11 +342,12 @@ def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
             o = obj[i]
             if not (mirror or dielectric[o]):
                 continue
-            d, c = row(dirs, i), row(color, o)
+            d = row(dirs, i)
+            c = row(reflection_tint, o) if mirror else row(transmission_tint, o)
             out, crossed, kept = scatter1(d, row(scattering, i), row(facing, i), row(shading, i), eta[i], alpha[i],
                                           mirror)
             share = fresnel[i] if mirror else (1.0 - fresnel[i] if crossed else 0.0)
-            s = share * kept
+            s = share * kept * (radiance_scale1(eta[i]) if radiance and crossed else 1.0)
             w = (weight[i, 0] * c[0] * s, weight[i, 1] * c[1] * s, weight[i, 2] * c[2] * s)
             if len(factor):
                 j = event * n + i
@@ -389,7 +402,9 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
           carries_light: bool, roulette: Roulette | None = None) -> Paths:
     """Both branches of every path at its specular hit: the reflected one
     with weight F and the refracted one with weight 1 - F (dielectrics
-    only), each times the surface's tint, and where rough about the same
+    only), each times the surface's tint for its kind (Materials'
+    reflection_tint, transmission_tint), an eye ray's refracted one (not
+    `carries_light`) times radiance_scale1 as well, and where rough about the same
     microfacet normal (`facets` drew it), times what scatter1 keeps and the
     multiscatter factor (on the eye's side: `carries_light` for beam
     vertices, not for eye rays). A branch whose weight falls below its
@@ -416,8 +431,8 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
         contiguous(hits.prim, i8), contiguous(surface.points, f8), contiguous(surface.facing, f8),
         contiguous(surface.shading, f8), contiguous(surface.scattering, f8), contiguous(surface.entering, bool),
         contiguous(surface.eta, f8), contiguous(surface.fresnel, f8), contiguous(surface.alpha, f8),
-        contiguous(_own_families(surface), bool), materials.color, materials.dielectric, accel.surface, factor,
-        accel.epsilon, 0.0 if roulette is None else roulette.weight,
+        contiguous(_own_families(surface), bool), materials.reflection_tint, materials.transmission_tint,
+        materials.dielectric, accel.surface, factor, not carries_light, accel.epsilon, 0.0 if roulette is None else roulette.weight,
         np.zeros(0, dtype=i8) if roulette is None else contiguous(roulette.draws, i8),
         1 if roulette is None else roulette.strata, np.uint64(0 if roulette is None else roulette.key), *out)
     origins, dirs, weight, medium, family, kind, prim, source = (a[:count] for a in out)

@@ -3,10 +3,14 @@ differentials"; pbrt's SurfaceInteraction::ComputeDifferentials): how an eye
 ray's origin and direction change per pixel step, carried through each
 reflection and refraction, so that a receiver seen through glass or in a
 mirror is averaged over the pixel's footprint there (PlaneChart.footprint),
-as one seen directly is, and not read at a point.
+as one seen directly is, and not read at a point; and how a beam vertex
+from a point of a lamp with a size lands as the point moves across its
+cell of the lamp (`landing_differentials`: passes/beam.py spreads its beams
+over that image of the cell).
 
 A ray is o + s d; its differentials do, dd are (2,3) per ray, one row per
-pixel step right and down. At a hit the point moves by the transfer dp, the
+pixel step right and down (a beam vertex's: per unit along its lamp cell's
+two axes). At a hit the point moves by the transfer dp, the
 surface's shading normal by dn (its corner normals' interpolant), and the
 new direction by the derivative of the reflection or refraction formula."""
 
@@ -125,3 +129,37 @@ def branch_differentials(accel, paths, hits, surface, source: np.ndarray, kind: 
                           accel.corners, accel.corner_normal, contiguous(paths.d_origins, np.float32),
                           contiguous(paths.d_dirs, np.float32), out_d_origins, out_d_dirs)
     return out_d_origins, out_d_dirs
+
+
+@kernel("void(f8[:, ::1], f8[::1], i8[::1], f8[:, ::1], f8[:, :, ::1], f4[:, :, ::1], f4[:, :, ::1], f8[:, :, ::1], "
+        "f8[:, :, ::1])")
+def _landing_differentials(dirs, t, prim, face_normal, corners, d_origins, d_dirs, dp, duv):
+    """`landing_differentials` of paths along `dirs (n,3)` that met
+    triangles `prim (n,)` (global) at distance `t (n,)`."""
+    for i in range(len(t)):
+        d, normal = row(dirs, i), row(face_normal, prim[i])
+        p0 = subrow(corners, prim[i], 0)
+        e1, e2 = sum1(1.0, subrow(corners, prim[i], 1), -1.0, p0), sum1(1.0, subrow(corners, prim[i], 2), -1.0, p0)
+        g11, g12, g22 = dot1(e1, e1), dot1(e1, e2), dot1(e2, e2)
+        det = g11 * g22 - g12 * g12
+        for k in range(2):
+            moved = transferred1(subrow(d_origins, i, k), subrow(d_dirs, i, k), d, t[i], normal)
+            set_subrow(dp, i, k, moved)
+            b1, b2 = dot1(moved, e1), dot1(moved, e2)
+            duv[i, k, 0] = (g22 * b1 - g12 * b2) / det if det > 0.0 else 0.0
+            duv[i, k, 1] = (g11 * b2 - g12 * b1) / det if det > 0.0 else 0.0
+
+
+def landing_differentials(accel, paths, hits) -> tuple[np.ndarray, np.ndarray]:
+    """(dp (n,2,3) world, duv (n,2,2) barycentric (u, v) of the triangle
+    hit): how the points where `paths`, which carry differentials, met
+    `hits` move with each differential, on the plane of the triangle each
+    met (the transfer, Igehy 1999; the barycentrics' change solves dp = e1
+    du + e2 dv, e_k = p_k - p_0)."""
+    n = len(paths)
+    dp, duv = np.empty((n, 2, 3)), np.empty((n, 2, 2))
+    f8 = np.float64
+    _landing_differentials(contiguous(paths.dirs, f8), contiguous(hits.t, f8), contiguous(hits.prim, np.int64),
+                           accel.face_normal, accel.corners, contiguous(paths.d_origins, np.float32),
+                           contiguous(paths.d_dirs, np.float32), dp, duv)
+    return dp, duv

@@ -41,6 +41,7 @@ from ..emission.environment import Environment
 from ..emission.lamp_samples import apparent_size, sample_lamp
 from ..optics.microfacet import bsdf_cosine1
 from ..optics.principled import Lobe, lobe_pdf1, lobe_weight1
+from ..optics.specular import radiance_scale1
 from ..sampling.hash import hash_uniform, hash_uniform1, stream_key
 from ..sampling.sequences import r2_point1
 from ..sampling.warps import cosine_hemisphere, frames
@@ -362,18 +363,22 @@ def _add_world(irradiance, glossy, idx, seen, toward, light, density, cos, sampl
 
 def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,
                             shading: np.ndarray, facing: np.ndarray, view: np.ndarray, alpha: np.ndarray,
-                            eta: np.ndarray, mirror: np.ndarray, far: float, pixel: np.ndarray,
-                            first_stratum: np.ndarray, samples: int, seed: int) -> np.ndarray:
+                            eta: np.ndarray, mirror: np.ndarray, tints: tuple[np.ndarray, np.ndarray], far: float,
+                            pixel: np.ndarray, first_stratum: np.ndarray, samples: int, seed: int) -> np.ndarray:
     """Radiance (n,3) toward the eye from all lamps' direct light at points
-    of rough casters, before their tint: each lamp sample's irradiance
-    times the GGX interface's f |cos| (optics.microfacet.bsdf_cosine1), what
-    Cycles adds at a glossy or glass closure by next-event estimation. A
-    lamp on the far side of glass (`eta (n,)` eta_view / eta_lamp, not a
-    `mirror (n,)`) shines through it; shadow rays as in direct_radiance.
+    of rough casters: each lamp sample's irradiance times the GGX
+    interface's f |cos| (optics.microfacet.bsdf_cosine1) and the tint of
+    what it does there, what Cycles adds at a glossy or glass closure by
+    next-event estimation. A lamp on the far side of glass (`eta (n,)`
+    eta_view / eta_lamp, not a `mirror (n,)`) shines through it, its
+    radiance scaled as the eye's refracted rays' (specular.radiance_scale1);
+    shadow rays as in direct_radiance.
 
     shading, facing   (n,3) shading and geometric normals, both on the eye's side
     view              (n,3) unit vectors from the points toward the eye
     alpha             (n,) GGX width, > 0
+    tints             (reflection, transmission), each (n,3), the colours
+                      of a reflected and a transmitted lamp sample
     """
     out = np.zeros((len(points), 3))
     shading, facing, view = (contiguous(a, np.float64) for a in (shading, facing, view))
@@ -384,7 +389,8 @@ def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: flo
             uv = strata(pixel, first_stratum * count + k, _ROUGH_STREAM + 2 * number, seed)
             lamp = sample_lamp(light, energy, points, uv, far)
             idx, dirs, radiance = _rough_lit(facing, shading, view, contiguous(lamp.dirs, np.float64),
-                                             contiguous(lamp.irradiance, np.float64), alpha, eta, mirror, count)
+                                             contiguous(lamp.irradiance, np.float64), alpha, eta, mirror,
+                                             *tints, count)
             if len(idx) == 0:
                 continue
             origins = accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), dirs)
@@ -394,12 +400,14 @@ def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: flo
 
 
 @kernel("Tuple((i8[::1], f8[:, ::1], f8[:, ::1]))(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], "
-        "f8[::1], f8[::1], b1[::1], i8)")
-def _rough_lit(facing, shading, view, dirs, irradiance, alpha, eta, mirror, count):
+        "f8[::1], f8[::1], b1[::1], f8[:, ::1], f8[:, ::1], i8)")
+def _rough_lit(facing, shading, view, dirs, irradiance, alpha, eta, mirror, reflection_tint, transmission_tint,
+               count):
     """The lamp samples `dirs, irradiance (n,3)` that light the rough points
     through their GGX interface (idx (l,)), their directions (l,3) and the
     radiance (l,3) each brings toward the eye, one of `count` samples:
-    E f |cos| / count (optics.microfacet.bsdf_cosine1), where f |cos| > 0.
+    E f |cos| / count (optics.microfacet.bsdf_cosine1) times the tint,
+    where f |cos| > 0; a transmitted sample times radiance_scale1 too.
     A sample counts on the eye's side of both normals, or, but at a
     `mirror`, behind both, and where E > 0."""
     n = len(dirs)
@@ -416,7 +424,10 @@ def _rough_lit(facing, shading, view, dirs, irradiance, alpha, eta, mirror, coun
             continue
         idx[lit] = i
         set_row(toward, lit, d)
+        through = along < 0.0
+        tint = row(transmission_tint, i) if through else row(reflection_tint, i)
+        scale = f / count * (radiance_scale1(eta[i]) if through else 1.0)
         for c in range(3):
-            radiance[lit, c] = irradiance[i, c] * (f / count)
+            radiance[lit, c] = irradiance[i, c] * (tint[c] * scale)
         lit += 1
     return idx[:lit].copy(), toward[:lit].copy(), radiance[:lit].copy()

@@ -19,8 +19,10 @@ the lamps and the world, but not the caustic, whose directions the map
 does not keep.
 
 At a dielectric: both the reflected ray (weight F) and the refracted ray
-(weight 1 - F) carry on, each tinted by the glass colour and by Beer-Lambert
-absorption inside, up to `max_depth` bounces. At a reflector the reflected
+(weight 1 - F) carry on, each times the glass's tint for what it did and
+Beer-Lambert absorption inside, the refracted one's radiance scaled by
+(n_from / n_to)^2 (optics.specular.radiance_scale1), up to `max_depth`
+bounces. At a reflector the reflected
 ray carries on, times the reflectance colour. A branch fainter than
 ROULETTE_WEIGHT of its camera ray plays Russian roulette as `split` writes
 it (bounce.Roulette): the faint internal reflections that make most of a
@@ -228,21 +230,21 @@ class EyeTracer:
 
     def _highlights(self, rays: Paths, hits: Hits, surface: Interface) -> None:
         """The lamps' direct light on the rough rows of `surface`, into the
-        direct pass, times the tint and Multiscatter GGX's factor."""
+        direct pass, times Multiscatter GGX's factor."""
         if not self.scene.lights:
             return
         rows = np.flatnonzero(surface.rough)
         m, obj = self.materials, hits.obj[rows]
         ids = rays.ids[rows]
         _, pixel, stratum = self._samples(ids)
+        tints = (np.take(m.reflection_tint, obj, axis=0), np.take(m.transmission_tint, obj, axis=0))
         radiance = rough_specular_radiance(
             self.accel, self.scene.lights, self.energy, np.take(surface.points, rows, axis=0),
             np.take(surface.shading, rows, axis=0), np.take(surface.facing, rows, axis=0),
-            -np.take(rays.dirs, rows, axis=0), surface.alpha[rows], surface.eta[rows], m.reflector[obj], self.far,
-            pixel, stratum, self.settings.lamp_samples, self.settings.seed)
+            -np.take(rays.dirs, rows, axis=0), surface.alpha[rows], surface.eta[rows], m.reflector[obj], tints,
+            self.far, pixel, stratum, self.settings.lamp_samples, self.settings.seed)
         factor = multiscatter(surface, m, hits.obj, rays.dirs, rays.dirs, np.zeros(len(rays), dtype=bool), False)
-        tint = np.take(m.color, obj, axis=0) * np.take(factor, rows, axis=0)
-        self._add("direct", ids, np.take(rays.weight, rows, axis=0), tint * radiance)
+        self._add("direct", ids, np.take(rays.weight, rows, axis=0), np.take(factor, rows, axis=0) * radiance)
 
 
 @kernel("void(f8[:, ::1], i8[::1], i8, f8[:, ::1], f8[:, ::1])")
@@ -336,6 +338,18 @@ def _shown_light(first, direct, ambient, caustic, specular_surface, out):
         out[p] = light
 
 
+def camera_radiance_scale(materials: Materials, camera_medium: int) -> float:
+    """What a camera inside glass or water (object `camera_medium`, MISS in
+    the air) records of the radiance there: the basic radiance L / n^2
+    (Veach 1997, sec. 5.2), as Cycles, whose paths take no factor at
+    refractions, renders it; the eye's refracted rays scale radiance from
+    the camera's medium on (specular.radiance_scale1), so a floor seen from
+    under water is as bright as from above it, less the Fresnel losses."""
+    if camera_medium == MISS or not materials.dielectric[camera_medium]:
+        return 1.0
+    return 1.0 / float(materials.ior[camera_medium]) ** 2
+
+
 def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materials: Materials,
              maps: dict[int, IlluminationMap], sky: World, monitor: Monitor, start: float) -> dict[str, np.ndarray]:
     """Trace `spp` eye rays through every pixel, chunk by chunk, reporting
@@ -348,6 +362,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     cam = scene.camera
     pixels = cam.pixx * cam.pixy
     camera_medium = int(accel.medium_at(cam.position[None])[0])
+    seen = camera_radiance_scale(materials, camera_medium)
     environment = Environment(scene.world)
     sky_paths = None
     if materials.specular_surface.any() and not sky.is_black:
@@ -368,7 +383,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
             sample = (local[:, None] * spp + np.arange(spp)).ravel()
             pixel = np.take(pixel_list, sample // spp)
             origins, dirs = eye_rays(cam, pixel, offsets[sample % spp])
-            weight = np.full((len(sample), 3), 1.0 / spp)
+            weight = np.full((len(sample), 3), seen / spp)
             tracer = EyeTracer(accel, scene, materials, maps, environment, sky_paths, settings, pixel_list[local],
                                spp, holdout, edge_pass)
             trace(accel, materials, Paths.start(origins, dirs, weight, sample - first * spp, camera_medium,

@@ -41,9 +41,10 @@ class Paths:
               until it first does (where surfaces touch, the next one it
               meets may lie at that very point: tracing/contact.py)
     d_origins (n,2,3) float32 world: how the origin changes per pixel step
-    d_dirs    (n,2,3) float32 right and down (passes/differentials.py), or
+    d_dirs    (n,2,3) float32 right and down (passes/differentials.py; a
+              beam vertex's per unit along its lamp cell's axes), or
               None where no one asks (eye rays ask once they meet a
-              specular surface)
+              specular surface, beam vertices from lamps with a size)
     """
 
     origins: np.ndarray

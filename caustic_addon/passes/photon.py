@@ -32,6 +32,7 @@ from ..emission.aims import casters_and_bounds
 from ..emission.photons import Emitter, Photons, make_emitters
 from ..maps.deposits import Deposits
 from ..optics.spectrum import photon_band
+from ..optics.specular import radiance_scale1
 from ..sampling.hash import hash_uniform, hash_uniform1, stream_key
 from ..scene import Light, RenderSettings, Scene
 from ..scene.material_table import Materials
@@ -81,7 +82,8 @@ def one_branch(accel: Accelerator, materials: Materials, paths: Paths, hits: Hit
     """The paths that go on from their specular hits at bounce `depth`,
     each along one branch: reflected with its Fresnel probability, else
     refracted, about a GGX normal where the surface is rough, then Russian
-    roulette (`_photon_bounces`). A path's random numbers hash its id in
+    roulette (`_photon_bounces`); an eye ray's (not `carries_light`)
+    refractions scale the radiance it carries (specular.radiance_scale1). A path's random numbers hash its id in
     `draws (n,)` with streams from `stream` on and `seed`; Multiscatter
     GGX's factor is taken on the eye's side (bounce.multiscatter) of light
     if `carries_light`, else of an eye ray."""
@@ -102,8 +104,9 @@ def one_branch(accel: Accelerator, materials: Materials, paths: Paths, hits: Hit
         contiguous(paths.floor, f8), contiguous(draws, i8), contiguous(hits.obj, i8),
         contiguous(surface.points, f8), contiguous(surface.facing, f8), contiguous(surface.shading, f8),
         contiguous(surface.scattering, f8), contiguous(surface.entering, bool), contiguous(surface.eta, f8),
-        contiguous(surface.fresnel, f8), contiguous(surface.alpha, f8), materials.color,
-        contiguous(factor, f8), accel.epsilon, reflect_key, roulette_key, *out)
+        contiguous(surface.fresnel, f8), contiguous(surface.alpha, f8), materials.reflection_tint,
+        materials.transmission_tint, contiguous(factor, f8), not carries_light, accel.epsilon, reflect_key,
+        roulette_key, *out)
     origins, dirs, weight, medium, source = (a[:count] for a in out)
     return Paths(origins, dirs, weight, medium, take(paths.ids, source), take(paths.floor, source),
                  np.ones(count, dtype=bool), None if paths.band is None else take(paths.band, source),
@@ -126,15 +129,16 @@ def roulette1(peak, threshold, xi):
 
 @kernel("i8(f8[:, ::1], f8[:, ::1], i8[::1], f8[::1], i8[::1], i8[::1], "
         "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1], f8[::1], f8[:, ::1], "
-        "f8[:, ::1], f8, u8, u8, f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], i8[::1])")
+        "f8[:, ::1], f8[:, ::1], b1, f8, u8, u8, f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], i8[::1])")
 def _photon_bounces(dirs, weight, medium, floor, draws, obj, points, facing, shading, scattering, entering, eta,
-                    fresnel, alpha, color, factor, epsilon, reflect_key, roulette_key,
-                    out_origins, out_dirs, out_weight, out_medium, source):
+                    fresnel, alpha, reflection_tint, transmission_tint, factor, radiance, epsilon, reflect_key,
+                    roulette_key, out_origins, out_dirs, out_weight, out_medium, source):
     """one_branch's rows: each path reflects where
     hash_uniform1(draw, reflect_key) < its Fresnel reflectance, else refracts
-    (bounce.scatter1), its weight times the surface's tint, what scatter1
-    keeps and, where `factor (n,3)` is given (else (0,3)), the multiscatter
-    factor; then roulette1 with hash_uniform1(draw, roulette_key). The
+    (bounce.scatter1), its weight times the surface's tint for what it did,
+    where it carries `radiance` and refracted times radiance_scale1, times
+    what scatter1 keeps and, where `factor (n,3)` is given (else (0,3)),
+    the multiscatter factor; then roulette1 with hash_uniform1(draw, roulette_key). The
     survivors go into the out_ arrays, in order, epsilon off the surface
     (offset1), `source` the row each comes from; returns how many."""
     count = 0
@@ -143,7 +147,9 @@ def _photon_bounces(dirs, weight, medium, floor, draws, obj, points, facing, sha
         mirror = hash_uniform1(draws[i], reflect_key) < fresnel[i]
         out, crossed, kept = scatter1(d, row(scattering, i), row(facing, i), row(shading, i), eta[i], alpha[i],
                                       mirror)
-        w = (weight[i, 0] * color[o, 0], weight[i, 1] * color[o, 1], weight[i, 2] * color[o, 2])
+        c = row(transmission_tint, o) if crossed else row(reflection_tint, o)
+        s = radiance_scale1(eta[i]) if radiance and crossed else 1.0
+        w = (weight[i, 0] * (c[0] * s), weight[i, 1] * (c[1] * s), weight[i, 2] * (c[2] * s))
         if len(factor):
             w = (w[0] * (kept * factor[i, 0]), w[1] * (kept * factor[i, 1]), w[2] * (kept * factor[i, 2]))
         divisor, alive = roulette1(max_channel1(w), floor[i], hash_uniform1(draws[i], roulette_key))

@@ -23,7 +23,13 @@ class Materials:
 
     dielectric (m,) bool        reflector (m,) bool        receiver (m,) bool
     specular_surface (m,) bool  dielectric or reflector: rays scatter there
-    ior (m,)                    color (m,3): glass tint or reflectance
+    ior (m,)
+    reflection_tint (m,3)       each reflection's colour: glass's, or a reflector's reflectance
+    transmission_tint (m,3)     each refraction's colour (0 at reflectors)
+    energy_tint (m,3)           the colour F_ss that Multiscatter GGX gives back
+                                energy in: glass's transmission tint, a
+                                reflector's reflectance (Cycles' bsdf_microfacet.h)
+    fresnel (m,) bool           False where every ray refracts whole (Refraction BSDF)
     absorption (m,3) per metre
     albedo (m,3)
     emission (m,3) radiance a surface gives off
@@ -45,7 +51,10 @@ class Materials:
     reflector: np.ndarray
     receiver: np.ndarray
     ior: np.ndarray
-    color: np.ndarray
+    reflection_tint: np.ndarray
+    transmission_tint: np.ndarray
+    energy_tint: np.ndarray
+    fresnel: np.ndarray
     absorption: np.ndarray
     albedo: np.ndarray
     emission: np.ndarray
@@ -75,12 +84,19 @@ class Materials:
         spectral = bands(band_count if np.isfinite(abbe).any() else 1)
         alpha = alpha_of(column("roughness", 0.0))
         facet_albedo = np.array([_facet_albedo(o, a) for o, a in zip(objects, alpha)]).reshape(-1, 2, ALBEDO_COSINES)
+        dielectric = np.array([o.is_transparent for o in objects], dtype=bool)
+        reflectance = rgb_column("color", 1.0)
+        reflection_tint = np.where(dielectric[:, None], rgb_column("reflection_tint", 1.0), reflectance)
+        transmission_tint = rgb_column("transmission_tint", 0.0)
         return Materials(
-            dielectric=np.array([o.is_transparent for o in objects], dtype=bool),
+            dielectric=dielectric,
             reflector=np.array([o.is_reflector for o in objects], dtype=bool),
             receiver=np.array([o.is_receiver for o in objects], dtype=bool),
             ior=ior,
-            color=rgb_column("color", 1.0),
+            reflection_tint=reflection_tint,
+            transmission_tint=transmission_tint,
+            energy_tint=np.where(dielectric[:, None], transmission_tint, reflection_tint),
+            fresnel=np.array([getattr(o.material, "fresnel", True) for o in objects], dtype=bool),
             absorption=rgb_column("absorption", 0.0),
             albedo=rgb_column("albedo", 0.0),
             emission=rgb_column("emission", 0.0),

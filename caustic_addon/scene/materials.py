@@ -18,34 +18,45 @@ from .textures import Node
 class Dielectric:
     """Clear or coloured glass, water, gems: refracts and reflects (Fresnel).
 
-    ior           index of refraction relative to the surrounding medium: 1.33
-                  water, 1.5 glass, 1.9 cubic zirconia, 2.41 diamond; below 1 for
-                  an air bubble in water (1/1.33)
-    color         tint applied at every reflection and refraction, as the
-                  colour of Blender's Glass BSDF
-    absorption    (3,) Beer-Lambert absorption coefficient, per metre, inside
-                  (optics.absorption_from_color turns a colour at a distance
-                  into one)
-    abbe          Abbe number V_d: the IOR follows Cauchy's law through `ior`
-                  at 587.6 nm with this dispersion (optics.cauchy_ior); 55
-                  diamond, 58 crown glass, 33 cubic zirconia; inf for none
-    roughness     Blender's Roughness, 0..1: light scatters about GGX
-                  microfacet normals of width alpha = roughness^2
-                  (optics.microfacet); 0 is a perfectly smooth interface
-    multiscatter  True for Blender's Multiscatter GGX (the default), which
-                  gives back the light a single microfacet bounce loses
-                  (optics.multiscatter); False for plain GGX
+    ior                index of refraction relative to the surrounding medium:
+                       1.33 water, 1.5 glass, 1.9 cubic zirconia, 2.41
+                       diamond; below 1 for an air bubble in water (1/1.33)
+    reflection_tint    (3,) colour of every reflection, total internal ones
+                       included: a Glass BSDF's Color, white for a Principled
+                       BSDF (Cycles' Fresnel reflection_tint, svm/closure.h)
+    transmission_tint  (3,) colour of every refraction: a Glass BSDF's Color,
+                       the square root of a Principled BSDF's Base Color, so
+                       that a thin shell crossed twice takes the colour once
+    absorption         (3,) Beer-Lambert absorption coefficient, per metre,
+                       inside (optics.absorption_from_color turns a colour at
+                       a distance into one)
+    abbe               Abbe number V_d: the IOR follows Cauchy's law through
+                       `ior` at 587.6 nm with this dispersion
+                       (optics.cauchy_ior); 55 diamond, 58 crown glass, 33
+                       cubic zirconia; inf for none
+    roughness          Blender's Roughness, 0..1: light scatters about GGX
+                       microfacet normals of width alpha = roughness^2
+                       (optics.microfacet); 0 is a perfectly smooth interface
+    multiscatter       True for Blender's Multiscatter GGX (the default),
+                       which gives back the light a single microfacet bounce
+                       loses (optics.multiscatter); False for plain GGX
+    fresnel            False for a Refraction BSDF, which reflects nothing:
+                       every ray refracts whole, and ends under total
+                       internal reflection (Cycles' MicrofacetFresnel::NONE)
     """
 
     ior: float = 1.5
-    color: RGB = field(default_factory=lambda: np.ones(3))
+    reflection_tint: RGB = field(default_factory=lambda: np.ones(3))
+    transmission_tint: RGB = field(default_factory=lambda: np.ones(3))
     absorption: RGB = field(default_factory=lambda: np.zeros(3))
     abbe: float = math.inf
     roughness: float = 0.0
     multiscatter: bool = True
+    fresnel: bool = True
 
     def __post_init__(self):
-        self.color = rgb(self.color)
+        self.reflection_tint = rgb(self.reflection_tint)
+        self.transmission_tint = rgb(self.transmission_tint)
         self.absorption = rgb(self.absorption)
 
     @property

@@ -224,6 +224,47 @@ def test_roughness_and_distribution_of_glass_and_metal(addon):
     assert not any("oughness" in w for w in result.warnings)
 
 
+def test_glass_tints_as_cycles_applies_them(addon):
+    """Cycles' svm/closure.h: a Glass BSDF's Color tints its reflections and
+    refractions; a Principled BSDF's refractions take the square root of
+    its Base Color (clamped to 0..1), its reflections none; a Refraction
+    BSDF reflects nothing. A Principled glass's Transmission Weight t
+    weighs both (its closure's weight); the base under 1 - t and its
+    Specular Tint, which are not rendered, are named."""
+    lamp_scene()
+    green = (0.2, 0.75, 0.3, 1.0)
+    tinted = scenes.glass_material("Tinted")
+    tinted.node_tree.nodes["Glass BSDF"].inputs["Color"].default_value = green
+    bottle = principled("Bottle", **{"Transmission Weight": 1.0, "Base Color": (0.2, 0.75, 1.4, 1.0),
+                                     "Specular Tint": (1.0, 0.5, 0.5, 1.0)})
+    partly = principled("Partly", **{"Transmission Weight": 0.8, "Base Color": green})
+    refraction = bpy.data.materials.new("Refraction")
+    if refraction.node_tree is None:
+        refraction.use_nodes = True
+    nodes = refraction.node_tree.nodes
+    nodes.clear()
+    node = nodes.new('ShaderNodeBsdfRefraction')
+    node.inputs["Color"].default_value = green
+    refraction.node_tree.links.new(node.outputs[0], nodes.new('ShaderNodeOutputMaterial').inputs['Surface'])
+    for k, material in enumerate((tinted, bottle, partly, refraction)):
+        scenes.add_sphere(0.2, (k * 0.5 - 0.5, 0.0, 0.5), material, name=material.name, segments=8, rings=4)
+    result = read(addon)
+    materials = {o.name: o.material for o in result.scene.objects}
+    np.testing.assert_allclose(materials["Tinted"].reflection_tint, green[:3])
+    np.testing.assert_allclose(materials["Tinted"].transmission_tint, green[:3])
+    assert materials["Tinted"].fresnel and materials["Bottle"].fresnel
+    np.testing.assert_allclose(materials["Bottle"].reflection_tint, 1.0)
+    np.testing.assert_allclose(materials["Bottle"].transmission_tint, np.sqrt((0.2, 0.75, 1.0)), rtol=1e-6)
+    np.testing.assert_allclose(materials["Refraction"].reflection_tint, 0.0)
+    np.testing.assert_allclose(materials["Refraction"].transmission_tint, green[:3])
+    assert not materials["Refraction"].fresnel
+    assert "material 'Bottle': its Specular Tint is not rendered on glass; its reflections are white" in result.warnings
+    np.testing.assert_allclose(materials["Partly"].reflection_tint, 0.8, rtol=1e-6)
+    np.testing.assert_allclose(materials["Partly"].transmission_tint, 0.8 * np.sqrt(green[:3]), rtol=1e-6)
+    assert any(w.startswith("material 'Partly': its Transmission Weight 0.8 is rendered as glass of 0.8")
+               for w in result.warnings)
+
+
 def test_approximations_are_named_in_warnings(addon):
     floor, _ = lamp_scene()
     material = floor.data.materials[0]
@@ -378,12 +419,51 @@ def volume(material, kind='ShaderNodeVolumeAbsorption', **inputs):
     return node
 
 
-def test_no_blender_glass_has_a_dispersion_input():
-    """Checked on 4.2, 4.5 and 5.3: dispersion comes from Object.caustic.abbe
-    alone. If Blender adds the input, export/materials.py should read it."""
-    for kind in ('ShaderNodeBsdfGlass', 'ShaderNodeBsdfPrincipled', 'ShaderNodeBsdfRefraction'):
-        node = scenes.glass_material().node_tree.nodes.new(kind)
-        assert "Dispersion" not in node.inputs
+def test_only_principled_bsdf_may_have_dispersion_inputs(addon):
+    """Checked on 4.2, 4.5 and 5.3: no Glass or Refraction BSDF has a
+    dispersion input (if Blender adds one, export/materials.py should read
+    it); a Principled BSDF has OpenPBR's two (5.3) or none (4.2, 4.5)."""
+    nodes = scenes.glass_material().node_tree.nodes
+    for kind in ('ShaderNodeBsdfGlass', 'ShaderNodeBsdfRefraction'):
+        assert not [s.name for s in nodes.new(kind).inputs if "ispersion" in s.name or "Abbe" in s.name]
+    principled_inputs = [s.name for s in nodes.new('ShaderNodeBsdfPrincipled').inputs
+                         if "ispersion" in s.name or "Abbe" in s.name]
+    assert principled_inputs in ([], [addon.export.materials.DISPERSION_SCALE, addon.export.materials.DISPERSION_ABBE])
+
+
+def test_principled_dispersion_is_the_abbe_number_cycles_renders(addon):
+    """Blender 5.3's Principled BSDF disperses by OpenPBR's Transmission
+    Dispersion Scale and Abbe Number: Cycles refracts by Cauchy's law with
+    the Abbe number abbe / scale (benchmarks/cycles_dispersion.py), none at
+    scale 0 or an Abbe number not above 0. The material's dispersion wins
+    over the object's Abbe Number, with a warning naming both where they
+    differ; the object's stays for glass whose material has none. A linked
+    input is read at its own value, with a warning."""
+    materials = addon.export.materials
+    probe = scenes.glass_material("Probe").node_tree.nodes.new('ShaderNodeBsdfPrincipled')
+    if materials.DISPERSION_SCALE not in probe.inputs:
+        pytest.skip(f"Blender {bpy.app.version_string}'s Principled BSDF has no {materials.DISPERSION_SCALE}")
+    lamp_scene()
+    cases = {"Halved": (0.5, 20.0, 0.0), "Clear": (0.0, 20.0, 0.0), "ObjectOnly": (0.0, 20.0, 55.0),
+             "Both": (1.0, 30.0, 55.0), "Agree": (1.0, 40.0, 40.0), "Negative": (1.0, -5.0, 0.0),
+             "Linked": (0.25, 10.0, 0.0)}
+    for k, (name, (scale, abbe, object_abbe)) in enumerate(cases.items()):
+        material = principled(name, **{"Transmission Weight": 1.0, "Roughness": 0.0, materials.DISPERSION_SCALE: scale,
+                                       materials.DISPERSION_ABBE: abbe})
+        ob = scenes.add_sphere(0.1, (0.3 * k - 1.0, 0.0, 0.5), material, name=name, segments=8, rings=4)
+        ob.caustic.abbe = object_abbe
+    linked = bpy.data.materials["Linked"].node_tree
+    linked.links.new(linked.nodes.new('ShaderNodeValue').outputs[0],
+                     linked.nodes["Principled BSDF"].inputs[materials.DISPERSION_SCALE])
+    result = read(addon)
+    abbe = {o.name: o.material.abbe for o in result.scene.objects if o.name in cases}
+    assert abbe == {"Halved": 40.0, "Clear": math.inf, "ObjectOnly": 55.0, "Both": 30.0, "Agree": 40.0,
+                    "Negative": math.inf, "Linked": 40.0}
+    conflicts = [w for w in result.warnings if "differs from the dispersion" in w]
+    assert conflicts == ["'Both': its Abbe Number 55 differs from the dispersion of its material 'Both' (Abbe "
+                         "Number 30, its Transmission Dispersion Abbe Number over its Scale); the material's is used"]
+    assert (f"material 'Linked': its {materials.DISPERSION_SCALE} comes from other nodes; the unconnected value "
+            "is used") in result.warnings
 
 
 def test_volume_absorption_abbe_and_colour_at_distance(addon, reports):

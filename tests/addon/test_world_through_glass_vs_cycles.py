@@ -36,38 +36,19 @@ def glass_ball_in_a_grey_world():
     scenes.set_resolution(PIXELS, PIXELS)
 
 
-def one_diffuse_bounce_of_the_floor():
-    """The floor's material gives nothing to paths that already bounced off
-    a diffuse surface (Light Path's Diffuse Depth above 0)."""
-    tree = bpy.data.materials["Floor"].node_tree
-    output = next(node for node in tree.nodes if node.type == 'OUTPUT_MATERIAL')
-    surface = output.inputs["Surface"].links[0].from_node
-    depth, above = tree.nodes.new('ShaderNodeLightPath'), tree.nodes.new('ShaderNodeMath')
-    above.operation, above.inputs[1].default_value = 'GREATER_THAN', 0.5
-    mix, black = tree.nodes.new('ShaderNodeMixShader'), tree.nodes.new('ShaderNodeEmission')
-    black.inputs["Strength"].default_value = 0.0
-    tree.links.new(depth.outputs["Diffuse Depth"], above.inputs[0])
-    tree.links.new(above.outputs[0], mix.inputs[0])
-    tree.links.new(surface.outputs[0], mix.inputs[1])
-    tree.links.new(black.outputs[0], mix.inputs[2])
-    tree.links.new(mix.outputs[0], output.inputs["Surface"])
-
-
 def test_the_floor_beside_a_glass_ball_in_a_grey_world_matches_cycles(addon, tmp_path):
     glass_ball_in_a_grey_world()
     bpy.ops.caustic.render()
     ours = scenes.pixels_of("Caustic Render")[..., 0].astype(np.float64)
     through = scenes.pixels_of("Caustic Render Caustic")[..., 0].astype(np.float64)
 
-    one_diffuse_bounce_of_the_floor()
+    # Cycles as Compare with Cycles sets it up: the floor black to paths that bounced off it once
     scene = bpy.context.scene
+    addon.comparison.whitted.black_after_a_diffuse_bounce(bpy.data.materials["Floor"])
+    addon.comparison.whitted.whitted_settings(addon.export.overrides.Overrides(), scene, scene.caustic.max_depth)
     scene.render.engine = 'CYCLES'
     cycles = scene.cycles
     cycles.device, cycles.samples, cycles.use_denoising, cycles.use_adaptive_sampling = 'CPU', 1024, False, False
-    cycles.max_bounces, cycles.diffuse_bounces, cycles.glossy_bounces, cycles.transmission_bounces = 32, 1, 16, 16
-    cycles.caustics_refractive = cycles.caustics_reflective = True
-    cycles.sample_clamp_direct = cycles.sample_clamp_indirect = 0.0
-    cycles.blur_glossy = 0.0
     cycles.pixel_filter_type, cycles.filter_width = 'BOX', 1.0
     reference = scenes.rendered_pixels(str(tmp_path))[..., 0]
 

@@ -50,7 +50,7 @@ def ceiling_mirror(glass_slab: bool = False, tint: float = 1.0) -> Scene:
                Object("Mirror", shapes.plane(2.0, (0, 0, CEILING)), Reflector(RHO))]
     if glass_slab:
         slab = shapes.cylinder(2.5, 0.4, (0, 0, 2.0), segments=64)
-        objects.append(Object("Slab", slab, Dielectric(1.0, color=tint)))
+        objects.append(Object("Slab", slab, Dielectric(1.0, transmission_tint=tint)))
     return Scene(objects, [PointLight((0, 0, LAMP_Z), POWER)], top_camera(2.0, 8))
 
 

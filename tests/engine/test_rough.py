@@ -16,6 +16,7 @@ from caustic_addon.optics.multiscatter import (albedo_at, albedo_cosines, multis
 from caustic_addon.optics.specular import fresnel_dielectric, reflect, refract
 from caustic_addon.sampling.warps import frames
 from caustic_addon.scene.lights import World
+from caustic_addon.scene.validate import rough_caster_warnings
 from scenes import top_camera
 
 N = 200_000
@@ -350,6 +351,22 @@ def test_rough_caster_is_named_in_one_warning_and_bad_roughness_is_an_error():
     scene.objects[1].material.roughness = 1.5
     with pytest.raises(SceneError, match="Mirror: roughness must be between 0 and 1"):
         render(scene)
+
+
+def test_rough_casters_are_named_together_in_one_warning():
+    """A gem's five rough prongs make one warning, not five: it names every
+    rough caster, in scene order, and the range of their Roughness."""
+    scene = ceiling(0.4)
+    scene.objects.append(Object("Mirror.001", shapes.plane(HALF, (0, 0, MIRROR_Z - 0.5)),
+                                Reflector(1.0, roughness=0.2)))
+    scene.objects.append(Object("Smooth", shapes.plane(HALF, (0, 0, MIRROR_Z - 1.0)), Reflector(1.0)))
+    assert rough_caster_warnings(scene, "adaptive") == [
+        "Mirror, Mirror.001: rough (Roughness 0.2-0.4): the view through them or in them takes one microfacet "
+        "normal per eye sample (more Samples smooth their grain)"]
+    assert rough_caster_warnings(scene, "beam") == [
+        "Mirror, Mirror.001: rough (Roughness 0.2-0.4): in beam mode their caustics come as photons, with their "
+        "noise; the view through them or in them takes one microfacet normal per eye sample (more Samples smooth "
+        "their grain)"]
 
 
 def test_beam_mode_sends_the_light_of_lamps_that_light_a_rough_caster_as_photons():
