@@ -11,19 +11,17 @@ The stages, in the order data flows through them: scene (the model), tracing
 illumination maps), renderer (all of it, in one call); beneath them util,
 sampling and optics; beside them cli, the command line.
 
-Importing it sets glibc's malloc to reuse what a render frees
-(util.heap.reuse_freed_memory), before any of its threads start.
+A render sets glibc's malloc to reuse what it frees
+(util.heap.reuse_freed_memory) before it starts its threads.
 """
 
-from .util.heap import reuse_freed_memory
-
-reuse_freed_memory()
-
+from .cli.files import WriteError, write_whole
 from .cli.image_io import write_exr_channels
 from .errors import Cancelled, SceneError
 from .maps.cache import MapCache
 from .maps.charts import ImageFrame
 from .maps.illumination_map import IlluminationMap
+from .memory import refusal as memory_refusal
 from .optics.media import absorption_from_color, volume_absorption
 from .renderer import RenderResult, render
 from .scene import (AreaLight, Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector, RenderSettings,
@@ -33,6 +31,8 @@ from .util.jit import compile_kernels, use_kernel_cache
 __all__ = [
     "AreaLight", "Camera", "Cancelled", "Dielectric", "Diffuse", "IlluminationMap", "ImageFrame", "MapCache", "Mesh", "Object", "PointLight", "Reflector",
     "RenderResult", "RenderSettings", "Scene", "SceneError", "Specular", "SpotLight", "SunLight", "Visibility", "World",
-    "absorption_from_color", "compile_kernels",
+    "WriteError",
+    "absorption_from_color", "compile_kernels", "memory_refusal",
     "paper", "render", "shapes", "textures", "use_kernel_cache", "volume_absorption", "write_exr_channels",
+    "write_whole",
 ]

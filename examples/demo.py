@@ -1,24 +1,21 @@
-"""The paper's scene rendered three ways, side by side, into out/:
+"""The add-on beside Cycles, into out/:
 
     .venv/bin/python examples/demo.py [options]         (make demo)
     blender -b --factory-startup --python examples/demo.py -- [options]
 
-The add-on's Add Paper Scene builds the paper's round glass of water over
-its floor, under its lamp, seen by its camera (caustic_addon.paper). It is
-rendered with the add-on's default settings (beams), with the paper's own
-settings (40,000 lamp rays splatted into a 5 mm illumination map, which
-the add-on coarsens to the 1024 cells a side it allows: 15.6 mm on the
-16 m floor), and by
-Cycles (with MNEE shadow caustics, the best Cycles has for a point lamp
-through glass). Each gets its time and its error against a reference: the
-same view with 25 times the lamp rays as beams refined twice, which the
-accuracy benchmark shows within 1% of the exact caustic on a ball lens. The
-paper's lamp energy 10 is moved into the lamp (100 W) so that Cycles sees
-the same light.
+A wine glass and a glass ball on a wooden table under a low sun with a
+1-degree disc, in a pale sky: what an artist sets up for a caustic shot.
+The add-on renders it with its default settings; Cycles renders the same
+scene, path tracing its caustics, in the same time. Both go through
+Blender's AgX view transform, as Blender shows them. The third panel is the
+paper's own scene with the paper's settings (40,000 lamp rays splatted
+into a 5 mm map).
 
-Writes out/demo.png (the three, labelled; needs matplotlib, which the demo's
-venv has), out/demo_beams.exr, demo_paper.exr and demo_cycles.exr (linear)
-and out/demo.json (the figures).
+The kernels are compiled (or loaded from their cache) first, and that
+one-time step is reported on its own line: it is never a render's time.
+
+Writes out/demo.png (the three panels, labelled; needs matplotlib, which
+the demo's venv has), out/demo_<panel>.exr (linear) and out/demo.json.
 Uses the installed extension if Blender has it, else the add-on in this
 source tree. Exits 1 on any failure.
 """
@@ -28,6 +25,7 @@ import importlib.util
 import json
 import math
 import sys
+import tempfile
 import time
 import traceback
 from pathlib import Path
@@ -36,18 +34,14 @@ import bpy
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-# Exposure (stops) of the PNG: the paper's lamp lights its floor dimly.
-EXPOSURE = 2.0
+PIXELS = (640, 400)
 
 
 def arguments():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
-    parser = argparse.ArgumentParser(description="Render the paper's scene three ways, side by side.")
+    parser = argparse.ArgumentParser(description="The add-on beside Cycles at equal time.")
     parser.add_argument("--out", type=Path, default=REPO / "out", help="output folder [out/]")
-    parser.add_argument("--percentage", type=int, default=100, help="resolution percentage of 640x480 [100]")
-    parser.add_argument("--samples", type=int, default=128, help="Cycles samples [128]")
-    parser.add_argument("--reference-lamp-rays", type=int, default=1_000_000,
-                        help="lamp rays of the reference render [1000000]")
+    parser.add_argument("--percentage", type=int, default=100, help="resolution percentage of 640x400 [100]")
     return parser.parse_args(argv)
 
 
@@ -65,13 +59,99 @@ def enable_addon():
     return module, True
 
 
+def material(name: str, **inputs):
+    """A Principled BSDF material with `inputs` (socket name: value)."""
+    made = bpy.data.materials.new(name)
+    if made.node_tree is None:
+        made.use_nodes = True
+    shader = made.node_tree.nodes["Principled BSDF"]
+    for socket, value in inputs.items():
+        shader.inputs[socket].default_value = value
+    return made
+
+
+def wine_glass_mesh(segments: int = 96) -> bpy.types.Mesh:
+    """A wine glass 20 cm tall, its bowl 3 mm thick: a closed profile in
+    (r, z), from the bowl's inner bottom on the axis to the foot's bottom,
+    turned about z, smooth."""
+    inner_radius, bottom, top, wall = 0.04, 0.11, 0.20, 0.003
+    bend = np.linspace(0.0, 0.95 * math.pi / 2, 24)
+    inner = [(0.0, bottom + wall)] + [((inner_radius - wall) * math.sin(a),
+                                       bottom + wall + (inner_radius - wall) * (1 - math.cos(a))) for a in bend[1:]]
+    outer = [(inner_radius * math.sin(a), bottom + inner_radius * (1 - math.cos(a))) for a in bend[::-1][:-1]]
+    profile = (inner + [(inner_radius - wall, top), (inner_radius, top)] + outer
+               + [(0.004, bottom), (0.004, 0.008), (0.035, 0.008), (0.035, 0.0), (0.0, 0.0)])
+    phi = np.linspace(0.0, 2.0 * math.pi, segments, endpoint=False)
+    ring = np.arange(segments)
+    verts, faces, previous = [], [], None
+    for r, z in profile:
+        if r == 0.0:
+            here = [len(verts)]
+            verts.append((0.0, 0.0, z))
+        else:
+            here = list(range(len(verts), len(verts) + segments))
+            verts += list(zip(r * np.cos(phi), r * np.sin(phi), np.full(segments, z)))
+        if previous is not None:
+            for s in ring:
+                quad = [previous[s % len(previous)], here[s % len(here)], here[(s + 1) % len(here)],
+                        previous[(s + 1) % len(previous)]]
+                faces.append(tuple(dict.fromkeys(quad)))
+        previous = here
+    mesh = bpy.data.meshes.new("Wine glass")
+    mesh.from_pydata(verts, [], faces)
+    return mesh
+
+
+def artist_scene(percentage: int):
+    """The wine glass and the ball on the table, the sun and the sky."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    bpy.ops.mesh.primitive_plane_add(size=3.0)
+    bpy.context.object.name = "Table"
+    bpy.context.object.data.materials.append(material("Wood", **{"Base Color": (0.42, 0.26, 0.15, 1.0),
+                                                                "Roughness": 0.6}))
+    glass = material("Glass", **{"Base Color": (1.0, 1.0, 1.0, 1.0), "Transmission Weight": 1.0,
+                                 "Roughness": 0.0, "IOR": 1.5})
+    wine = bpy.data.objects.new("Wine glass", wine_glass_mesh())
+    scene.collection.objects.link(wine)
+    wine.location = (0.06, 0.05, 0.0)
+    wine.data.materials.append(glass)
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.055, location=(-0.09, -0.04, 0.055), segments=96, ring_count=48)
+    ball = bpy.context.object
+    ball.name = "Ball"
+    ball.data.materials.append(glass)
+    for ob in (wine, ball):
+        ob.data.shade_smooth()
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))
+    sun.data.energy, sun.data.angle, sun.data.color = 4.0, math.radians(1.0), (1.0, 0.93, 0.85)
+    sun.rotation_euler = (math.radians(50.0), 0.0, math.radians(35.0))
+    scene.collection.objects.link(sun)
+    world = bpy.data.worlds.new("Sky")
+    world.color = (0.35, 0.45, 0.6)
+    if world.node_tree is None:
+        world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.35, 0.45, 0.6, 1.0)
+    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.4
+    scene.world = world
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    camera.data.lens = 50.0
+    camera.location = (0.0, -0.62, 0.30)
+    camera.rotation_euler = (math.radians(66.0), 0.0, 0.0)
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    scene.render.resolution_x, scene.render.resolution_y = PIXELS
+    scene.render.resolution_percentage = percentage
+    scene.view_settings.view_transform = 'AgX'
+    return scene
+
+
 def paper_scene(percentage: int):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     assert bpy.ops.caustic.add_paper_scene(shape='ROUND', ior_preset='WATER') == {'FINISHED'}
     scene = bpy.context.scene
     scene.render.resolution_x, scene.render.resolution_y = 640, 480
     scene.render.resolution_percentage = percentage
-    bpy.data.lights["Lamp"].energy *= 10.0
+    scene.view_settings.view_transform = 'AgX'
     return scene
 
 
@@ -81,25 +161,24 @@ def pixels(name: str) -> np.ndarray:
     w, h = image.size
     out = np.empty(w * h * 4, dtype=np.float32)
     image.pixels.foreach_get(out)
-    return out.reshape(h, w, 4)[::-1]
+    return out.reshape(h, w, 4)[::-1].copy()
 
 
-def render_with(preset: str, **settings) -> tuple[np.ndarray, float]:
-    """The add-on's render with a preset and then `settings` (Scene.caustic
-    fields): (image (h,w,4), seconds)."""
-    props = bpy.context.scene.caustic
-    bpy.ops.caustic.apply_preset(preset=preset)
-    props.energy = 1.0
-    for name, value in settings.items():
-        setattr(props, name, value)
-    assert bpy.ops.caustic.render() == {'FINISHED'}
-    return pixels("Caustic Render").copy(), props.last_seconds
-
-
-def relative_error(image: np.ndarray, reference: np.ndarray, region: np.ndarray) -> float:
-    """|image - reference| / |reference| over `region (h,w)`, RGB."""
-    difference = image[..., :3][region] - reference[..., :3][region]
-    return float(np.linalg.norm(difference) / np.linalg.norm(reference[..., :3][region]))
+def shown(rgba: np.ndarray, folder: Path, name: str) -> np.ndarray:
+    """(h,w,3) in 0..1: `rgba` (linear, top row first) as the scene's view
+    transform shows it, through Blender's own colour management."""
+    h, w = rgba.shape[:2]
+    image = bpy.data.images.new(name, w, h, alpha=True, float_buffer=True)
+    image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1]).ravel())
+    path = folder / f"{name}.png"
+    image.save_render(str(path), scene=bpy.context.scene)
+    bpy.data.images.remove(image)
+    loaded = bpy.data.images.load(str(path))
+    view = np.empty(w * h * 4, dtype=np.float32)
+    loaded.pixels.foreach_get(view)
+    bpy.data.images.remove(loaded)
+    srgb = view.reshape(h, w, 4)[::-1, :, :3]
+    return srgb
 
 
 def save_exr(rgba: np.ndarray, path: Path) -> None:
@@ -111,9 +190,48 @@ def save_exr(rgba: np.ndarray, path: Path) -> None:
     bpy.data.images.remove(image)
 
 
+def render_addon(addon, **settings) -> tuple[np.ndarray, float]:
+    """The add-on's Render at its defaults and `settings` (Scene.caustic
+    fields): (image (h,w,4) linear, seconds)."""
+    props = bpy.context.scene.caustic
+    for name, value in settings.items():
+        setattr(props, name, value)
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    return pixels("Caustic Render"), props.last_seconds
+
+
+def render_cycles(seconds: float, folder: Path) -> tuple[np.ndarray, float, int]:
+    """Cycles path tracing the scene's caustics for `seconds`: (image (h,w,4)
+    linear, seconds, samples it reached)."""
+    scene = bpy.context.scene
+    scene.render.engine = 'CYCLES'
+    cycles = scene.cycles
+    cycles.device, cycles.samples, cycles.time_limit = 'CPU', 1 << 16, seconds
+    cycles.use_denoising, cycles.use_adaptive_sampling = False, False
+    cycles.caustics_reflective = cycles.caustics_refractive = True
+    cycles.blur_glossy = 0.0
+    cycles.max_bounces = cycles.transmission_bounces = cycles.glossy_bounces = 12
+    cycles.diffuse_bounces = 1
+    scene.render.image_settings.file_format, scene.render.image_settings.color_depth = 'OPEN_EXR', '32'
+    scene.render.filepath = str(folder / "cycles.exr")
+    samples = []
+    bpy.app.handlers.render_stats.append(lambda stats: samples.append(stats))
+    clock = time.perf_counter()
+    bpy.ops.render.render(write_still=True)
+    took = time.perf_counter() - clock
+    bpy.app.handlers.render_stats.clear()
+    loaded = bpy.data.images.load(str(folder / "cycles.exr"))
+    w, h = loaded.size
+    out = np.empty(w * h * 4, dtype=np.float32)
+    loaded.pixels.foreach_get(out)
+    bpy.data.images.remove(loaded)
+    reached = next((int(s.split("Sample ")[1].split("/")[0]) for s in reversed(samples) if "Sample " in s), 0)
+    return out.reshape(h, w, 4)[::-1].copy(), took, reached
+
+
 def figure(panels: list[tuple[str, np.ndarray]], path: Path) -> bool:
-    """The panels side by side with their titles, sRGB at EXPOSURE; False
-    without matplotlib."""
+    """The panels (view-transformed, 0..1) side by side with their titles;
+    False without matplotlib."""
     try:
         import matplotlib
     except ImportError:
@@ -121,11 +239,9 @@ def figure(panels: list[tuple[str, np.ndarray]], path: Path) -> bool:
     matplotlib.use("Agg")
     from matplotlib import pyplot
 
-    fig, axes = pyplot.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.6))
-    for ax, (title, rgba) in zip(axes, panels):
-        linear = np.clip(rgba[..., :3] * 2.0 ** EXPOSURE, 0.0, 1.0)
-        srgb = np.where(linear <= 0.0031308, 12.92 * linear, 1.055 * linear ** (1 / 2.4) - 0.055)
-        ax.imshow(srgb)
+    fig, axes = pyplot.subplots(1, len(panels), figsize=(5.6 * len(panels), 4.2))
+    for ax, (title, image) in zip(axes, panels):
+        ax.imshow(np.clip(image, 0.0, 1.0))
         ax.set_title(title, fontsize=10)
         ax.axis("off")
     fig.tight_layout()
@@ -140,42 +256,39 @@ def main():
     addon, registered = enable_addon()
     engine = sys.modules[addon.__name__ + ".caustic_addon"]
     try:
-        scene = paper_scene(args.percentage)
-        beams = render_with('DEFAULT')
-        splat = render_with('PAPER_10_5')
-        bpy.ops.caustic.apply_preset(preset='DEFAULT')
-        scene.caustic.energy, scene.caustic.cycles_samples = 1.0, args.samples
-        assert bpy.ops.caustic.compare_cycles() == {'FINISHED'}
-        cycles = pixels("Cycles Reference").copy(), scene.caustic.cycles_seconds
-
-        read = addon.export.read_scene(bpy.context)
         clock = time.perf_counter()
-        exact = engine.render(read.scene, engine.RenderSettings(lamp_rays=args.reference_lamp_rays,
-                                                                beam_refinement=2))
-        reference_seconds = time.perf_counter() - clock
-        caustic = exact.passes["caustic"].sum(axis=-1)
-        region = caustic > 0.01 * caustic.max()
-
-        rows = {"beams": ("beams (the default)", beams), "paper": ("the paper's settings: splat map", splat),
-                "cycles": (f"Cycles, MNEE, {args.samples} samples", cycles)}
-        figures = {key: {"title": title, "seconds": round(seconds, 3),
-                         "relative_l2": relative_error(image, exact.image, region)}
-                   for key, (title, (image, seconds)) in rows.items()}
-        for key, (_, (image, _)) in rows.items():
-            save_exr(image, args.out / f"demo_{key}.exr")
-        labelled = figure([(f"{f['title']}\n{f['seconds']:.1f} s, error {100 * f['relative_l2']:.1f}%", rows[key][1][0])
-                           for key, f in figures.items()], args.out / "demo.png")
-        summary = dict(figures=figures, reference=dict(lamp_rays=args.reference_lamp_rays, beam_refinement=2,
-                                                       seconds=round(reference_seconds, 3)),
-                       pixels=list(exact.image.shape[1::-1]), blender=bpy.app.version_string)
+        kernels = engine.compile_kernels()
+        compile_seconds = time.perf_counter() - clock
+        print(f"compiling the engine's {kernels} kernels, once (or loading them from their cache): "
+              f"{compile_seconds:.1f} s", flush=True)
+        with tempfile.TemporaryDirectory(prefix="caustic-demo-") as tmp:
+            folder = Path(tmp)
+            artist_scene(args.percentage)
+            ours, ours_seconds = render_addon(addon)
+            ours_shown = shown(ours, folder, "ours")
+            cycles, cycles_seconds, cycles_samples = render_cycles(ours_seconds, folder)
+            cycles_shown = shown(cycles, folder, "cycles")
+            paper_scene(args.percentage)
+            bpy.ops.caustic.apply_preset(preset='PAPER_10_5')
+            paper, paper_seconds = render_addon(addon, energy=1.0)
+            paper_shown = shown(paper * 4.0, folder, "paper")
+        panels = {
+            "caustics": (f"the add-on, default settings: {ours_seconds:.1f} s", ours, ours_shown, ours_seconds),
+            "cycles": (f"Cycles in the same time: {cycles_seconds:.1f} s, {cycles_samples} samples", cycles,
+                       cycles_shown, cycles_seconds),
+            "paper": (f"the paper's scene and settings: {paper_seconds:.1f} s", paper, paper_shown, paper_seconds)}
+        for key, (_, linear, _, _) in panels.items():
+            save_exr(linear, args.out / f"demo_{key}.exr")
+        labelled = figure([(title, image) for title, _, image, _ in panels.values()], args.out / "demo.png")
+        summary = dict(kernels=dict(count=kernels, seconds=round(compile_seconds, 2)),
+                       panels={key: dict(title=title, seconds=round(seconds, 3))
+                               for key, (title, _, _, seconds) in panels.items()},
+                       cycles_samples=cycles_samples, pixels=list(ours.shape[1::-1]),
+                       blender=bpy.app.version_string)
         (args.out / "demo.json").write_text(json.dumps(summary, indent=2) + "\n")
-        print(f"The paper's scene at {exact.image.shape[1]}x{exact.image.shape[0]}; error against "
-              f"{args.reference_lamp_rays:,} lamp rays as beams ({reference_seconds:.1f} s), over the caustic:")
-        for f in figures.values():
-            print(f"  {f['title']:32s} {f['seconds']:6.2f} s   {100 * f['relative_l2']:6.2f}%")
+        for title, _, _, _ in panels.values():
+            print(f"  {title}")
         print(f"wrote {args.out / 'demo.png'}" if labelled else "matplotlib is missing: no demo.png")
-        if not all(math.isfinite(f["relative_l2"]) for f in figures.values()):
-            raise RuntimeError("an error is not finite")
     finally:
         if registered:
             addon.unregister()
