@@ -100,8 +100,8 @@ def disc_shares(rc: np.ndarray, grid: int) -> np.ndarray:
     the centre of a grid of an even number of points has its corners on a
     circle, and the square they span covers 2/pi of its disc, so with the
     cell's measure its beams are pi/2 times too bright (a patch one cell
-    wide at the aim's centre, where every point of a lamp with a size puts
-    it). The flat triangles tile the disc but for slivers at its rim."""
+    wide at the aim's centre, a sun's through a flat pane). The flat
+    triangles tile the disc but for slivers at its rim."""
     disc = concentric_disc(rc.reshape(-1, 2) / (grid - 1)).reshape(-1, 3, 2)
     (ax, ay), (bx, by) = (disc[:, 1] - disc[:, 0]).T, (disc[:, 2] - disc[:, 0]).T
     return np.abs(ax * by - ay * bx) / (2.0 * math.pi)

@@ -83,6 +83,15 @@ def radiance_scale1(eta):
     return eta * eta
 
 
+def basic_irradiance_scale(ior: np.ndarray) -> np.ndarray:
+    """(n,) what a receiver inside a medium of index `ior (n,)` shows of its
+    irradiance E to a renderer whose paths take no factor at refractions,
+    as Cycles and EEVEE: the basic irradiance E / n^2 (Veach 1997, sec. 5.2),
+    the irradiance that radiance over n^2 gives. A baked caustic under water
+    holds it, so Cycles shows the floor's caustic as bright as ours."""
+    return 1.0 / (ior * ior)
+
+
 @kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1])")
 def _reflect_rows(d, n, out):
     for i in range(len(d)):

@@ -8,7 +8,8 @@ and refracted (weight 1 - F) branch; at a reflector it only reflects (weight
 its reflectance). A path's *family* is its sequence of (surface, event), so
 paths that meet the same surfaces in the same order, glass or mirror, make
 beams together. Three grid neighbours of the same family that land on the
-same receiver bound a beam: the grid triangle's flux, spread evenly over the
+same receiver bound a beam: the grid triangle's flux (its flat triangle's
+share of the aim's measure, beam_sources.disc_shares), spread evenly over the
 triangle the three land on, is irradiance flux / area there (beam tracing,
 Heckbert and Hanrahan 1984; Watt 1990). `beam_map.BeamMap` rasterises the
 beams with exact area coverage, so the caustic has no noise and sharp edges.
@@ -26,8 +27,7 @@ toward the same point of the aim (BeamSource.differentials, carried through
 the bounces by differentials.py), and each beam of theirs is spread over
 where its cell's light lands, the landing's image of the cell
 (`_spread_beams`): the points' caustics, each sharp, then sum to the soft
-one rather than to a lattice of dots, one a point. Their grids' triangles
-carry their flat triangles' share of the aim (beam_sources.disc_shares).
+one rather than to a lattice of dots, one a point.
 
 A lamp that can light a rough caster sends photons instead
 (`photon_lamps`); grid paths that meet a rough surface all the same (a
@@ -162,10 +162,11 @@ class BeamTracer:
         pass
 
     def arrived(self, paths: Paths, hits: Hits) -> None:
-        for obj, rows, xy, scale, island in on_maps(self.accel, self.maps, paths, hits):
+        for obj, rows, xy, scale, island, basic in on_maps(self.accel, self.materials, self.maps, paths, hits):
             weight, floor = take(paths.weight, rows), take(paths.floor, rows)
             throughput = np.empty(len(rows))
             _throughputs(weight, floor, throughput)
+            weight *= basic[:, None]
             points = take(hits.points, rows)
             landed = Landings(take(paths.ids, rows), take(paths.family, rows), np.full(len(rows), obj),
                               island, points, xy, scale, weight, throughput)
@@ -278,18 +279,12 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
         landings = Landings.concat([landings, trace_vertices(fresh)])
         traced = np.union1d(traced, fresh)
 
-    triangles, area, centres = crack_free_triangles(cells, width, traced)
+    triangles, _, centres = crack_free_triangles(cells, width, traced)
     landings = Landings.concat([landings, trace_vertices(centres)])
-    cell_measure = np.array([source.cell_measure for source in sources])
-    owner = triangles[:, 0] // keys
-    measure = cell_measure[owner] * area / scale ** 2
-    if spreading:
-        # a lamp point's beams by their flat triangles' share of the aim (beam_sources.disc_shares)
-        local = triangles % keys
-        shares = disc_shares(np.stack([local // width, local % width], axis=-1) / scale, grid)
-        exact = np.array([source.cell is not None for source in sources])
-        aim_measure = np.array([source.aim.measure for source in sources])
-        measure = np.where(exact[owner], aim_measure[owner] * shares, measure)
+    aim_measure = np.array([source.aim.measure for source in sources])
+    local = triangles % keys
+    measure = aim_measure[triangles[:, 0] // keys] * disc_shares(
+        np.stack([local // width, local % width], axis=-1) / scale, grid)
     deposits, beams, flux_landed = _beams_and_photons(LandingIndex(landings, maps), triangles, measure, maps)
     refined = len(traced) + len(centres) - on_grid
     return JobResult(deposits, LampPassStats(owned + refined, refined, beams, flux_landed))

@@ -32,7 +32,7 @@ import numpy as np
 from ..optics.media import beer_lambert1
 from ..optics.microfacet import shadowing_weight1, visible_normal_about1
 from ..optics.multiscatter import albedo_at1, multiscatter_factor1
-from ..optics.specular import fresnel_dielectric1, radiance_scale1, reflect1, refract1
+from ..optics.specular import basic_irradiance_scale, fresnel_dielectric1, radiance_scale1, reflect1, refract1
 from ..sampling.hash import hash_uniform1
 from ..sampling.warps import concentric_disc1, orthonormal_basis1
 from ..scene.material_table import Materials
@@ -502,15 +502,18 @@ def trace(accel: Accelerator, materials: Materials, paths: Paths, max_depth: int
         paths = tracer.scattered(paths, hits, surface, depth)
 
 
-def on_maps(accel: Accelerator, maps: dict, paths: Paths, hits: Hits):
+def on_maps(accel: Accelerator, materials: Materials, maps: dict, paths: Paths, hits: Hits):
     """Where the paths that have met a specular surface land on a
     receiver's map (`maps`: object index -> IlluminationMap), one receiver
     at a time: (object index, rows (k,) of `paths`, xy (k,2) chart metres,
-    scale (k,) chart area per world area, island (k,) of the chart)."""
+    scale (k,) chart area per world area, island (k,) of the chart,
+    basic (k,) the share of their flux a map holds: the basic irradiance
+    of the medium they arrive through, specular.basic_irradiance_scale)."""
     land = np.flatnonzero(paths.specular & np.isin(hits.obj, list(maps)))
     for index in np.unique(hits.obj[land]):
         rows = land[hits.obj[land] == index]
         local = np.take(hits.prim, rows) - accel.prim_offset[index]
         chart = maps[index].chart
         xy = chart.coords(local, np.take(hits.u, rows), np.take(hits.v, rows), np.take(hits.points, rows, axis=0))
-        yield int(index), rows, xy, chart.area_scale(local), chart.islands_of(local)
+        basic = basic_irradiance_scale(materials.medium_ior(np.take(paths.medium, rows)))
+        yield int(index), rows, xy, chart.area_scale(local), chart.islands_of(local), basic

@@ -191,7 +191,9 @@ class EyeTracer:
         rays' from the camera's differentials (the beams' exactly, from the
         screen layer), the others' from the differentials they carried
         through their specular bounces (differentials.py). Elsewhere, and
-        where a footprint misses the receiver's plane, a point sample."""
+        where a footprint misses the receiver's plane, a point sample. The
+        map holds the basic irradiance of the medium the light arrived
+        through (bounce.on_maps), and the rays' medium gives back its n^2."""
         xy = imap.chart.coords(hits.prim - self.accel.prim_offset[index], hits.u, hits.v, hits.points)
         irradiance = np.empty((len(xy), 3))
         spread = np.zeros(len(xy), dtype=bool)
@@ -209,6 +211,8 @@ class EyeTracer:
                 spread[seen[ok]] = True
                 irradiance[seen[ok]] = imap.mean_over(lo[ok], hi[ok])
         irradiance[~spread] = imap.irradiance_at(xy[~spread])
+        if (rays.medium != MISS).any():
+            irradiance *= (self.materials.medium_ior(rays.medium) ** 2)[:, None]
         return irradiance
 
     def scattered(self, rays: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:

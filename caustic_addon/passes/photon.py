@@ -69,8 +69,8 @@ class PhotonTracer:
         pass
 
     def arrived(self, paths: Paths, hits: Hits) -> None:
-        for obj, rows, xy, scale, _ in on_maps(self.accel, self.maps, paths, hits):
-            self.deposits.add_photons(obj, xy, np.take(paths.weight, rows, axis=0), scale)
+        for obj, rows, xy, scale, _, basic in on_maps(self.accel, self.materials, self.maps, paths, hits):
+            self.deposits.add_photons(obj, xy, np.take(paths.weight, rows, axis=0) * basic[:, None], scale)
             self.landed += len(rows)
 
     def scattered(self, paths: Paths, hits: Hits, surface: Interface, depth: int) -> Paths:

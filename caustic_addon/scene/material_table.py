@@ -147,6 +147,11 @@ class Materials:
     def specular_surface(self) -> np.ndarray:
         return self.dielectric | self.reflector
 
+    def medium_ior(self, medium: np.ndarray) -> np.ndarray:
+        """(n,) the index of refraction of the media `medium (n,)` (object
+        indices; MISS, -1, the air): 1 in the air."""
+        return np.where(medium < 0, 1.0, np.take(self.ior, np.maximum(medium, 0)))
+
 
 def _layers(objects: list[Object]) -> dict[int, Layer]:
     """Object index -> the specular layer of each diffuse object that has one that reflects."""

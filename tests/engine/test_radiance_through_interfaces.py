@@ -80,3 +80,15 @@ def test_the_sky_on_a_floor_under_water_is_the_sky_through_one_surface():
     irradiance = 2 * math.pi * np.sum(transmitted * np.cos(theta) * np.sin(theta)) * (math.pi / 40_000)
     exact = (1 - F0) / WATER ** 2 * ALBEDO * irradiance / math.pi
     assert result.passes["caustic"][..., 0].mean() == pytest.approx(exact, rel=5e-3)
+
+
+@pytest.mark.parametrize("bottom, basic", [(-0.1, 1 / WATER ** 2), (0.3, 1.0)], ids=["under water", "in the air"])
+def test_a_map_under_water_holds_the_basic_irradiance_that_cycles_shows(bottom, basic):
+    """A baked map is shown by Cycles and EEVEE, whose paths take no factor
+    at refractions: a receiver inside a medium holds its basic irradiance
+    E / n^2 (the floor under water: E = S (1 - F)), one in the air E, here
+    S ((1 - F)^2 / (1 - F^2)) under the slab, in the image a bake writes."""
+    floor = render(water_over_floor(bottom), RenderSettings()).maps["Floor"].irradiance()
+    irradiance = SUN * ((1 - F0) if bottom < 0 else (1 - F0) ** 2 / (1 - F0 ** 2))
+    h, w = floor.shape[:2]
+    assert_uniform(floor[h // 3:2 * h // 3, w // 3:2 * w // 3], irradiance * basic)
