@@ -22,14 +22,17 @@ from dataclasses import replace
 import bpy
 import numpy as np
 
-from ..export import read_scene, render_settings
-from ..jobs import JobRunner, RenderJob
+from ..export import InputError, read_scene, render_settings
+from ..jobs import LOWER_RESOLUTION, JobRunner, RenderJob, refusal
 from ..writeback.images import show_image, write_image
 from ..writeback.results import write_result
 from .cycles import CyclesReference, ReferenceRender
 from .metrics import caustic_region, half_renders_light_noise, half_renders_noise, light, psnr, relative_l2
 from .sources import caustic_sources
 
+# Cycles' CPU render of the reference, as it runs beside the rest: its kernels and scene, and its film and
+# render result a pixel (measured in the bpy module: 0.9 GB at 1000 x 1000, 3.3 GB at 3000 x 3000).
+CYCLES_BASE_BYTES, CYCLES_BYTES_PER_PIXEL = 0.6e9, 300.0
 REFERENCE_IMAGE = "Cycles Reference"
 DIFFERENCE_IMAGE = "Difference"
 SECOND_SEED, WITHOUT_CAUSTICS = "cycles, second seed", "cycles without caustics"
@@ -66,6 +69,9 @@ class Comparison:
         self.sources = caustic_sources(self.read)
         lamps = frozenset(self.sources.point_lamps) if self.sources.mnee else frozenset()
         self.renders = _renders(props, context.scene.cycles.seed, lamps, bool(self.read.scene.casters))
+        too_large = refusal(self.read.scene, self.settings, besides=_cycles_bytes(self.read.scene, len(self.renders)))
+        if too_large is not None:
+            raise InputError(f"Compare with Cycles: {too_large}")
         self.runner = JobRunner(("caustics", *self.renders), self._prepare, self._finish, parts=True)
         self.references: dict[str, np.ndarray] = {}
         self.cycles_seconds = 0.0
@@ -164,3 +170,12 @@ def summary(props, caustic_seconds: float) -> str:
     return (f"{times} (path-traced): relative L2 {error:.3f} over the caustics (of Cycles' caustic light), "
             f"{without_noise:.3f} without the Cycles Reference's own noise ({noise:.3f}); caustic light "
             f"{props.cycles_caustic_ratio:.2f} ± {props.cycles_caustic_noise:.2f} of Cycles'; {psnr_text}")
+
+
+def _cycles_bytes(scene, renders: int) -> dict[str, tuple[float, str]]:
+    """What a comparison holds besides the caustic render: one Cycles render
+    at a time, the `renders` references kept as float RGBA, and the
+    reference and difference images (part: (bytes, what to lower))."""
+    pixels = scene.camera.pixx * scene.camera.pixy
+    return {"the Cycles reference render": (CYCLES_BASE_BYTES + CYCLES_BYTES_PER_PIXEL * pixels, LOWER_RESOLUTION),
+            "the comparison's images": (16.0 * (renders + 2) * pixels, LOWER_RESOLUTION)}

@@ -21,12 +21,16 @@ MAP_CACHE = MapCache()
 IMAGE_BYTES_PER_PIXEL = 4 * (16 + 16 + 16) + 16
 
 
-def refusal(scene: Scene, settings: RenderSettings) -> str | None:
+LOWER_RESOLUTION = "lower the resolution or its % (Output Properties)"
+
+
+def refusal(scene: Scene, settings: RenderSettings, besides: dict[str, tuple[float, str]] | None = None) -> str | None:
     """Why a render of `scene` into Blender's images cannot fit in memory,
-    the whole process's need told up front; None if it fits."""
+    the whole process's need told up front, with what the caller holds
+    `besides` (part: (bytes, what to lower)); None if it fits."""
     pixels = scene.camera.pixx * scene.camera.pixy
-    return memory_refusal(scene, settings, besides={"Blender's images of the render": (
-        IMAGE_BYTES_PER_PIXEL * pixels, "lower the resolution or its % (Output Properties)")})
+    return memory_refusal(scene, settings, besides={
+        "Blender's images of the render": (IMAGE_BYTES_PER_PIXEL * pixels, LOWER_RESOLUTION), **(besides or {})})
 
 
 class RenderJob:

@@ -105,6 +105,8 @@ CASES = [
                                   "the resolution X and Y (Output Properties)", {"render", "compare_cycles", "bake"}),
     (a_resolution_too_large_for_memory, "893.4 GB of it for Blender's images of the render: lower the resolution or "
                                         "its % (Output Properties)", {"render"}),
+    (a_resolution_too_large_for_memory, "GB of it for the Cycles reference render: lower the resolution or its % "
+                                        "(Output Properties)", {"compare_cycles"}),
 ]
 
 
