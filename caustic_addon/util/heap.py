@@ -7,9 +7,7 @@ hands back to the kernel the top of an arena that frees more than a few MB
 (at most 2 x 32 MB) and a thread arena's 64 MB heaps once empty, and serves
 anything larger than its adaptive threshold (128 kB at start, 32 MB at
 most) with mmap, which is unmapped on free. So the same arrays keep coming
-back as new pages, each a fault that the kernel zeroes: on this project's
-virtual machine 150,000 to 400,000 faults and 0.3 to 4.6 CPU s in the
-kernel a frame of the animated pool (README, Measured).
+back as new pages, each a fault that the kernel zeroes.
 
 `reuse_freed_memory` sets, for the whole process: one arena (M_ARENA_MAX),
 mmap only above 64 MB (M_MMAP_THRESHOLD), free memory returned to the
@@ -20,12 +18,12 @@ longer uses, much as jemalloc keeps its freed pages for a while:
 Blender's Linux builds link jemalloc in place of glibc's malloc (the bpy
 module does not), and there this changes nothing. It does nothing where
 malloc is not glibc's (Windows, macOS), and leaves alone a process whose
-environment already tunes glibc's malloc. Threads that have an arena keep
-it, and a new thread may be handed one of theirs, so it runs when the
-engine is imported, before the engine starts any thread: the command
-line's threads then all share the main arena; in Blender, whose own
-threads start first, the engine's may be handed one of Blender's, which
-the pad keeps from shrinking."""
+environment already tunes glibc's malloc.
+
+The renderer applies it where a render starts, never at import: importing
+the engine leaves the process as it was. Threads that already have an
+arena keep it; the pad keeps theirs from shrinking. benchmarks/allocator.py
+measures it inside Blender against glibc's default."""
 
 from __future__ import annotations
 
