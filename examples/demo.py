@@ -124,7 +124,8 @@ def artist_scene(percentage: int):
         ob.data.shade_smooth()
     sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))
     sun.data.energy, sun.data.angle, sun.data.color = 4.0, math.radians(1.0), (1.0, 0.93, 0.85)
-    sun.rotation_euler = (math.radians(50.0), 0.0, math.radians(35.0))
+    # behind the glasses: their shadows and caustics fall toward the camera
+    sun.rotation_euler = (math.radians(-50.0), 0.0, math.radians(-25.0))
     scene.collection.objects.link(sun)
     world = bpy.data.worlds.new("Sky")
     world.color = (0.35, 0.45, 0.6)
@@ -171,7 +172,12 @@ def shown(rgba: np.ndarray, folder: Path, name: str) -> np.ndarray:
     image = bpy.data.images.new(name, w, h, alpha=True, float_buffer=True)
     image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1]).ravel())
     path = folder / f"{name}.png"
+    # save_render writes in the scene's output format: an 8-bit PNG is what takes the view transform
+    output = bpy.context.scene.render.image_settings
+    kept = output.file_format, output.color_depth
+    output.file_format, output.color_depth = 'PNG', '8'
     image.save_render(str(path), scene=bpy.context.scene)
+    output.file_format, output.color_depth = kept
     bpy.data.images.remove(image)
     loaded = bpy.data.images.load(str(path))
     view = np.empty(w * h * 4, dtype=np.float32)
@@ -179,6 +185,17 @@ def shown(rgba: np.ndarray, folder: Path, name: str) -> np.ndarray:
     bpy.data.images.remove(loaded)
     srgb = view.reshape(h, w, 4)[::-1, :, :3]
     return srgb
+
+
+def metered(rgba: np.ndarray) -> np.ndarray:
+    """`rgba` exposed so that its median lit pixel is mid-grey (0.18), as a
+    photographer meters the paper's dim floor; alpha as it was."""
+    luminance = rgba[..., :3] @ np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)
+    lit = luminance[luminance > 0.0]
+    out = rgba.copy()
+    if len(lit):
+        out[..., :3] *= 0.18 / float(np.median(lit))
+    return out
 
 
 def save_exr(rgba: np.ndarray, path: Path) -> None:
@@ -244,7 +261,7 @@ def figure(panels: list[tuple[str, np.ndarray]], path: Path) -> bool:
         ax.imshow(np.clip(image, 0.0, 1.0))
         ax.set_title(title, fontsize=10)
         ax.axis("off")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.95))
     fig.savefig(path, dpi=110)
     pyplot.close(fig)
     return True
@@ -271,7 +288,7 @@ def main():
             paper_scene(args.percentage)
             bpy.ops.caustic.apply_preset(preset='PAPER_10_5')
             paper, paper_seconds = render_addon(addon, energy=1.0)
-            paper_shown = shown(paper * 4.0, folder, "paper")
+            paper_shown = shown(metered(paper), folder, "paper")
         panels = {
             "caustics": (f"the add-on, default settings: {ours_seconds:.1f} s", ours, ours_shown, ours_seconds),
             "cycles": (f"Cycles in the same time: {cycles_seconds:.1f} s, {cycles_samples} samples", cycles,
