@@ -45,19 +45,26 @@ def test_saved_file_renders_in_the_background(tmp_path):
     assert np.allclose(np.array(saved.pixels[:], dtype=np.float32), rendered, rtol=1e-5, atol=1e-6)
 
 
-def test_the_demo_renders_the_paper_scene_three_ways(tmp_path):
+def test_the_demo_renders_ours_cycles_and_the_paper_after_the_compile(tmp_path):
+    """make demo: the kernels' one-time compile is reported on its own line
+    before any render is timed; then the artist's scene by the add-on and by
+    Cycles, and the paper's scene, each written linear, with their times."""
     run = subprocess.run([sys.executable, str(REPO / "examples" / "demo.py"), "--out", str(tmp_path),
-                          "--percentage", "10", "--samples", "4", "--reference-lamp-rays", "20000"],
-                         capture_output=True, text=True, timeout=600)
+                          "--percentage", "10"], capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
-    figures = json.loads((tmp_path / "demo.json").read_text())["figures"]
-    assert len(figures) == 3
-    for name in ("demo_beams.exr", "demo_paper.exr", "demo_cycles.exr"):
-        assert (tmp_path / name).stat().st_size > 0, name
+    lines = run.stdout.splitlines()
+    compiled = next(i for i, line in enumerate(lines) if line.startswith("compiling the engine's"))
+    rendered = next(i for i, line in enumerate(lines) if "Caustics rendered in" in line)
+    assert compiled < rendered
+    summary = json.loads((tmp_path / "demo.json").read_text())
+    assert list(summary["panels"]) == ["caustics", "cycles", "paper"]
+    assert summary["cycles_samples"] > 0
+    for name in summary["panels"]:
+        saved = bpy.data.images.load(str(tmp_path / f"demo_{name}.exr"))
+        pixels = np.array(saved.pixels[:]).reshape(saved.size[1], saved.size[0], 4)
+        assert np.isfinite(pixels).all() and pixels[..., :3].max() > 0.0, name
     # the labelled picture needs matplotlib, which only the main venv has
     assert (tmp_path / "demo.png").exists() == (importlib.util.find_spec("matplotlib") is not None)
-    # the default is nearer the converged render than the paper's map and than Cycles' MNEE
-    assert figures["beams"]["relative_l2"] < min(figures["paper"]["relative_l2"], figures["cycles"]["relative_l2"])
 
 
 def test_the_demo_fails_loudly(tmp_path):
