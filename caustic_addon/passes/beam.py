@@ -65,7 +65,8 @@ from ..util.jit import inline, kernel
 from ..util.rows import take, take_rows
 from ..util.vectors import DIVISION_FLOOR, max_channel1, row
 from .beam_grid import Cells, LandingIndex, coherent_triangles, crack_free_triangles, diverging, fallback_shares
-from .bounce import Interface, facets, on_maps, split, trace
+from .bounce import facets, on_maps, split, trace
+from .interface import Interface
 from .differentials import landing_differentials
 from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
 from .paths import MIN_BRANCH_WEIGHT, Paths, relative_floor

@@ -35,14 +35,16 @@ from ..optics.multiscatter import albedo_at1, multiscatter_factor1
 from ..optics.specular import basic_irradiance_scale, fresnel_dielectric1, radiance_scale1, reflect1, refract1
 from ..sampling.hash import hash_uniform1
 from ..sampling.warps import concentric_disc1, orthonormal_basis1
-from ..scene.material_table import Materials
-from ..tracing.accelerator import REFLECTED, REFRACTED, Accelerator, inside1, offset1, shading_normal1
-from ..tracing.hits import MISS, Hits
-from ..util.jit import inline, kernel
+from ..scene.material_table import MATERIAL_TYPES, Materials
+from ..tracing.accelerator import (GEOMETRY_TYPES, REFLECTED, REFRACTED, Accelerator, inside1, offset1,
+                                   shading_normal1)
+from ..tracing.hits import HIT_TYPES, MISS, Hits
+from ..util.jit import inline, kernel, named_kernel
 from ..util.rows import contiguous, partition, take_rows
 from ..util.vectors import dot1, max_channel1, normalize1, row, scale1, set_row
 from .differentials import branch_differentials
-from .paths import MIN_BRANCH_WEIGHT, Paths
+from .interface import INTERFACE_TYPES, Interface
+from .paths import MIN_BRANCH_WEIGHT, PATH_TYPES, Paths
 
 _FAMILY_PRIME = np.uint64(0x100000001B3)
 _ID_PRIME = np.uint64(0x9E3779B97F4A7C15)
@@ -52,41 +54,6 @@ SCATTERED = np.uint64(1 << 63)
 # What became of a path at its hit (trace): it left the scene, arrived at an
 # opaque surface, or met a specular one.
 _ESCAPED, _ARRIVED, _SPECULAR = 0, 1, 2
-
-
-@dataclass
-class Interface:
-    """n rays at specular hits, oriented.
-
-    points      (n,3) world hit points
-    facing      (n,3) geometric normal on the side the ray comes from
-    shading     (n,3) shading normal on that same side
-    entering    (n,) bool: the ray goes from outside the object to inside
-    eta         (n,) eta_i / eta_t for this crossing
-    fresnel     (n,) unpolarised reflectance at `scattering`; 1 under total
-                internal reflection and at reflectors
-    alpha       (n,) GGX width; 0 where the surface is smooth
-    scattering  (n,3) the normal the ray scatters about: the shading normal,
-                or where rough a microfacet normal drawn by `facets`
-    """
-
-    points: np.ndarray
-    facing: np.ndarray
-    shading: np.ndarray
-    entering: np.ndarray
-    eta: np.ndarray
-    fresnel: np.ndarray
-    alpha: np.ndarray
-    scattering: np.ndarray
-
-    @property
-    def rough(self) -> np.ndarray:
-        """(n,) bool: the rows whose surface is rough."""
-        return self.alpha > 0.0
-
-    def select(self, mask: np.ndarray) -> "Interface":
-        return Interface(*take_rows(mask, self.points, self.facing, self.shading, self.entering, self.eta,
-                                    self.fresnel, self.alpha, self.scattering))
 
 
 @inline
@@ -109,8 +76,8 @@ def reflectance1(reflector, reflects, cos_i, eta):
     return fresnel_dielectric1(cos_i, eta) if reflects else 0.0
 
 
-@kernel("void(i8[::1], f8[::1], f8[::1], i8[::1], f8[:, ::1], i8[::1], i8[::1], f8[:, ::1], f8[:, :, ::1], "
-        "b1[::1], i8[::1], f8[:, ::1], b1[::1], b1[::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1])")
+@named_kernel("void", PATH_TYPES, HIT_TYPES, INTERFACE_TYPES, MATERIAL_TYPES, GEOMETRY_TYPES,
+              {"ior": "f8[:, ::1]", "reflects": "b1[::1]"})
 def _oriented(prim, u, v, obj, dirs, medium, band, face_normal, corner_normal, closed, body, ior, reflector,
               reflects, facing, shading, entering, eta, fresnel):
     """orient's rows: `ior (m,K)` per object and band, `band (n,)` each
@@ -143,11 +110,13 @@ def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, materials: Material
     facing, shading = np.empty((n, 3)), np.empty((n, 3))
     entering, eta, fresnel = np.empty(n, dtype=bool), np.empty(n), np.empty(n)
     ior = materials.ior[:, None] if band is None else materials.ior_bands
-    _oriented(contiguous(hits.prim, np.int64), contiguous(hits.u, np.float64), contiguous(hits.v, np.float64),
-              contiguous(hits.obj, np.int64), contiguous(dirs, np.float64), contiguous(medium, np.int64),
-              np.zeros(n, dtype=np.int64) if band is None else contiguous(band, np.int64), accel.face_normal,
-              accel.corner_normal, accel.closed, accel.body, contiguous(ior, np.float64), materials.reflector,
-              materials.fresnel, facing, shading, entering, eta, fresnel)
+    _oriented(prim=contiguous(hits.prim, np.int64), u=contiguous(hits.u, np.float64), v=contiguous(hits.v, np.float64),
+              obj=contiguous(hits.obj, np.int64), dirs=contiguous(dirs, np.float64),
+              medium=contiguous(medium, np.int64),
+              band=np.zeros(n, dtype=np.int64) if band is None else contiguous(band, np.int64),
+              face_normal=accel.face_normal, corner_normal=accel.corner_normal, closed=accel.closed, body=accel.body,
+              ior=contiguous(ior, np.float64), reflector=materials.reflector, reflects=materials.fresnel,
+              facing=facing, shading=shading, entering=entering, eta=eta, fresnel=fresnel)
     return Interface(hits.points, facing, shading, entering, eta, fresnel, np.take(materials.alpha, hits.obj),
                      shading)
 
@@ -319,10 +288,9 @@ def _own_families(surface: Interface) -> np.ndarray:
     return surface.rough
 
 
-@kernel("i8(f8[:, ::1], f8[:, ::1], i8[::1], f8[::1], u8[::1], i8[::1], i8[::1], i8[::1], "
-        "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1], f8[::1], b1[::1], "
-        "f8[:, ::1], f8[:, ::1], b1[::1], i8[::1], f8[:, ::1], b1, f8, f8, i8[::1], i8, u8, "
-        "f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], u8[::1], i1[::1], i8[::1], i8[::1])")
+@named_kernel("i8", PATH_TYPES, HIT_TYPES, INTERFACE_TYPES, MATERIAL_TYPES, GEOMETRY_TYPES,
+              {"own": "b1[::1]", "factor": "f8[:, ::1]", "radiance": "b1", "roulette": "f8", "draws": "i8[::1]",
+               "strata": "i8", "key": "u8", "source": "i8[::1]"})
 def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
               points, facing, shading, scattering, entering, eta, fresnel, alpha, own,
               reflection_tint, transmission_tint, dielectric, surface_of, factor, radiance, epsilon, roulette, draws,
@@ -421,21 +389,27 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
         factor = np.concatenate([multiscatter(surface, materials, hits.obj, paths.dirs, *scatter(
             surface, paths.dirs, np.full(n, mirror))[:2], carries_light) for mirror in (True, False)])
     family = np.zeros(0, dtype=np.uint64) if paths.family is None else contiguous(paths.family, np.uint64)
-    out = (np.empty((2 * n, 3)), np.empty((2 * n, 3)), np.empty((2 * n, 3)), np.empty(2 * n, dtype=np.int64),
-           np.empty(2 * n if len(family) else 0, dtype=np.uint64), np.empty(2 * n, dtype=np.int8),
-           np.empty(2 * n, dtype=np.int64), np.empty(2 * n, dtype=np.int64))
+    out = dict(out_origins=np.empty((2 * n, 3)), out_dirs=np.empty((2 * n, 3)), out_weight=np.empty((2 * n, 3)),
+               out_medium=np.empty(2 * n, dtype=np.int64),
+               out_family=np.empty(2 * n if len(family) else 0, dtype=np.uint64),
+               out_kind=np.empty(2 * n, dtype=np.int8), out_surface=np.empty(2 * n, dtype=np.int64),
+               source=np.empty(2 * n, dtype=np.int64))
     f8, i8 = np.float64, np.int64
     count = _branches(
-        contiguous(paths.dirs, f8), contiguous(paths.weight, f8), contiguous(paths.medium, i8),
-        contiguous(paths.floor, f8), family, contiguous(paths.ids, i8), contiguous(hits.obj, i8),
-        contiguous(hits.prim, i8), contiguous(surface.points, f8), contiguous(surface.facing, f8),
-        contiguous(surface.shading, f8), contiguous(surface.scattering, f8), contiguous(surface.entering, bool),
-        contiguous(surface.eta, f8), contiguous(surface.fresnel, f8), contiguous(surface.alpha, f8),
-        contiguous(_own_families(surface), bool), materials.reflection_tint, materials.transmission_tint,
-        materials.dielectric, accel.surface, factor, not carries_light, accel.epsilon, 0.0 if roulette is None else roulette.weight,
-        np.zeros(0, dtype=i8) if roulette is None else contiguous(roulette.draws, i8),
-        1 if roulette is None else roulette.strata, np.uint64(0 if roulette is None else roulette.key), *out)
-    origins, dirs, weight, medium, family, kind, prim, source = (a[:count] for a in out)
+        dirs=contiguous(paths.dirs, f8), weight=contiguous(paths.weight, f8), medium=contiguous(paths.medium, i8),
+        floor=contiguous(paths.floor, f8), family=family, ids=contiguous(paths.ids, i8),
+        obj=contiguous(hits.obj, i8), prim=contiguous(hits.prim, i8), points=contiguous(surface.points, f8),
+        facing=contiguous(surface.facing, f8), shading=contiguous(surface.shading, f8),
+        scattering=contiguous(surface.scattering, f8), entering=contiguous(surface.entering, bool),
+        eta=contiguous(surface.eta, f8), fresnel=contiguous(surface.fresnel, f8), alpha=contiguous(surface.alpha, f8),
+        own=contiguous(_own_families(surface), bool), reflection_tint=materials.reflection_tint,
+        transmission_tint=materials.transmission_tint, dielectric=materials.dielectric, surface_of=accel.surface,
+        factor=factor, radiance=not carries_light, epsilon=accel.epsilon,
+        roulette=0.0 if roulette is None else roulette.weight,
+        draws=np.zeros(0, dtype=i8) if roulette is None else contiguous(roulette.draws, i8),
+        strata=1 if roulette is None else roulette.strata, key=np.uint64(0 if roulette is None else roulette.key),
+        **out)
+    origins, dirs, weight, medium, family, kind, prim, source = (out[name][:count] for name in out)
     d_origins = d_dirs = None
     if paths.d_origins is not None:
         d_origins, d_dirs = branch_differentials(accel, paths, hits, surface, source, kind, dirs)

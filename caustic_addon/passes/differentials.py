@@ -20,10 +20,13 @@ import math
 
 import numpy as np
 
-from ..tracing.accelerator import REFLECTED, REFRACTED
-from ..util.jit import inline, kernel
+from ..tracing.accelerator import GEOMETRY_TYPES, REFLECTED, REFRACTED
+from ..tracing.hits import HIT_TYPES
+from ..util.jit import inline, kernel, named_kernel
 from ..util.rows import contiguous
 from ..util.vectors import dot1, row, scale1, set_subrow, subrow, sum1, transferred1
+from .interface import INTERFACE_TYPES
+from .paths import PATH_TYPES
 
 
 @inline
@@ -78,9 +81,8 @@ def refracted_change1(d, dd, n, dn, t, eta):
     return sum1(1.0, sum1(eta, dd, -mu, dn), -d_mu, n)
 
 
-@kernel("void(i8[::1], i8[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], "
-        "f8[::1], f8[::1], f8[:, :, ::1], f8[:, :, ::1], f4[:, :, ::1], f4[:, :, ::1], f4[:, :, ::1], "
-        "f4[:, :, ::1])")
+@named_kernel("void", PATH_TYPES, HIT_TYPES, INTERFACE_TYPES, GEOMETRY_TYPES,
+              {"reflected": "i8[::1]", "refracted": "i8[::1]"})
 def _branch_differentials(reflected, refracted, out_dirs, dirs, t, facing, scattering, eta, prim, u, v, corners,
                           corner_normal, d_origins, d_dirs, out_d_origins, out_d_dirs):
     """The differentials of the branches of each path i: its reflected
@@ -122,12 +124,15 @@ def branch_differentials(accel, paths, hits, surface, source: np.ndarray, kind: 
         rows[source[chosen]] = chosen
     out_d_origins, out_d_dirs = np.empty((k, 2, 3), dtype=np.float32), np.empty((k, 2, 3), dtype=np.float32)
     f8 = np.float64
-    _branch_differentials(branch[REFLECTED], branch[REFRACTED], contiguous(out_dirs, f8),
-                          contiguous(paths.dirs, f8), contiguous(hits.t, f8), contiguous(surface.facing, f8),
-                          contiguous(surface.scattering, f8), contiguous(surface.eta, f8),
-                          contiguous(hits.prim, np.int64), contiguous(hits.u, f8), contiguous(hits.v, f8),
-                          accel.corners, accel.corner_normal, contiguous(paths.d_origins, np.float32),
-                          contiguous(paths.d_dirs, np.float32), out_d_origins, out_d_dirs)
+    _branch_differentials(reflected=branch[REFLECTED], refracted=branch[REFRACTED],
+                          out_dirs=contiguous(out_dirs, f8), dirs=contiguous(paths.dirs, f8),
+                          t=contiguous(hits.t, f8), facing=contiguous(surface.facing, f8),
+                          scattering=contiguous(surface.scattering, f8), eta=contiguous(surface.eta, f8),
+                          prim=contiguous(hits.prim, np.int64), u=contiguous(hits.u, f8), v=contiguous(hits.v, f8),
+                          corners=accel.corners, corner_normal=accel.corner_normal,
+                          d_origins=contiguous(paths.d_origins, np.float32),
+                          d_dirs=contiguous(paths.d_dirs, np.float32), out_d_origins=out_d_origins,
+                          out_d_dirs=out_d_dirs)
     return out_d_origins, out_d_dirs
 
 

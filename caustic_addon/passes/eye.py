@@ -54,7 +54,8 @@ from ..tracing.hits import MISS, Hits
 from ..util.jit import kernel
 from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.rows import take, take_rows
-from .bounce import Interface, Roulette, facets, multiscatter, split, trace
+from .bounce import Roulette, facets, multiscatter, split, trace
+from .interface import Interface
 from .camera_rays import camera_footprints, eye_rays, pixel_offsets, ray_differentials
 from .direct_light import direct_radiance, rough_specular_radiance, strata, world_light
 from .paths import Paths, relative_floor

@@ -101,3 +101,10 @@ class Paths:
 def relative_floor(weight: np.ndarray) -> np.ndarray:
     """(n,) MIN_BRANCH_WEIGHT of each path's starting weight `weight (n,3)`."""
     return MIN_BRANCH_WEIGHT * max_channel(weight)
+
+
+# The numba type of each field, for the kernels that take path arrays by
+# name (util.jit.named_kernel).
+PATH_TYPES = {"origins": "f8[:, ::1]", "dirs": "f8[:, ::1]", "weight": "f8[:, ::1]", "medium": "i8[::1]",
+              "ids": "i8[::1]", "floor": "f8[::1]", "specular": "b1[::1]", "band": "i8[::1]", "family": "u8[::1]",
+              "kind": "i1[::1]", "surface": "i8[::1]", "d_origins": "f4[:, :, ::1]", "d_dirs": "f4[:, :, ::1]"}

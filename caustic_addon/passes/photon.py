@@ -35,16 +35,17 @@ from ..optics.spectrum import photon_band
 from ..optics.specular import radiance_scale1
 from ..sampling.hash import hash_uniform, hash_uniform1, stream_key
 from ..scene import Light, RenderSettings, Scene
-from ..scene.material_table import Materials
-from ..tracing.accelerator import Accelerator, offset1
-from ..tracing.hits import MISS, Hits
+from ..scene.material_table import MATERIAL_TYPES, Materials
+from ..tracing.accelerator import GEOMETRY_TYPES, Accelerator, offset1
+from ..tracing.hits import HIT_TYPES, MISS, Hits
 from ..util.parallel import Monitor, chunk_size, run_chunks
-from ..util.jit import inline, kernel
+from ..util.jit import inline, kernel, named_kernel
 from ..util.rows import contiguous, take
 from ..util.vectors import DIVISION_FLOOR, max_channel, max_channel1, row, set_row
-from .bounce import Interface, crossed_medium1, facets, multiscatter, on_maps, scatter, scatter1, trace
+from .bounce import crossed_medium1, facets, multiscatter, on_maps, scatter, scatter1, trace
+from .interface import INTERFACE_TYPES, Interface
 from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
-from .paths import Paths
+from .paths import PATH_TYPES, Paths
 
 # Below this fraction of its starting flux (max channel), a photon plays
 # Russian roulette and survives with probability flux / threshold.
@@ -98,16 +99,19 @@ def one_branch(accel: Accelerator, materials: Materials, paths: Paths, hits: Hit
         dirs, crossed, _ = scatter(surface, paths.dirs, reflect)
         factor = multiscatter(surface, materials, hits.obj, paths.dirs, dirs, crossed, carries_light)
     n, f8, i8 = len(paths), np.float64, np.int64
-    out = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty(n, dtype=i8), np.empty(n, dtype=i8))
+    out = dict(out_origins=np.empty((n, 3)), out_dirs=np.empty((n, 3)), out_weight=np.empty((n, 3)),
+               out_medium=np.empty(n, dtype=i8), source=np.empty(n, dtype=i8))
     count = _photon_bounces(
-        contiguous(paths.dirs, f8), contiguous(paths.weight, f8), contiguous(paths.medium, i8),
-        contiguous(paths.floor, f8), contiguous(draws, i8), contiguous(hits.obj, i8),
-        contiguous(surface.points, f8), contiguous(surface.facing, f8), contiguous(surface.shading, f8),
-        contiguous(surface.scattering, f8), contiguous(surface.entering, bool), contiguous(surface.eta, f8),
-        contiguous(surface.fresnel, f8), contiguous(surface.alpha, f8), materials.reflection_tint,
-        materials.transmission_tint, contiguous(factor, f8), not carries_light, accel.epsilon, reflect_key,
-        roulette_key, *out)
-    origins, dirs, weight, medium, source = (a[:count] for a in out)
+        dirs=contiguous(paths.dirs, f8), weight=contiguous(paths.weight, f8), medium=contiguous(paths.medium, i8),
+        floor=contiguous(paths.floor, f8), draws=contiguous(draws, i8), obj=contiguous(hits.obj, i8),
+        points=contiguous(surface.points, f8), facing=contiguous(surface.facing, f8),
+        shading=contiguous(surface.shading, f8), scattering=contiguous(surface.scattering, f8),
+        entering=contiguous(surface.entering, bool), eta=contiguous(surface.eta, f8),
+        fresnel=contiguous(surface.fresnel, f8), alpha=contiguous(surface.alpha, f8),
+        reflection_tint=materials.reflection_tint, transmission_tint=materials.transmission_tint,
+        factor=contiguous(factor, f8), radiance=not carries_light, epsilon=accel.epsilon, reflect_key=reflect_key,
+        roulette_key=roulette_key, **out)
+    origins, dirs, weight, medium, source = (out[name][:count] for name in out)
     return Paths(origins, dirs, weight, medium, take(paths.ids, source), take(paths.floor, source),
                  np.ones(count, dtype=bool), None if paths.band is None else take(paths.band, source),
                  kind=None if paths.kind is None else take(paths.kind, source), surface=take(hits.prim, source))
@@ -127,9 +131,9 @@ def roulette1(peak, threshold, xi):
     return (max(q, DIVISION_FLOOR) if alive else 1.0), alive and peak > 0.0
 
 
-@kernel("i8(f8[:, ::1], f8[:, ::1], i8[::1], f8[::1], i8[::1], i8[::1], "
-        "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1], f8[::1], f8[:, ::1], "
-        "f8[:, ::1], f8[:, ::1], b1, f8, u8, u8, f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], i8[::1])")
+@named_kernel("i8", PATH_TYPES, HIT_TYPES, INTERFACE_TYPES, MATERIAL_TYPES, GEOMETRY_TYPES,
+              {"draws": "i8[::1]", "factor": "f8[:, ::1]", "radiance": "b1", "reflect_key": "u8",
+               "roulette_key": "u8", "source": "i8[::1]"})
 def _photon_bounces(dirs, weight, medium, floor, draws, obj, points, facing, shading, scattering, entering, eta,
                     fresnel, alpha, reflection_tint, transmission_tint, factor, radiance, epsilon, reflect_key,
                     roulette_key, out_origins, out_dirs, out_weight, out_medium, source):

@@ -23,7 +23,8 @@ from ..scene.material_table import Materials
 from ..tracing.accelerator import SHADOW, Accelerator
 from ..tracing.hits import Hits
 from ..util.vectors import DIVISION_FLOOR, max_channel
-from .bounce import Interface, trace
+from .bounce import trace
+from .interface import Interface
 from .paths import Paths
 from .photon import ROULETTE_FRACTION, one_branch
 

@@ -153,6 +153,12 @@ class Materials:
         return np.where(medium < 0, 1.0, np.take(self.ior, np.maximum(medium, 0)))
 
 
+# The numba type of the Materials fields kernels take by name
+# (util.jit.named_kernel).
+MATERIAL_TYPES = {"dielectric": "b1[::1]", "reflector": "b1[::1]", "reflection_tint": "f8[:, ::1]",
+                  "transmission_tint": "f8[:, ::1]"}
+
+
 def _layers(objects: list[Object]) -> dict[int, Layer]:
     """Object index -> the specular layer of each diffuse object that has one that reflects."""
     layers = {}

@@ -17,11 +17,11 @@ from embreex import rtcore_scene
 from embreex.mesh_construction import TriangleMesh
 
 from ..scene import Object
-from ..util.jit import inline, kernel
+from ..util.jit import inline, kernel, named_kernel
 from ..util.parallel import threads_here
 from ..util.vectors import dot1, float_rows, length, normalize, normalize1, row, set_row, sum1
 from .contact import Contacts
-from .hits import MISS, Hits
+from .hits import HIT_TYPES, MISS, Hits
 from .topology import open_edges, signed_volume, triangle_normals
 
 _MIN_SPLIT = 8192
@@ -63,6 +63,13 @@ class _View:
 
     def __init__(self, embree, objects: np.ndarray):
         self.embree, self.objects = embree, objects
+
+
+# The numba type of each of the Accelerator's tables, by the name kernels
+# give it (util.jit.named_kernel): `surface_of` is its `surface`.
+GEOMETRY_TYPES = {"body": "i8[::1]", "surface_of": "i8[::1]", "closed": "b1[::1]", "corners": "f8[:, :, ::1]",
+                  "face_normal": "f8[:, ::1]", "corner_normal": "f8[:, :, ::1]", "min_barycentric": "f8[:, ::1]",
+                  "prim_offset": "i8[::1]", "epsilon": "f8"}
 
 
 class Accelerator:
@@ -376,10 +383,10 @@ class Accelerator:
         """Write embreex's output `raw` for rays from `origins (k,3)` into
         rows start..start+k of `hits` (see _decoded)."""
         stop = start + len(origins)
-        _decoded(*(np.ascontiguousarray(raw[key], dtype=dtype) for key, dtype in _RAW), origins,
-                 np.ascontiguousarray(members, dtype=np.int64), self.prim_offset, self.corners, self.min_barycentric,
-                 hits.t[start:stop], hits.obj[start:stop], hits.prim[start:stop], hits.u[start:stop],
-                 hits.v[start:stop], hits.points[start:stop])
+        _decoded(**{name: np.ascontiguousarray(raw[key], dtype=code) for name, (key, code) in _RAW.items()},
+                 origins=origins, members=np.ascontiguousarray(members, dtype=np.int64), prim_offset=self.prim_offset,
+                 corners=self.corners, min_barycentric=self.min_barycentric,
+                 **{f"out_{field}": getattr(hits, field)[start:stop] for field in HIT_TYPES})
 
     def occluded(self, origins: np.ndarray, dirs: np.ndarray, dists: np.ndarray) -> np.ndarray:
         """(n,) bool: is anything that casts shadows between `origins` and
@@ -411,7 +418,9 @@ def _table(parts: list[np.ndarray], empty: tuple[int, ...]) -> np.ndarray:
 
 
 # embreex's output arrays that _decoded reads, and their types
-_RAW = (("geomID", np.int32), ("primID", np.int32), ("tfar", np.float32), ("u", np.float32), ("v", np.float32))
+# embreex's output arrays: the name _decoded gives each, its key and its type.
+_RAW = {"raw_geom": ("geomID", "i4"), "raw_prim": ("primID", "i4"), "raw_tfar": ("tfar", "f4"),
+        "raw_u": ("u", "f4"), "raw_v": ("v", "f4")}
 
 
 @inline
@@ -499,24 +508,25 @@ def surface_point1(corners, min_barycentric, prim, u, v):
             b0 * corners[prim, 0, 2] + b1 * corners[prim, 1, 2] + b2 * corners[prim, 2, 2])
 
 
-@kernel("void(i4[::1], i4[::1], f4[::1], f4[::1], f4[::1], f8[:, ::1], i8[::1], i8[::1], f8[:, :, ::1], "
-        "f8[:, ::1], f8[::1], i8[::1], i8[::1], f8[::1], f8[::1], f8[:, ::1])")
-def _decoded(geom, prim, tfar, u, v, origins, members, prim_offset, corners, min_barycentric,
-             t_out, obj_out, prim_out, u_out, v_out, points_out):
+@named_kernel("void", HIT_TYPES, GEOMETRY_TYPES, {name: f"{code}[::1]" for name, (_, code) in _RAW.items()},
+              {"origins": "f8[:, ::1]", "members": "i8[::1]"})
+def _decoded(raw_geom, raw_prim, raw_tfar, raw_u, raw_v, origins, members, prim_offset, corners, min_barycentric,
+             out_t, out_obj, out_prim, out_u, out_v, out_points):
     """Hits from embreex's arrays for rays from `origins (k,3)`: geomID
-    `geom` indexes `members` (object indices), primID `prim` the object's
-    own triangles (global: plus `prim_offset`), the point is surface_point1;
-    a miss (geomID < 0) has t = inf, MISS and the ray's origin."""
-    for i in range(len(geom)):
-        u_out[i], v_out[i] = u[i], v[i]
-        if geom[i] < 0:
-            t_out[i], obj_out[i], prim_out[i] = np.inf, MISS, MISS
-            set_row(points_out, i, row(origins, i))
+    `raw_geom` indexes `members` (object indices), primID `raw_prim` the
+    object's own triangles (global: plus `prim_offset`), the point is
+    surface_point1; a miss (geomID < 0) has t = inf, MISS and the ray's
+    origin."""
+    for i in range(len(raw_geom)):
+        out_u[i], out_v[i] = raw_u[i], raw_v[i]
+        if raw_geom[i] < 0:
+            out_t[i], out_obj[i], out_prim[i] = np.inf, MISS, MISS
+            set_row(out_points, i, row(origins, i))
             continue
-        obj = members[geom[i]]
-        face = prim[i] + prim_offset[obj]
-        t_out[i], obj_out[i], prim_out[i] = tfar[i], obj, face
-        set_row(points_out, i, surface_point1(corners, min_barycentric, face, u_out[i], v_out[i]))
+        obj = members[raw_geom[i]]
+        face = raw_prim[i] + prim_offset[obj]
+        out_t[i], out_obj[i], out_prim[i] = raw_tfar[i], obj, face
+        set_row(out_points, i, surface_point1(corners, min_barycentric, face, out_u[i], out_v[i]))
 
 
 @kernel("void(i8[::1], i8[::1], f8[:, ::1], i8[::1], b1[::1], i8[::1], f8[:, ::1], b1[::1])")

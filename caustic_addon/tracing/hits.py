@@ -65,3 +65,9 @@ class Hits:
         """Overwrite the hits at `index (k,)` with `other`'s k hits."""
         for name in ("t", "obj", "prim", "u", "v", "points"):
             getattr(self, name)[index] = getattr(other, name)
+
+
+# The numba type of each field, for the kernels that take hit arrays by
+# name (util.jit.named_kernel).
+HIT_TYPES = {"t": "f8[::1]", "obj": "i8[::1]", "prim": "i8[::1]", "u": "f8[::1]", "v": "f8[::1]",
+             "points": "f8[:, ::1]"}

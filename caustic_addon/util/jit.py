@@ -26,8 +26,7 @@ before), not for this machine's, so one cache serves every machine of a
 platform: on x86-64 that is x86-64-v2, SSE4.2 and what comes with it,
 which Blender requires since 4.2 (its creator_cpu_check.cc); elsewhere
 numba's "generic". numba's generic x86-64 has no SSE4.1 rounding, so
-each floor and fmod was a call into numba's helper library (README,
-Compiled kernels). Arrays must match the signature exactly (`f8[:, ::1]`
+each floor and fmod would be a call into numba's helper library. Arrays must match the signature exactly (`f8[:, ::1]`
 is C-contiguous float64): a kernel never compiles again for other types.
 
 Scalar helpers that kernels call (`@inline`) are inlined into each kernel."""
@@ -36,6 +35,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import inspect
 import platform
 import shutil
 import threading
@@ -93,10 +93,11 @@ def cache_folder() -> Path:
 
 class Kernel:
     """A kernel compiled on first use: `func` under numba.njit(signatures,
-    nogil=True, cache=True)."""
+    nogil=True, cache=True). A kernel with `names` (named_kernel) is called
+    with its arguments by those names only."""
 
-    def __init__(self, func, signatures: tuple[str, ...]):
-        self.func, self.signatures = func, signatures
+    def __init__(self, func, signatures: tuple[str, ...], names: tuple[str, ...] | None = None):
+        self.func, self.signatures, self.names = func, signatures, names
         self._compiled = None
         functools.update_wrapper(self, func)
 
@@ -108,8 +109,15 @@ class Kernel:
                     self._compiled = _njit_cached(self.func, self.signatures)
         return self._compiled
 
-    def __call__(self, *args):
-        return self.compiled()(*args)
+    def __call__(self, *args, **named):
+        if self.names is None:
+            return self.compiled()(*args)
+        missing, unknown = [n for n in self.names if n not in named], sorted(set(named) - set(self.names))
+        if args or missing or unknown:
+            raise TypeError(f"{self.func.__name__} takes its arguments by name only"
+                            + (f"; missing: {', '.join(missing)}" if missing else "")
+                            + (f"; unknown: {', '.join(unknown)}" if unknown else ""))
+        return self.compiled()(*(named[n] for n in self.names))
 
 
 def _njit_cached(func, signatures: tuple[str, ...]):
@@ -167,6 +175,28 @@ def kernel(*signatures: str):
     return declare
 
 
+def named_kernel(returns: str, *tables: dict[str, str]):
+    """Declare a compiled kernel whose arguments are typed by name: each
+    parameter takes its numba type from the first of `tables` that names it
+    (the path state's, the hits', ... each declared once beside its
+    fields), an `out_<field>` parameter its field's type; the signature is
+    `returns` of those types in the parameters' order. The kernel is then
+    called with every argument by name, so two arrays of one type cannot
+    trade places; a parameter no table types fails at import."""
+    def declare(func) -> Kernel:
+        names = tuple(inspect.signature(func).parameters)
+        types = []
+        for name in names:
+            typed = [table[key] for key in (name, name.removeprefix("out_")) for table in tables if key in table]
+            if not typed:
+                raise TypeError(f"kernel {func.__name__}: no table declares the type of '{name}'")
+            types.append(typed[0])
+        made = Kernel(func, (f"{returns}({', '.join(types)})",), names)
+        _KERNELS.append(made)
+        return made
+    return declare
+
+
 def inline(func):
     """A scalar helper for kernels, inlined into each kernel that calls it
     in numba's own IR: a call to a compiled function takes an atomic
@@ -176,6 +206,13 @@ def inline(func):
     read arrays unconditionally (tracing.accelerator.inside1) or leave the
     reading to their kernel (optics.principled.curve_at1)."""
     return numba.njit(nogil=True, inline="always")(func)
+
+
+def kernels_cached() -> bool:
+    """Whether every kernel declared so far is in the cache, so that
+    compile_kernels() only loads them."""
+    folder = cache_folder()
+    return folder.is_dir() and sum(1 for _ in folder.rglob("*.nbi")) >= len(_KERNELS)
 
 
 def compile_kernels() -> int:

@@ -11,6 +11,12 @@ import numpy as np
 import pytest
 
 from caustic_addon.maps.raster import _accumulate
+from caustic_addon.passes.bounce import _branches
+from caustic_addon.passes.interface import INTERFACE_TYPES
+from caustic_addon.passes.paths import PATH_TYPES
+from caustic_addon.scene.material_table import MATERIAL_TYPES
+from caustic_addon.tracing.accelerator import GEOMETRY_TYPES
+from caustic_addon.tracing.hits import HIT_TYPES
 from caustic_addon.util import jit
 
 REPO = Path(__file__).resolve().parents[2]
@@ -97,6 +103,32 @@ def test_a_kernel_refuses_arrays_its_signatures_do_not_name():
     corners = np.zeros((2, 3, 4))[:, :, :2]
     with pytest.raises(TypeError):
         _accumulate(acc, 4, 4, corners, np.ones((2, 1)))
+
+
+def test_a_kernel_with_many_arrays_takes_them_by_name_only():
+    """A kernel of 16 arguments or more is declared by name (jit.named_kernel):
+    its types come from the tables of the fields it takes, and a call that
+    passes them by position, or misses or misspells one, is refused before
+    anything runs, so two arrays of one type cannot trade places."""
+    many = [k.func.__name__ for k in jit._KERNELS if k.func.__code__.co_argcount >= 16 and k.names is None]
+    assert not many
+    with pytest.raises(TypeError, match="by name only"):
+        _branches(*range(36))
+    with pytest.raises(TypeError, match="missing: source"):
+        _branches(**{name: None for name in _branches.names if name != "source"})
+    with pytest.raises(TypeError, match="unknown: sorce"):
+        _branches(**{name: None for name in _branches.names if name != "source"}, sorce=None)
+
+
+def test_a_named_kernel_s_argument_without_a_declared_type_fails_at_its_declaration():
+    with pytest.raises(TypeError, match="no table declares the type of 'weight'"):
+        jit.named_kernel("void", {"dirs": "f8[:, ::1]"})(lambda dirs, weight: None)
+
+
+def test_the_field_tables_agree_on_every_name_they_share():
+    tables = [PATH_TYPES, HIT_TYPES, INTERFACE_TYPES, MATERIAL_TYPES, GEOMETRY_TYPES]
+    for name in set().union(*tables):
+        assert len({table[name] for table in tables if name in table}) == 1, name
 
 
 # Every kernel compiled afresh (cached code cannot be inspected), and what
