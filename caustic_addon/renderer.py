@@ -154,7 +154,7 @@ def lamps_on_surfaces(scene: Scene, accel: Accelerator) -> list[str]:
     warnings = []
     for light, obj in zip(lamps, accel.surface_at(centres).tolist()):
         if obj != MISS:
-            warnings.append(f"lamp '{light.name}' lies on '{scene.objects[obj].body_name}' (within the tracing "
+            warnings.append(f"light '{light.name}' lies on '{scene.objects[obj].body_name}' (within the tracing "
                             f"epsilon, {accel.epsilon:.2g} m): its rays start on that surface and stop there at "
                             "once, so it casts no caustics and may light nothing; move it off the surface")
     return warnings

@@ -91,7 +91,7 @@ class Comparison:
             self._write(bpy.context)
 
     def _write(self, context) -> None:
-        props, result = context.scene.caustic, self.caustics.result
+        props, result = context.window_manager.caustic, self.caustics.result
         image, caustic = result.image, result.passes["caustic"]
         first, second = self.references["cycles"], self.references.get(SECOND_SEED)
         without = self.references.get(WITHOUT_CAUSTICS)
@@ -114,13 +114,13 @@ class Comparison:
                             f"{props.cycles_noise:.3f}, makes most of the relative L2 of "
                             f"{props.cycles_relative_l2:.3f} over {what}"
                             f"{', so no PSNR is given over them' if props.cycles_psnr_outside else ''}; raise "
-                            f"Cycles Samples (now {props.cycles_samples})")
+                            f"Cycles Samples (now {context.scene.caustic.cycles_samples})")
         props.cycles_psnr = psnr(image, reference, ~region if props.cycles_psnr_outside else None)
         self.warnings = self.read.warnings + result.warnings + warnings
         self.summary = summary(props, self.caustics.seconds)
 
     def _figures(self, image, caustic, region, reference, first, second, without) -> tuple[dict, list[str]]:
-        """Scene.caustic's figures by property name, but the PSNR, over the
+        """WindowManager.caustic's figures by name, but the PSNR, over the
         caustics' pixels `region`; and the warnings. `reference` is the
         `first` render, or its mean with the `second`; `without` is the one
         without caustics, if any."""

@@ -214,7 +214,7 @@ def render_addon(addon, **settings) -> tuple[np.ndarray, float]:
     for name, value in settings.items():
         setattr(props, name, value)
     assert bpy.ops.caustic.render() == {'FINISHED'}
-    return pixels("Caustic Render"), props.last_seconds
+    return pixels("Caustic Render"), bpy.context.window_manager.caustic.last_seconds
 
 
 def render_cycles(seconds: float, folder: Path) -> tuple[np.ndarray, float, int]:
@@ -242,7 +242,7 @@ def render_cycles(seconds: float, folder: Path) -> tuple[np.ndarray, float, int]
     out = np.empty(w * h * 4, dtype=np.float32)
     loaded.pixels.foreach_get(out)
     bpy.data.images.remove(loaded)
-    reached = next((int(s.split("Sample ")[1].split("/")[0]) for s in reversed(samples) if "Sample " in s), 0)
+    reached = max((int(s.split("Sample ")[1].split("/")[0]) for s in samples if "Sample " in s), default=0)
     return out.reshape(h, w, 4)[::-1].copy(), took, reached
 
 

@@ -27,7 +27,7 @@ def _node_emission(light, name: str, warnings: list[str]) -> np.ndarray:
     if node is None:
         return np.ones(3)
     if node.bl_idname != 'ShaderNodeEmission' or any(s.is_linked for s in node.inputs):
-        warnings.append(f"lamp '{name}': only a plain Emission node is understood in its nodes; "
+        warnings.append(f"light '{name}': only a plain Emission node is understood in its nodes; "
                         "they are ignored")
         return np.ones(3)
     return np.array(node.inputs['Color'].default_value[:3], dtype=np.float64) * node.inputs['Strength'].default_value

@@ -172,7 +172,7 @@ def read_surface(material) -> Surface:
                        emission=_value(shader, "Color", what, warnings) * _value(shader, "Strength", what, warnings))
     return Surface(transparent=False, albedo=viewport,
                    warnings=[f"{what}: a '{shader.name}' shader is not understood; it is rendered as diffuse "
-                             "with the material's viewport colour"])
+                             "with the material's viewport color"])
 
 
 def _glass_tints(shader, what: str, warnings: list[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -269,7 +269,7 @@ def _read_volume(material, what: str, warnings: list[str]) -> np.ndarray:
         return np.zeros(3)
     color = _value(volume, "Color", what, warnings)
     if np.any(color > 1.0):
-        warnings.append(f"{what}: a Volume Absorption colour above 1 would add light; it is read as 1")
+        warnings.append(f"{what}: a Volume Absorption color above 1 would add light; it is read as 1")
     return volume_absorption(np.minimum(color, 1.0), _value(volume, "Density", what, warnings))
 
 

@@ -179,7 +179,7 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
                             "Cycles renders its faces black, and so does the caustic render")
         if np.any(surfaces[key].emission > 0.0):
             warnings.append(f"'{name}': its material '{key}' emits light; the caustic render shows it but lights "
-                            "nothing with it and casts no caustics from it yet (a lamp in its place would)")
+                            "nothing with it and casts no caustics from it yet (a light in its place would)")
         part = f"{name} [{key if key is not None else 'no material'}]" if several else name
         texture = None
         if surfaces[key].texture is not None:
@@ -197,5 +197,5 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
     if not ob.visible_diffuse and any(obj.is_caster for obj, _ in objects):
         warnings.append(f"'{name}': its Diffuse ray visibility is off, which hides it from Cycles' diffuse "
                         "bounces and the caustics they find through it; the caustic render's light goes from the "
-                        "lamps, so it still casts its caustic")
+                        "lights, so it still casts its caustic")
     return objects

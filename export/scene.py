@@ -74,7 +74,7 @@ def read_scene(context, with_camera: bool = True, depsgraph=None) -> SceneRead:
     read.scene.world = engine_world(scene.world, read.warnings)
     read.scene.ambient = np.array(scene.caustic.ambient[:], dtype=np.float64)
     if not read.scene.lights and read.scene.world.is_black:
-        raise InputError("Nothing lights the scene: it has no lamp, and its world is black")
+        raise InputError("Nothing lights the scene: it has no light, and its world is black")
     if not read.scene.receivers:
         raise InputError("No object receives caustics: give a mesh a diffuse material or set its "
                          "Caustics role to Receiver")

@@ -9,7 +9,7 @@ from .errors import InputError
 def render_settings(props, spp: int | None = None) -> RenderSettings:
     """The engine settings of Scene.caustic `props`; `spp` overrides its samples."""
     if props.lamp_rays == 0:
-        raise InputError("Lamp Rays is 0: the photon pass needs at least one lamp ray")
+        raise InputError("Light Rays is 0: the caustics need at least one light ray (Caustics > Illumination Map)")
     return RenderSettings(
         lamp_rays=props.lamp_rays,
         emission=props.emission.lower(),

@@ -205,5 +205,5 @@ def bind(recipe: Recipe, frame: ObjectFrame, what: str, warnings: list[str]) -> 
     try:
         return recipe(frame)
     except NotRead as exc:
-        warnings.append(f"{what}: its colour comes from {exc}; the unconnected value is used")
+        warnings.append(f"{what}: its color comes from {exc}; the unconnected value is used")
         return None

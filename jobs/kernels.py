@@ -23,6 +23,11 @@ def start(folder: str | None, shipped: Path) -> None:
     _warming.start()
 
 
+def compiling() -> bool:
+    """Whether the background compile is still going."""
+    return _warming is not None and _warming.is_alive()
+
+
 def wait() -> None:
     """Return once the background compile is done."""
     if _warming is not None:

@@ -68,7 +68,7 @@ class CAUSTIC_OT_render_animation(FrameRange, EngineOperator, bpy.types.Operator
 
     def _done(self, context, runner: JobRunner) -> set:
         if runner.last is not None:
-            show_image(context, write_result(context.scene.caustic, runner.last))
+            show_image(context, write_result(context.window_manager.caustic, runner.last))
         done = runner.done
         written = f"{len(done)} of {len(runner.steps)} frames written" + (
             f" ({frames_text(done)}, the last to '{self._paths[done[-1]]}')" if done else "")

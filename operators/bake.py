@@ -42,7 +42,7 @@ class BakeFrame(EngineOperator):
             self.report({'WARNING'}, warning)
         if not self._baked:
             raise StepError("No receiver's material can take a baked caustic")
-        record_run(bpy.context.scene.caustic, job)
+        record_run(bpy.context.window_manager.caustic, job)
 
     def _done(self, context, runner: JobRunner) -> set:
         if runner.cancelled:
@@ -58,16 +58,14 @@ class BakeFrame(EngineOperator):
 class CAUSTIC_OT_bake(BakeFrame, bpy.types.Operator):
     bl_idname = "caustic.bake"
     bl_label = "Bake Caustics"
-    bl_description = ("Trace the lamp rays and store each receiver's caustic in an image its material shows "
-                      "(EEVEE and the viewport then display it)")
+    bl_description = "Store each receiver's caustic in an image its material shows, in EEVEE, Cycles and the viewport"
     bl_options = {'REGISTER', 'UNDO'}
 
 
 class CAUSTIC_OT_unbake(bpy.types.Operator):
     bl_idname = "caustic.unbake"
     bl_label = "Remove Baked Caustics"
-    bl_description = ("Take every baked caustic out of the materials, with its node groups and images; the files "
-                      "of an animated bake stay on disk")
+    bl_description = "Take every baked caustic out of the materials, with its node groups and images"
     bl_options = {'REGISTER', 'UNDO'}
 
     @classmethod

@@ -83,7 +83,7 @@ class BakeFrames(FrameRange, EngineOperator):
                 raise StepError(f"Frame {frame}: the map of '{name}' {exc}") from exc
         self._warn(self._read.warnings + job.result.warnings)
         self._seconds += job.seconds
-        record_run(bpy.context.scene.caustic, job)
+        record_run(bpy.context.window_manager.caustic, job)
         job.drop_maps()
 
     def _wire(self, frames: list[int]) -> None:
@@ -118,6 +118,5 @@ class BakeFrames(FrameRange, EngineOperator):
 class CAUSTIC_OT_bake_animation(BakeFrames, bpy.types.Operator):
     bl_idname = "caustic.bake_animation"
     bl_label = "Bake Caustic Animation"
-    bl_description = ("Bake the caustics of every frame of the range into an image sequence beside the .blend, "
-                      "which the receivers' materials follow frame by frame (EEVEE and Cycles renders show it)")
+    bl_description = "Bake every frame's caustics into an image sequence beside the .blend, which the materials follow"
     bl_options = {'UNDO'}

@@ -21,8 +21,7 @@ from .engine_run import EngineOperator
 class CAUSTIC_OT_compare_cycles(EngineOperator, bpy.types.Operator):
     bl_idname = "caustic.compare_cycles"
     bl_label = "Compare with Cycles"
-    bl_description = ("Render the camera with caustics and with Cycles (CPU, path-traced caustics, or MNEE for "
-                      "lamps without a size) and measure the difference")
+    bl_description = "Render the camera with caustics and with Cycles, and measure the difference"
     # As caustic.render: an undo step keeps the images, and no redo panel re-runs both renders.
     bl_options = {'UNDO'}
 

@@ -7,7 +7,9 @@ from pathlib import Path
 
 import bpy
 
-from ..jobs import JobRunner
+from ..jobs import JobRunner, kernels
+
+COMPILING = "compiling the engine's kernels, once (about half a minute)"
 
 
 def kernel_folder() -> str | None:
@@ -47,12 +49,19 @@ class EngineOperator:
         return no_render_running(cls)
 
     def _status(self, runner: JobRunner) -> str:
+        if kernels.compiling():
+            return f"Caustics: {COMPILING} (Esc to cancel)"
         return f"Caustics: {runner.stage}, {runner.fraction:.0%} (Esc to cancel)"
+
+    def _say_if_compiling(self) -> None:
+        if kernels.compiling():
+            self.report({'INFO'}, f"Caustics: {COMPILING}; the run goes on when they are ready")
 
     def execute(self, context):
         runner = self._runner(context)
         if runner is None:
             return {'CANCELLED'}
+        self._say_if_compiling()
         runner.run()
         return self._end(context, runner)
 
@@ -62,12 +71,13 @@ class EngineOperator:
         runner = self._runner(context)
         if runner is None:
             return {'CANCELLED'}
-        self._run, self._progress_before = runner, context.scene.caustic.progress
+        self._run, self._progress_before = runner, context.window_manager.caustic.progress
         wm = context.window_manager
         wm.progress_begin(0.0, 1.0)
         self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.modal_handler_add(self)
         EngineOperator.running = True
+        self._say_if_compiling()
         runner.tick()
         return {'RUNNING_MODAL'}
 
@@ -85,7 +95,7 @@ class EngineOperator:
             raise
         if ticking:
             context.window_manager.progress_update(self._run.fraction)
-            context.scene.caustic.progress = self._run.fraction
+            context.window_manager.caustic.progress = self._run.fraction
             context.workspace.status_text_set(self._status(self._run))
             for area in context.screen.areas:
                 if area.type == 'VIEW_3D':
@@ -93,7 +103,7 @@ class EngineOperator:
             return {'RUNNING_MODAL'}
         self._stop(context)
         if not self._run.done:
-            context.scene.caustic.progress = self._progress_before
+            context.window_manager.caustic.progress = self._progress_before
         return self._end(context, self._run)
 
     def cancel(self, context):
@@ -110,5 +120,5 @@ class EngineOperator:
 
     def _end(self, context, runner: JobRunner) -> set:
         if runner.done and runner.error is None and not runner.cancelled:
-            context.scene.caustic.progress = 1.0
+            context.window_manager.caustic.progress = 1.0
         return self._done(context, runner)

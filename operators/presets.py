@@ -10,14 +10,14 @@ import bpy
 
 def _paper(energy: int, map_scale: int) -> tuple[str, str, dict]:
     return (f"Paper: energy {energy}, map {map_scale} mm",
-            f"40,000 lamp rays, lamp energy {energy}, map scale {map_scale} mm, bilinear map",
+            f"40,000 light rays, light energy {energy}, map scale {map_scale} mm, bilinear map",
             dict(lamp_rays=40_000, emission='TARGETED', energy=float(energy), use_auto_map_scale=False,
                  map_scale=map_scale / 1000.0, density='SPLAT'))
 
 
 # key -> (label, description, Scene.caustic values)
 PRESETS = {
-    'DEFAULT': ("Default", "40,000 lamp rays as beams, automatic map scale, Cycles brightness",
+    'DEFAULT': ("Default", "40,000 light rays as beams, automatic map scale, Cycles brightness",
                 dict(lamp_rays=40_000, emission='TARGETED', energy=1.0, use_auto_map_scale=True,
                      density='BEAM', beam_refinement=1)),
     **{f'PAPER_{energy}_{scale}': _paper(energy, scale) for energy in (10, 20) for scale in (5, 40)},

@@ -45,7 +45,7 @@ class CAUSTIC_OT_render(EngineOperator, bpy.types.Operator):
 
     def _write(self, frame: int, job: RenderJob) -> None:
         context = bpy.context
-        image = write_result(context.scene.caustic, job)
+        image = write_result(context.window_manager.caustic, job)
         self._image = image.name
         show_image(context, image)
         for warning in self._read.warnings + job.result.warnings:
@@ -67,7 +67,6 @@ class CAUSTIC_OT_render(EngineOperator, bpy.types.Operator):
         if runner.error is not None:
             self.report({'ERROR'}, runner.error)
             return {'CANCELLED'}
-        props = context.scene.caustic
         self.report({'INFO'}, f"Caustics rendered in {runner.last.seconds:.1f} s from "
-                              f"{props.last_lamp_rays:,} lamp rays into \"{self._image}\"")
+                              f"{context.window_manager.caustic.last_lamp_rays:,} light rays into \"{self._image}\"")
         return {'FINISHED'}

@@ -50,8 +50,7 @@ class RenderAfterBake:
 class CAUSTIC_OT_render_image_with_caustics(RenderAfterBake, BakeFrame, bpy.types.Operator):
     bl_idname = "caustic.render_image_with_caustics"
     bl_label = "Render Image with Caustics"
-    bl_description = ("Bake this frame's caustics into the receivers' materials, then render the active scene "
-                      "with its own engine (EEVEE, Cycles), as F12 does")
+    bl_description = "Bake this frame's caustics into the receivers' materials, then render the scene as F12 does"
     # An undo step keeps the bake; no redo panel would re-run bake and render.
     bl_options = {'UNDO'}
 
@@ -66,8 +65,7 @@ class CAUSTIC_OT_render_image_with_caustics(RenderAfterBake, BakeFrame, bpy.type
 class CAUSTIC_OT_render_animation_with_caustics(RenderAfterBake, BakeFrames, bpy.types.Operator):
     bl_idname = "caustic.render_animation_with_caustics"
     bl_label = "Render Animation with Caustics"
-    bl_description = ("Bake the caustics of every frame of the range into an image sequence the receivers' "
-                      "materials follow, then render the animation with the scene's engine, as Ctrl-F12 does")
+    bl_description = "Bake every frame's caustics, then render the animation as Ctrl-F12 does"
     bl_options = {'UNDO'}
 
     def _runner(self, context) -> JobRunner | None:

@@ -27,21 +27,22 @@ class _CausticPanel:
 
 
 class CAUSTIC_PT_render(_CausticPanel, bpy.types.Panel):
-    bl_label = "Caustic Render"
+    bl_label = "Caustics"
 
     def draw(self, context):
-        layout, props = self.layout, context.scene.caustic
+        layout, props, run = self.layout, context.scene.caustic, context.window_manager.caustic
         row = layout.row(align=True)
         row.scale_y = 1.4
         row.operator("caustic.render", icon='RENDER_STILL')
         row.operator("caustic.render_animation", text="Animation", icon='RENDER_ANIMATION')
         if EngineOperator.running:
-            layout.progress(factor=props.progress, type='BAR', text=f"{props.progress:.0%}  (Esc cancels)")
-        col = layout.column(align=True)
-        col.label(text=f"Last render: {props.last_seconds:.1f} s")
-        col.label(text=f"Lamp rays traced: {props.last_lamp_rays:,}")
-        if props.last_refined:
-            col.label(text=f"  of which refinement added {props.last_refined:,}")
+            layout.progress(factor=run.progress, type='BAR', text=f"{run.progress:.0%}  (Esc cancels)")
+        if run.last_seconds > 0:
+            col = layout.column(align=True)
+            col.label(text=f"Last render: {run.last_seconds:.1f} s")
+            col.label(text=f"Light rays traced: {run.last_lamp_rays:,}")
+            if run.last_refined:
+                col.label(text=f"  of which refinement added {run.last_refined:,}")
         row = layout.row(align=True)
         row.operator("caustic.bake", icon='TEXTURE')
         row.operator("caustic.bake_animation", text="Animation", icon='RENDER_ANIMATION')
@@ -50,7 +51,7 @@ class CAUSTIC_PT_render(_CausticPanel, bpy.types.Panel):
 
 
 class CAUSTIC_PT_photons(_CausticPanel, bpy.types.Panel):
-    bl_label = "Photon Pass"
+    bl_label = "Illumination Map"
     bl_parent_id = "CAUSTIC_PT_render"
 
     def draw(self, context):
@@ -73,7 +74,7 @@ class CAUSTIC_PT_photons(_CausticPanel, bpy.types.Panel):
 
 
 class CAUSTIC_PT_eye(_CausticPanel, bpy.types.Panel):
-    bl_label = "Eye Pass"
+    bl_label = "Sampling"
     bl_parent_id = "CAUSTIC_PT_render"
 
     def draw(self, context):
@@ -90,10 +91,7 @@ class CAUSTIC_PT_eye(_CausticPanel, bpy.types.Panel):
 class CAUSTIC_PT_camera(_CausticPanel, bpy.types.Panel):
     bl_label = "Camera"
     bl_parent_id = "CAUSTIC_PT_eye"
-    bl_description = ("The scene's resolution and the active camera's field of view, as the Output and Camera "
-                      "properties show them. In the paper's words, Resolution X and Y are pixx and pixy and "
-                      "Field of View is FOV; its screen size S, the width of the image plane, does not change "
-                      "a pinhole camera's image, so it has no setting")
+    bl_description = "The scene's resolution and the active camera's field of view: the paper's pixx, pixy and FOV"
 
     def draw(self, context):
         layout, scene = self.layout, context.scene
@@ -129,7 +127,10 @@ class CAUSTIC_PT_object(_CausticPanel, bpy.types.Panel):
             sub = row.row()
             sub.active = settings.use_ior
             sub.prop(settings, "ior", text="")
-            layout.prop(settings, "abbe")
+            row = layout.row(heading="Dispersion")
+            row.prop(settings, "use_dispersion", text="")
+            if settings.use_dispersion:
+                row.prop(settings, "abbe", text="")
             layout.prop(settings, "absorption_from")
             if settings.absorption_from == 'COEFFICIENT':
                 layout.prop(settings, "absorption")
@@ -150,6 +151,7 @@ class CAUSTIC_PT_compare(_CausticPanel, bpy.types.Panel):
         layout.prop(props, "cycles_samples")
         layout.prop(props, "cycles_time_limit")
         layout.operator("caustic.compare_cycles", icon='IMAGE_REFERENCE')
+        props = context.window_manager.caustic
         if props.cycles_seconds > 0:
             col = layout.column(align=True)
             col.label(text=f"Caustics: {props.last_seconds:.1f} s   Cycles: {props.cycles_seconds:.1f} s")

@@ -1,8 +1,9 @@
-"""The add-on's settings, one PropertyGroup per ID type: Scene.caustic and Object.caustic."""
+"""The add-on's settings, one PropertyGroup per ID type: Scene.caustic and
+Object.caustic; and the last runs' figures, WindowManager.caustic."""
 
-from . import object_settings, scene_settings
+from . import object_settings, run_results, scene_settings
 
-_MODULES = (scene_settings, object_settings)
+_MODULES = (run_results, scene_settings, object_settings)
 
 
 def register():

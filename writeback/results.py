@@ -1,4 +1,4 @@
-"""A finished run written into Blender: its image and passes, and its figures in Scene.caustic for the panels."""
+"""A finished run written into Blender: its image and passes, and its figures in WindowManager.caustic for the panels."""
 
 from .images import write_image, write_passes
 
@@ -6,7 +6,7 @@ RESULT_IMAGE = "Caustic Render"
 
 
 def record_run(props, job) -> None:
-    """Show the finished `job`'s time and lamp rays in Scene.caustic `props`."""
+    """Show the finished `job`'s time and light rays in WindowManager.caustic `props`."""
     props.last_seconds = job.seconds
     props.last_lamp_rays = job.result.stats["lamp_rays"]
     props.last_refined = job.result.stats["lamp_rays_refined"]

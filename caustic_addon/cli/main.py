@@ -28,6 +28,7 @@ from typing import Optional, TextIO
 
 from ..errors import Cancelled, SceneError
 from ..renderer import render
+from ..util.jit import compile_kernels, kernels_cached
 from . import config, files, image_io, obj
 
 EXIT_BAD_INPUT = 2
@@ -145,6 +146,11 @@ def run_render(args: argparse.Namespace, err: TextIO) -> None:
     mesh = obj.read_obj(args.mesh)
     scene = cfg.scene(mesh, Path(args.mesh).stem)
 
+    if not kernels_cached():
+        err.write("compiling the engine's kernels, once (about half a minute)\n")
+        clock = time.perf_counter()
+        compile_kernels()
+        err.write(f"compiled in {time.perf_counter() - clock:.1f} s\n")
     clock = time.perf_counter()
     bar = ProgressBar(err)
     try:

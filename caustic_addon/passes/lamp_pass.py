@@ -67,6 +67,6 @@ def lamps_in_glass(scene: Scene, accel: Accelerator) -> list[str]:
     for light in scene.lights:
         medium = lamp_medium(accel, light)
         if medium != MISS and scene.objects[medium].is_transparent:
-            warnings.append(f"lamp '{light.name}' is inside '{scene.objects[medium].body_name}': what is outside "
+            warnings.append(f"light '{light.name}' is inside '{scene.objects[medium].body_name}': what is outside "
                             "gets its light only through the glass, as caustics")
     return warnings

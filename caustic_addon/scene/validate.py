@@ -36,7 +36,7 @@ def _material_finite(name: str, material) -> None:
         parts = [("its reflection tint", material.reflection_tint),
                  ("its transmission tint", material.transmission_tint), ("its absorption", material.absorption)]
     elif isinstance(material, Diffuse):
-        parts = [("its colour", material.albedo), ("its emission", material.emission)]
+        parts = [("its color", material.albedo), ("its emission", material.emission)]
     else:
         parts = []
     for what, value in parts:
@@ -86,9 +86,9 @@ def validate_scene(scene: Scene) -> list[str]:
         if isinstance(material, Diffuse) and material.specular is not None:
             _check_specular(obj.name, material.specular)
         if isinstance(material, Reflector):
-            _finite(obj.name, "its reflectance colour", material.color)
+            _finite(obj.name, "its reflectance color", material.color)
             if np.any((material.color < 0) | (material.color > 1)):
-                raise SceneError(f"{obj.name}: reflectance colour must be in 0..1 (got {material.color.tolist()})")
+                raise SceneError(f"{obj.name}: reflectance color must be in 0..1 (got {material.color.tolist()})")
 
     extent = scene.extent()
     for light in scene.lights:
@@ -96,7 +96,7 @@ def validate_scene(scene: Scene) -> list[str]:
     _check_world(scene.world)
 
     if not scene.lights and scene.world.is_black:
-        warnings.append("the scene has no lamps and a black world: only the ambient term shows")
+        warnings.append("the scene has no lights and a black world: only the ambient term shows")
     if scene.casters and not scene.receivers:
         warnings.append("no object receives caustics: the photon pass is skipped")
     return warnings
@@ -175,17 +175,17 @@ def _check_specular(name: str, spec) -> None:
 
 def _check_lamp(light, extent: float) -> list[str]:
     """Raise SceneError for a lamp that cannot render; its warnings."""
-    name = f"lamp '{light.name}'"
-    _finite(name, "its colour", light.color)
+    name = f"light '{light.name}'"
+    _finite(name, "its color", light.color)
     if np.any(light.color < 0):
-        raise SceneError(f"{name}: its colour must not be negative")
+        raise SceneError(f"{name}: its color must not be negative")
     power = light.strength if isinstance(light, SunLight) else light.power
     what = "strength" if isinstance(light, SunLight) else "power"
     if not (math.isfinite(power) and power >= 0):
         raise SceneError(f"{name}: its {what} must be a finite number >= 0 (got {power})")
     if power * float(np.max(light.color)) > _MAX_POWER:
         raise SceneError(f"{name}: its {what} of {power:.3g} {'W/m^2' if what == 'strength' else 'W'} (times its "
-                         f"colour) is past the {_MAX_POWER:.0e} that the render's float32 images hold (the Sun "
+                         f"color) is past the {_MAX_POWER:.0e} that the render's float32 images hold (the Sun "
                          "gives 3.8e+26 W): lower it")
     warnings = []
     if power == 0 or not np.any(light.color > 0):
@@ -212,7 +212,7 @@ def _check_lamp(light, extent: float) -> list[str]:
         size = light.radius
     if size > extent:
         warnings.append(f"{name} is larger than the scene ({size:.3g} m against {extent:.3g} m across): "
-                        "its light is that of a lamp wrapped around everything")
+                        "its light is that of a light wrapped around everything")
     if isinstance(light, SpotLight):
         if not 0.0 < light.spot_size <= math.pi:
             raise SceneError(f"{name}: its spot size must be between 0 and 180 degrees")
@@ -222,9 +222,9 @@ def _check_lamp(light, extent: float) -> list[str]:
 
 
 def _check_world(world: World) -> None:
-    _finite("the world", "its colour", world.color)
+    _finite("the world", "its color", world.color)
     if np.any(world.color < 0):
-        raise SceneError("the world: its colour must not be negative")
+        raise SceneError("the world: its color must not be negative")
     if world.environment is not None:
         image = world.environment
         if image.ndim != 3 or image.shape[2] != 3 or image.shape[0] < 2 or image.shape[1] < 2:

@@ -32,7 +32,7 @@ def test_saved_file_renders_in_the_background(tmp_path):
     assert (props.lamp_rays, props.spp) == (30_000, 2)
     # A button press invokes the operator; in the background that is the synchronous path.
     assert bpy.ops.caustic.render('INVOKE_DEFAULT') == {'FINISHED'}
-    assert props.last_lamp_rays == 30_000
+    assert bpy.context.window_manager.caustic.last_lamp_rays == 30_000
     rendered = np.array(bpy.data.images["Caustic Render"].pixels[:], dtype=np.float32)
     assert rendered.max() > 1.0
 

@@ -63,7 +63,7 @@ def test_compare_restores_every_setting_and_stores_the_images():
     assert reference[..., :3].max() > 0.1 and tuple(bpy.data.images["Cycles Reference"].size) == (64, 48)
 
     # a point lamp through smooth glass: the reference is MNEE's, and no error is measured over the caustics
-    props = scene.caustic
+    props = bpy.context.window_manager.caustic
     assert props.cycles_seconds > 0 and props.last_seconds > 0
     assert props.cycles_reference == 'MNEE' and math.isnan(props.cycles_relative_l2) and props.cycles_psnr_outside
     assert math.isfinite(props.cycles_psnr)
@@ -82,10 +82,10 @@ def test_compare_says_cycles_cannot_render_a_mirrors_caustic(reports):
             "reflectors 'Ring' it has none (MNEE cannot solve for mirrors)" in said)
     # Cycles' reference holds none of it: what it has over the caustics, less its render without caustics, is noise
     assert "of the caustic render's caustic light: it lacks" in said
-    assert bpy.context.scene.caustic.cycles_caustic_ratio > 10.0
+    assert bpy.context.window_manager.caustic.cycles_caustic_ratio > 10.0
     bpy.data.materials["Chrome"].node_tree.nodes["Glossy BSDF"].inputs["Roughness"].default_value = 0.3
     assert bpy.ops.caustic.compare_cycles() == {'FINISHED'}
-    assert "lacks" not in reports() and bpy.context.scene.caustic.cycles_reference == 'PATH_TRACED'
+    assert "lacks" not in reports() and bpy.context.window_manager.caustic.cycles_reference == 'PATH_TRACED'
 
 
 def tick_to_the_end(runner):
@@ -121,7 +121,7 @@ def test_compare_runs_step_by_step_as_the_modal_operator_does(addon):
                                                                      "Difference"}
     assert after == before
     assert scenes.pixels_of("Cycles Reference")[..., :3].max() > 0.1
-    assert bpy.context.scene.caustic.cycles_seconds > 0
+    assert bpy.context.window_manager.caustic.cycles_seconds > 0
 
 
 @pytest.mark.parametrize("stopped_in", ["caustics", "cycles"])
@@ -129,6 +129,7 @@ def test_esc_leaves_no_half_result_and_every_setting_as_it_was(addon, stopped_in
     """Esc in either half: nothing is written (no Caustic Render without its
     reference), the figures stay, the settings Cycles needed are put back."""
     props = user_scene(3_000_000 if stopped_in == "caustics" else 20_000)
+    props = bpy.context.window_manager.caustic
     before, figures = render_state(), (props.cycles_seconds, props.last_seconds)
     runner = addon.comparison.run.Comparison(bpy.context).runner
     runner.tick()
@@ -195,7 +196,7 @@ def test_a_sized_lamps_caustic_is_path_traced_and_a_wrong_caustic_measures_wrong
     over the whole image), where MNEE's reference (a quarter of the
     caustic) rewarded a dimmer caustic."""
     sized_lamp_scene()
-    props = bpy.context.scene.caustic
+    props = bpy.context.window_manager.caustic
     right = compare(addon)
     assert props.cycles_reference == 'PATH_TRACED' and not right.sources.mnee
     region = addon.comparison.metrics.caustic_region(right.caustics.result.passes["caustic"])
@@ -230,7 +231,7 @@ def test_a_noisy_reference_is_said_to_be_too_noisy_to_judge_the_caustics(reports
     said = reports()
     assert "The Cycles Reference is too noisy to judge the caustics" in said
     assert "raise Cycles Samples (now 4)" in said and "outside the caustics" in said
-    assert bpy.context.scene.caustic.cycles_psnr_outside
+    assert bpy.context.window_manager.caustic.cycles_psnr_outside
 
 
 def test_a_point_lamps_compare_says_its_reference_lacks_the_caustic_with_the_share(reports):
@@ -243,7 +244,7 @@ def test_a_point_lamps_compare_says_its_reference_lacks_the_caustic_with_the_sha
     reports()
     assert bpy.ops.caustic.compare_cycles() == {'FINISHED'}
     said = reports()
-    props = bpy.context.scene.caustic
+    props = bpy.context.window_manager.caustic
     held = 1.0 / props.cycles_caustic_ratio
     print(f"MNEE holds {held:.3f} of the caustic render's caustic light")
     assert props.cycles_reference == 'MNEE' and 0.1 < held < 0.6

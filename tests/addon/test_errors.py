@@ -41,11 +41,6 @@ def zero_ior_in_the_material(parts):
     bpy.data.materials["Glass"].node_tree.nodes["Glass BSDF"].inputs["IOR"].default_value = 0.0
 
 
-def negative_ior_override(parts):
-    parts["ball"].caustic.use_ior = True
-    parts["ball"].caustic.ior = 0.0
-
-
 def a_resolution_too_large_for_memory(parts):
     bpy.context.scene.render.resolution_x = bpy.context.scene.render.resolution_y = 65536
     bpy.context.scene.render.resolution_percentage = 100
@@ -86,18 +81,17 @@ HUGE = [
     (a_glass_vertex_at_1e30, " m across (its vertex 3 at (0, 0, 1e+30)): the tracing's precision follows the "
                              "whole scene's size, so the rest would render black or wrong"),
     (an_infinite_glass_vertex, " m across (its vertex 3 at (0, 0, 3.4e+38))"),
-    (a_lamp_of_1e35_watts, "lamp 'Lamp': its power of 1e+35 W (times its colour) is past the 1e+30 that the "
+    (a_lamp_of_1e35_watts, "light 'Lamp': its power of 1e+35 W (times its color) is past the 1e+30 that the "
                            "render's float32 images hold"),
 ]
 
 CASES = [
     (no_camera, "The scene has no active camera", {"render", "compare_cycles"}),
-    (no_lamp, "Nothing lights the scene: it has no lamp, and its world is black", {"render", "compare_cycles", "bake"}),
-    (an_area_lamp_of_size_0, "lamp 'Lamp': its size is 0", {"render", "compare_cycles", "bake"}),
+    (no_lamp, "Nothing lights the scene: it has no light, and its world is black", {"render", "compare_cycles", "bake"}),
+    (an_area_lamp_of_size_0, "light 'Lamp': its size is 0", {"render", "compare_cycles", "bake"}),
     (no_receiver, "No object receives caustics", {"render", "compare_cycles", "bake"}),
-    (zero_lamp_rays, "Lamp Rays is 0", {"render", "compare_cycles", "bake"}),
+    (zero_lamp_rays, "Light Rays is 0", {"render", "compare_cycles", "bake"}),
     (zero_ior_in_the_material, "Ball: IOR must be a positive number", {"render", "compare_cycles", "bake"}),
-    (negative_ior_override, "Ball: IOR must be a positive number", {"render", "compare_cycles", "bake"}),
     *[(spoil, message, {"render", "compare_cycles", "bake"}) for spoil, message in HUGE],
     (a_lamp_as_the_camera, "The scene's camera 'Lamp' is a point light, not a camera: choose a camera object in "
                            "Scene Properties > Camera", {"render", "compare_cycles"}),
@@ -167,11 +161,6 @@ def assert_only_the_render_changed(before, after):
     for kind in after:
         if kind not in ("images", "scenes"):
             assert after[kind] == before[kind], kind
-    result_fields = {"last_seconds", "last_lamp_rays", "last_refined", "progress"}
-    caustic_before = {k: v for k, v in before["scenes"]["Scene"]["caustic"].items() if k not in result_fields}
-    caustic_after = {k: v for k, v in after["scenes"]["Scene"]["caustic"].items() if k not in result_fields}
-    assert caustic_after == caustic_before
-    before["scenes"]["Scene"].pop("caustic"), after["scenes"]["Scene"].pop("caustic")
     assert after["scenes"] == before["scenes"]
 
 
@@ -237,11 +226,11 @@ def a_lamp_inside_the_glass(parts):
 
 
 WARNED = [
-    (a_lamp_of_power_0, "lamp 'Lamp' gives no light (power 0 or black): it was left out"),
-    (an_area_lamp_with_spread_0, "lamp 'Lamp' has a spread of 0, a parallel beam: it lights the scene but casts "
+    (a_lamp_of_power_0, "light 'Lamp' gives no light (power 0 or black): it was left out"),
+    (an_area_lamp_with_spread_0, "light 'Lamp' has a spread of 0, a parallel beam: it lights the scene but casts "
                                  "no caustics"),
-    (a_lamp_larger_than_the_scene, "lamp 'Lamp' is larger than the scene"),
-    (a_lamp_inside_the_glass, "lamp 'Lamp' is inside 'Ball': what is outside gets its light only through the "
+    (a_lamp_larger_than_the_scene, "light 'Lamp' is larger than the scene"),
+    (a_lamp_inside_the_glass, "light 'Lamp' is inside 'Ball': what is outside gets its light only through the "
                               "glass, as caustics"),
 ]
 
@@ -280,7 +269,7 @@ def glass_whose_only_face_has_no_area(parts):
 
 
 WARNED += [
-    (a_lamp_on_the_floor, "lamp 'Lamp' lies on 'Floor' (within the tracing epsilon"),
+    (a_lamp_on_the_floor, "light 'Lamp' lies on 'Floor' (within the tracing epsilon"),
     (glass_whose_only_face_has_no_area, "'Ball' has no area (each of its faces is a line or a point): it casts no "
                                         "caustics and shows nothing"),
     (the_ball_scaled_to_0_on_one_axis, "'Ball' is scaled to 0 along an axis: glass with no thickness bends no "

@@ -530,5 +530,5 @@ def test_ray_visibility_and_holdouts_are_read_as_cycles_reads_them(addon):
                     "Held": Visibility(holdout=True), "InHoldout": Visibility(holdout=True),
                     "Aside": Visibility(camera=False), "Piece": Visibility(glossy=False)}
     assert ("'Shy': its Diffuse ray visibility is off, which hides it from Cycles' diffuse bounces and the caustics "
-            "they find through it; the caustic render's light goes from the lamps, so it still casts its caustic"
+            "they find through it; the caustic render's light goes from the lights, so it still casts its caustic"
             ) in result.warnings

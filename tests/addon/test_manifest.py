@@ -80,3 +80,14 @@ def test_readme_gives_each_zip_the_oldest_os_its_wheels_run_on():
         row = next((line for line in README.splitlines() if line.startswith(f"| {platform} |")), None)
         assert row is not None, f"README has no row for the {platform} zip"
         assert needs in row, row
+
+
+def test_the_file_permission_names_every_kind_of_file_the_add_on_writes():
+    """Blender shows the reason when the extension is installed: renders and
+    animation frames, baked caustic images, the kernel cache (numba's, in
+    the extension's user folder) and the Cycles comparison's render; at most
+    64 characters, as Blender's manifest check allows."""
+    reason = MANIFEST["permissions"]["files"]
+    assert len(reason) <= 64
+    for kind in ("renders", "baked caustics", "kernel cache", "Cycles comparison"):
+        assert kind in reason, kind

@@ -2,6 +2,7 @@
 
 import math
 import os
+import threading
 
 import bpy
 import numpy as np
@@ -69,7 +70,7 @@ def test_output_image_is_float_linear_at_the_render_resolution():
     assert tuple(image.size) == (50, 40)
     assert image.is_float
     assert image.colorspace_settings.name == "Linear Rec.709"
-    props = bpy.context.scene.caustic
+    props = bpy.context.window_manager.caustic
     assert props.last_lamp_rays == 20_000 and props.last_seconds > 0 and props.progress == 1.0
 
 
@@ -180,3 +181,24 @@ def test_the_passes_are_images_of_their_own_that_sum_to_the_render():
         assert bpy.data.images[f"Caustic Render {name}"].packed_file is not None
     total = passes["Direct"] + passes["Caustic"] + passes["Ambient"]
     np.testing.assert_allclose(total[..., :3], scenes.pixels_of("Caustic Render")[..., :3], rtol=1e-5, atol=1e-7)
+
+
+def test_a_render_started_while_the_kernels_compile_says_so(addon, reports):
+    """The kernels compile on a thread when the add-on is enabled; a render
+    started before it ends says that it waits for a one-time compile, and
+    then renders."""
+    scenes.ball_lens_scene(32, 24, lamp_rays=2_000)
+    compile_going_on = threading.Event()
+    thread = threading.Thread(target=compile_going_on.wait)
+    thread.start()
+    kept, addon.jobs.kernels._warming = addon.jobs.kernels._warming, thread
+    try:
+        reports()
+        assert bpy.ops.caustic.render() == {'FINISHED'}
+        assert "compiling the engine's kernels, once" in reports()
+    finally:
+        compile_going_on.set()
+        thread.join()
+        addon.jobs.kernels._warming = kept
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    assert "compiling" not in reports()

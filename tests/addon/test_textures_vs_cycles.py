@@ -129,4 +129,4 @@ def test_a_missing_image_and_a_missing_uv_map_are_named(reports):
     floor.uv_layers.remove(floor.uv_layers[0])
     floor.update()
     assert bpy.ops.caustic.render() == {'FINISHED'}
-    assert "'Floor': its colour comes from 'Wood', whose UV map 'active' the mesh does not have" in reports()
+    assert "'Floor': its color comes from 'Wood', whose UV map 'active' the mesh does not have" in reports()

@@ -9,6 +9,7 @@ import os
 import pty
 import re
 import select
+import shutil
 import signal
 import subprocess
 import sys
@@ -229,7 +230,7 @@ def test_an_exposure_past_float32_is_refused_for_exr_and_clips_in_png(tmp_path):
     (("position = [0.0, 0.0, 0.02]", "position = [0.0, 0.0, 1e30]"), None, "'round' reaches 1e+30 m from the rest"),
     (None, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1e30\nf 1 2 3\nf 1 2 4\nf 2 3 4\nf 3 1 4\n",
      "'spike' reaches 1e+29 m from the rest"),
-    (("power = 0.8", "power = 1e300"), None, "its power of 1e+300 W (times its colour) is past the 1e+30"),
+    (("power = 0.8", "power = 1e300"), None, "its power of 1e+300 W (times its color) is past the 1e+30"),
 ], ids=["object position", "OBJ vertex", "lamp power"])
 def test_huge_values_are_refused_by_name(tmp_path, edit, obj_text, fragment):
     """Each turned the whole image black, the lit plane included (issue 40)."""
@@ -536,3 +537,32 @@ def test_blender_reads_both_images_and_we_read_blender_s_zip_exr(tmp_path):
     np.testing.assert_allclose(np.load(tmp_path / "b.png.npy") * 255.0, read_png(tmp_path / "b.png"), atol=1e-3)
     for codec in ("ZIP", "ZIPS", "NONE"):
         np.testing.assert_array_equal(read_exr(tmp_path / f"blender_{codec}.exr"), image, err_msg=codec)
+
+
+def test_a_render_that_must_compile_kernels_says_so_first(tmp_path):
+    """Where a kernel is missing from the cache, the CLI says it compiles the
+    kernels, once, and how long that took, before the render's progress and
+    outside the render's time; with every kernel cached it says nothing."""
+    from caustic_addon.util import jit
+    cache = tmp_path / "cache"
+    kernels = cache / jit._ENGINE_NAME / jit._DIGEST
+    if jit.cache_folder().is_dir():
+        shutil.copytree(jit.cache_folder(), kernels)
+    for missing in sorted(kernels.rglob("*.nbi"))[:1]:
+        missing.unlink()
+    scene = tmp_path / "small.toml"
+    scene.write_text(SMALL)
+    mesh = tmp_path / "ball.obj"
+    write_obj(mesh, shapes.uv_sphere(1.0, segments=16, rings=8))
+    script = ("import sys; from caustic_addon.util.jit import use_kernel_cache; use_kernel_cache(sys.argv[1]); "
+              "from caustic_addon.cli.main import main; sys.exit(main(sys.argv[2:]))")
+    for first in (True, False):
+        run = subprocess.run([sys.executable, "-c", script, str(cache), "render", str(scene), str(mesh),
+                              "-o", str(tmp_path / "out.png")], cwd=ROOT, capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        said = run.stderr
+        if first:
+            compiling, summary = said.index("compiling the engine's kernels, once"), said.index("out.png: 64x48")
+            assert compiling < said.index("compiled in ") < summary
+        else:
+            assert "compiling the engine's kernels" not in said and "compiled in " not in said

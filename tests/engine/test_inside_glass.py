@@ -64,7 +64,7 @@ def test_a_lamp_inside_absorbing_glass_is_dimmed_by_the_radius_it_crosses(densit
     ratio = np.array(dimmed.stats["flux_landed_w"]) / np.array(clear.stats["flux_landed_w"])
     low, high = chord_bounds()
     assert np.all((ratio > low) & (ratio < high)), ratio
-    assert ("lamp 'Point' is inside 'Glass': what is outside gets its light only through the glass, as caustics"
+    assert ("light 'Point' is inside 'Glass': what is outside gets its light only through the glass, as caustics"
             in dimmed.warnings)
 
 

@@ -9,7 +9,7 @@ import pytest
 from caustic_addon import (Camera, Cancelled, Dielectric, Diffuse, MapCache, Mesh, Object, PointLight,
                            RenderSettings, Scene, SceneError, SpotLight, SunLight, render, shapes)
 from caustic_addon.tracing.topology import open_edge_count, signed_volume, triangle_normals
-from metrics import annulus_means, annulus_points, relative_l2
+from benchmarks.references.metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
 
 
@@ -92,11 +92,11 @@ def broken(**changes):
     (dict(vertices=[0, 0, np.inf]), r"Glass: its vertex 3 is not a finite point \(0, 0, inf\)"),
     (dict(vertices=[0, 0, 1e30]), r"'Glass' reaches 1e\+30 m from the rest of the scene, which is 23 m across "
                                   r"\(its vertex 3 at \(0, 0, 1e\+30\)\): the tracing's precision follows"),
-    (dict(power=1e300), r"lamp 'Lamp': its power of 1e\+300 W \(times its colour\) is past the 1e\+30"),
+    (dict(power=1e300), r"light 'Lamp': its power of 1e\+300 W \(times its color\) is past the 1e\+30"),
     (dict(empty=True), "Glass: the mesh has no triangles"),
-    (dict(power=-5.0), "lamp 'Lamp': its power must be"),
+    (dict(power=-5.0), "light 'Lamp': its power must be"),
     (dict(absorption=[np.nan, 0.0, 0.0]), "Glass: its absorption contains NaN"),
-    (dict(albedo=[0.5, np.inf, 0.5]), "Floor: its colour contains NaN or infinite"),
+    (dict(albedo=[0.5, np.inf, 0.5]), "Floor: its color contains NaN or infinite"),
     (dict(uv=[np.nan, 0.0]), "Floor: its UV map contains NaN"),
 ])
 def test_bad_scenes_name_the_culprit(changes, message):
@@ -295,7 +295,7 @@ def test_a_lamp_on_the_receiver_is_named_and_one_just_above_it_casts_its_caustic
         return render(scene, quick(lamp_rays=20_000))
 
     on, above = lamp_at(0.0), lamp_at(1e-4)
-    assert [w for w in on.warnings if w.startswith("lamp 'Lamp' lies on 'Floor' (within the tracing epsilon")]
+    assert [w for w in on.warnings if w.startswith("light 'Lamp' lies on 'Floor' (within the tracing epsilon")]
     assert not [w for w in above.warnings if "lies on" in w]
     assert above.stats["landed"] > 1000
 

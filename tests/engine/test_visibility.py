@@ -54,7 +54,7 @@ def test_parts_of_one_body_are_one_closed_surface_and_render_as_the_whole():
     for name in ("direct", "ambient", "caustic"):
         np.testing.assert_allclose(ours.passes[name], reference.passes[name], rtol=1e-5, atol=1e-6)
     split.lights = [PointLight((0.0, 0.0, 1.5), 100.0, name="Inner")]
-    assert "lamp 'Inner' is inside 'Glass'" in " ".join(render(split, settings).warnings)
+    assert "light 'Inner' is inside 'Glass'" in " ".join(render(split, settings).warnings)
 
 
 def test_a_glass_hidden_from_the_camera_keeps_its_shadow_and_its_caustic():
