@@ -13,7 +13,7 @@ VENV := .venv
 python_of = $(if $(filter $(NEWEST),$(1)),$(PY313),$(PY311))
 venv_of = $(if $(filter $(NEWEST),$(1)),$(VENV),.venv-$(1))
 
-.PHONY: all venv demo test test-engine bench clean package $(addprefix test-,$(NEWEST) $(OLDER))
+.PHONY: all venv demo test test-engine bench bench-mitsuba bench-report clean package $(addprefix test-,$(NEWEST) $(OLDER))
 
 all: test
 
@@ -42,18 +42,22 @@ demo: $(VENV)/.installed
 test-engine: venv
 	$(foreach v,$(NEWEST) $(OLDER),$(call venv_of,$(v))/bin/python -m pytest -c tests/pytest.ini tests/engine &&) true
 
-test: venv package $(addprefix test-,$(NEWEST) $(OLDER))
+# The engine's suite runs with the newest and the oldest Python and numpy
+# (5.3, 4.2); 4.5 shares 4.2's Python, so it runs the add-on's suite and the
+# engine's check of the numpy it ships. The slowest suite, 4.2's, starts first.
+test: venv package test-4.2 test-$(NEWEST) test-4.5
 
 # `make test` runs the Blenders' suites two at a time, each suite's output
-# kept whole: a suite keeps about 1.4 of the 2 cores busy, and two side by
-# side take 22 minutes where one after another took 32 (2026-12-02).
+# kept whole: a suite keeps about 1.4 of the 2 cores busy.
 ifeq ($(MAKECMDGOALS),test)
 MAKEFLAGS += --jobs=2 --output-sync=target
 endif
 
+suite_of = $(if $(filter 4.5,$(1)),tests/addon tests/engine/test_shipped_numpy_api.py,tests)
+
 $(addprefix test-,$(NEWEST) $(OLDER)): test-%: venv package
 	@echo "== Blender $* =="
-	$(call venv_of,$*)/bin/python -m pytest -c tests/pytest.ini tests
+	$(call venv_of,$*)/bin/python -m pytest -c tests/pytest.ini $(call suite_of,$*)
 
 # The extension: one zip per platform in dist/, each with the embreex, numba
 # and llvmlite wheels for Blender 4.2-5.0 (Python 3.11) and 5.1+ (Python 3.13).
@@ -81,10 +85,31 @@ package: venv
 	  for zip in $$out/caustics-*.zip; do $(BLENDER_EXT) validate $$zip || exit 1; done && \
 	  mv $$out/caustics-*.zip dist/
 
-bench: $(VENV)/.installed
-	$(VENV)/bin/python benchmarks/speed.py
-	$(VENV)/bin/python benchmarks/accuracy.py
-	$(VENV)/bin/python benchmarks/budget.py
+# The benchmark suite: every kept measurement that does not need Mitsuba 3
+# (Cycles' accuracy before the engine's, whose plot shows both), then
+# benchmarks/README.md written from benchmarks/results/*.json (hours).
+# first_render.py times the extension `make package` builds; allocator.py
+# runs in the newest and the oldest Blender. `make bench-mitsuba` adds the
+# comparison with Mitsuba's particle tracer, where its venv has Mitsuba;
+# `make bench-report` only writes the README again.
+BENCH := cycles_accuracy accuracy speed passes beams_at_scale memory animation paper sized_lamps rough_glass \
+	through_glass dispersion cycles_dispersion world_paths flicker gallery
+MITSUBA_PYTHON ?= /tmp/mitsuba-venv/bin/python
+
+bench: package
+	$(foreach b,$(BENCH),$(VENV)/bin/python benchmarks/$(b).py &&) true
+	$(VENV)/bin/python benchmarks/first_render.py
+	$(foreach v,$(NEWEST) $(firstword $(OLDER)),$(call venv_of,$(v))/bin/python benchmarks/allocator.py &&) true
+	$(MAKE) bench-report
+
+bench-mitsuba: $(VENV)/.installed
+	@if $(MITSUBA_PYTHON) -c "import mitsuba" 2>/dev/null; then \
+	  $(VENV)/bin/python benchmarks/mitsuba_folds.py --mitsuba-python $(MITSUBA_PYTHON); \
+	else echo "bench-mitsuba: no Mitsuba 3 at $(MITSUBA_PYTHON) (MITSUBA_PYTHON=...): skipped"; fi
+	$(MAKE) bench-report
+
+bench-report: $(VENV)/.installed
+	$(VENV)/bin/python benchmarks/report.py --readme README.md
 
 clean:
 	rm -rf $(VENV) $(foreach v,$(OLDER),.venv-$(v)) dist wheels out kernels

@@ -1,9 +1,10 @@
 """glibc's malloc as the engine sets it where a render starts
-(caustic_addon/util/heap.py) against glibc's default, inside Blender: Render
-Caustic Animation of the animated pool (animation.py's scene, 1280 x 720,
-the add-on's defaults), each setting in a fresh Blender process, twice, in
-turn. Seconds and CPU seconds a frame, page faults, kernel CPU seconds and
-peak memory of the whole run.
+(caustic_addon/util/heap.py) against glibc's default, inside Blender.
+
+Render Caustic Animation of the animated pool (animation.py's scene,
+1280 x 720, the add-on's defaults), each setting in a fresh Blender process,
+twice, in turn. Seconds and CPU seconds a frame, page faults, kernel CPU
+seconds and peak memory of the whole run.
 
     .venv/bin/python benchmarks/allocator.py [--frames 6] [--runs 2]
     .venv-4.2/bin/python benchmarks/allocator.py
@@ -20,11 +21,13 @@ import resource
 import statistics
 import subprocess
 import sys
-from datetime import date
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-RESULT = HERE / "results" / "allocator.json"
+sys.path.insert(0, str(HERE.parent))  # the repository root
+
+from benchmarks import record  # noqa: E402
+
 # A tunable that changes nothing: with it set, the engine leaves malloc alone (heap.tuned_by_environment).
 DEFAULT_MALLOC = {"GLIBC_TUNABLES": "glibc.malloc.perturb=0"}
 
@@ -33,8 +36,9 @@ def one_run(frames: int) -> dict:
     """In this process: the pool's animation, and what the process spent on it."""
     import tempfile
 
-    import animation
     import bpy
+
+    from benchmarks import animation
 
     animation.register_addon()
     animation.pool(Path(tempfile.mkdtemp()))
@@ -58,13 +62,12 @@ def measure(setting: str, frames: int) -> dict:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--frames", type=int, default=6)
     parser.add_argument("--runs", type=int, default=2)
     parser.add_argument("--one", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.one:
-        sys.path.insert(0, str(HERE))
         print(json.dumps(one_run(args.one)), flush=True)
         os._exit(0)  # past bpy's teardown, which Blender 4.2's module may crash in at exit
     runs = {"default": [], "engine": []}
@@ -75,16 +78,10 @@ def main() -> None:
     blender = runs["engine"][0]["blender"]
     figures = {setting: {key: statistics.mean(r[key] for r in rs) for key in rs[0] if key != "blender"}
                for setting, rs in runs.items()}
-    sys.path.insert(0, str(HERE))
-    from speed import machine
-
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE, capture_output=True,
-                            text=True).stdout.strip()
-    blenders = json.loads(RESULT.read_text())["blenders"] if RESULT.exists() else {}
+    blenders = record.read("allocator").get("blenders", {})
     blenders[blender] = figures
-    RESULT.write_text(json.dumps(dict(date=date.today().isoformat(), machine=machine(), commit=commit,
-                                      scene="animated pool, 1280x720, the add-on's defaults (animation.py)",
-                                      frames=args.frames, runs=args.runs, blenders=blenders), indent=2) + "\n")
+    record.write("allocator", dict(scene="animated pool, 1280x720, the add-on's defaults (animation.py)",
+                                   frames=args.frames, runs=args.runs, blenders=blenders))
 
 
 if __name__ == "__main__":

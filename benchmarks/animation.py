@@ -1,6 +1,6 @@
-"""Animated caustics in Blender (issue 19): the speed of Render Caustic
-Animation on an animated pool, and what each way of getting caustics into
-an EEVEE or Cycles render costs a frame.
+"""Animated caustics in Blender: the speed of Render Caustic Animation on an
+animated pool, and what each way of getting caustics into an EEVEE or
+Cycles render costs a frame, against Cycles alone.
 
     .venv/bin/python benchmarks/animation.py [--frames 24] [--cycles-frames 3]
 
@@ -30,22 +30,19 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import json
 import math
 import os
 import sys
 import tempfile
 import time
-from datetime import date
 from pathlib import Path
 
 import bpy
 
 REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from speed import machine  # noqa: E402
+sys.path.insert(0, str(REPO))  # the repository root
 
-RESULTS = Path(__file__).resolve().parent / "results"
+from benchmarks import record  # noqa: E402
 
 
 def register_addon() -> None:
@@ -181,11 +178,9 @@ def main() -> None:
         pool(Path(folder))
         speed = caustic_animation(args.frames) if args.frames else None
         options = final_frame_options(Path(folder), args.cycles_frames)
-    RESULTS.mkdir(exist_ok=True)
-    if speed is None and (RESULTS / "animation.json").exists():
-        speed = json.loads((RESULTS / "animation.json").read_text())["pool"]
-    (RESULTS / "animation.json").write_text(json.dumps(
-        dict(date=date.today().isoformat(), machine=machine(), pool=speed, final_frame=options), indent=2) + "\n")
+    if speed is None:
+        speed = record.read("animation").get("pool")
+    record.write("animation", dict(pool=speed, final_frame=options))
     if speed is not None:
         print(f"pool 1280x720: {speed['mean']:.2f} s a frame on average, at most {speed['max']:.2f} s, "
               f"{speed['total']:.1f} s for {speed['frames']} frames ({speed['cpu_total']:.1f} CPU s; load "

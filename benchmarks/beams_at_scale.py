@@ -1,5 +1,6 @@
 """Beams from 10k to 10M lamp rays (and one render of 50M): time, error and
-peak memory, on the ball lens and on sunlight through a wavy water slab.
+peak memory, on the ball lens against its exact reference and on sunlight
+through a wavy water slab against a converged render.
 
     .venv/bin/python benchmarks/beams_at_scale.py [--counts 1e4 3e4 ...] [--big 5e7] [--threads 2]
 
@@ -11,11 +12,12 @@ The wall time is the whole render's; the CPU time (all threads) is given
 too, since on a shared machine only it stays comparable.
 
 Errors are relative L2 over the caustic's pixels:
-- ball lens (benchmarks/ball_lens.py): against the exact pixel reference;
-- wavy slab (the gallery's rippled water, 240x180): against this engine's
-  own converged render, `--reference` lamp rays refined twice: a
-  self-convergence figure, not an independent one (issue 18 item 3 asks
-  for Mitsuba's particle tracer there).
+- ball lens (benchmarks/scenes/ball_lens.py): against the exact pixel
+  reference;
+- wavy slab (benchmarks/scenes/wavy_slab.py's pool: the gallery's rippled
+  water, 240x180): against this engine's own converged render,
+  `--reference` lamp rays refined twice: a self-convergence figure, not an
+  independent one (mitsuba_folds.py has Mitsuba's particle tracer there).
 
 Writes benchmarks/results/beams_at_scale.json.
 """
@@ -29,36 +31,23 @@ import resource
 import subprocess
 import sys
 import time
-from datetime import date
 from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-sys.path[:0] = [str(HERE), str(HERE.parent)]
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
 
-from caustic_addon import Camera, Dielectric, Diffuse, Object, RenderSettings, Scene, SunLight, render, shapes  # noqa: E402
+from benchmarks import record  # noqa: E402
+from benchmarks.references.metrics import region_relative_l2 as relative_l2  # noqa: E402
+from benchmarks.scenes import ball_lens, wavy_slab  # noqa: E402
+from caustic_addon import RenderSettings, Scene, render  # noqa: E402
 
-RESULTS = HERE / "results"
+RESULTS = record.RESULTS
 COUNTS = (1e4, 3e4, 1e5, 3e5, 1e6, 3e6, 1e7)
 
 
-def wavy_slab() -> Scene:
-    """The gallery's sunlight through rippled water, seen from above at 240x180."""
-    water = shapes.wavy_slab(2.4, 0.25, ((0.012, 0.45, 0.3), (0.009, 0.31, 1.4), (0.006, 0.23, 2.5)), 192,
-                             (0.0, 0.0, 0.35))
-    return Scene(objects=[Object("Pool floor", shapes.plane(4.0), Diffuse(albedo=1.0)),
-                          Object("Water", water, Dielectric(1.33))],
-                 lights=[SunLight((0.15, 0.1, -1.0), 4.0)],
-                 camera=Camera.look_at((0.0, -1.6, 2.2), (0.0, 0.15, 0.0), pixx=240, pixy=180,
-                                       fov=math.radians(40.0)))
-
-
 def scene_of(name: str) -> Scene:
-    if name == "ball_lens":
-        import ball_lens
-        return ball_lens.scene()
-    return wavy_slab()
+    return ball_lens.scene() if name == "ball_lens" else wavy_slab.pool()
 
 
 def peak_rss_mb() -> float:
@@ -97,10 +86,6 @@ def run(name: str, lamp_rays: float, refinement: int, threads: int) -> tuple[dic
     return figures, caustic
 
 
-def relative_l2(ours: np.ndarray, truth: np.ndarray, region: np.ndarray) -> float:
-    return float(np.sqrt(np.sum((ours - truth)[region] ** 2) / np.sum(truth[region] ** 2)))
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--counts", type=float, nargs="+", default=COUNTS)
@@ -117,13 +102,9 @@ def main() -> None:
         return
 
     RESULTS.mkdir(exist_ok=True)
-    path = RESULTS / "beams_at_scale.json"
-    report = json.loads(path.read_text()) if path.exists() else {}
-    from speed import machine
-    report.update(date=date.today().isoformat(), machine=machine())
+    report = record.read("beams_at_scale")
     for name in args.scenes:
         if name == "ball_lens":
-            import ball_lens
             truth = ball_lens.pixel_reference(ball_lens.scene())
             region, exact = truth.region, truth.irradiance / math.pi
         else:
@@ -142,7 +123,7 @@ def main() -> None:
                 rows[:] = [r for r in rows if (r["lamp_rays"], r["refinement"]) != (int(count), refinement)]
                 rows.append(figures)
                 rows.sort(key=lambda r: (r["refinement"], r["lamp_rays"]))
-                path.write_text(json.dumps(report, indent=2) + "\n")
+                record.write("beams_at_scale", report)
                 print(f"{name:10s} refinement {refinement} {int(count):>11,d} lamp rays {figures['seconds']:8.1f} s "
                       f"(CPU {figures['cpu_seconds']:7.1f} s)  error {100 * figures['error']:6.2f}%  "
                       f"peak {figures['peak_rss_mb']:6.0f} MB", flush=True)

@@ -1,5 +1,6 @@
 """What Cycles does with a Principled BSDF's dispersion, and the engine's
-spectrum against it, on benchmarks/prism.py's prism.
+spectrum against it and against the closed form, on
+benchmarks/scenes/prism.py's prism.
 
     .venv/bin/python benchmarks/cycles_dispersion.py [--samples 256]
 
@@ -40,24 +41,21 @@ import os
 import sys
 import tempfile
 import time
-from datetime import date
 from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-sys.path[:0] = [str(HERE), str(HERE.parent)]
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
 
 import bpy  # noqa: E402
 from mathutils import Matrix  # noqa: E402
 
-import prism  # noqa: E402
+from benchmarks import record  # noqa: E402
+from benchmarks.scenes import prism  # noqa: E402
 from caustic_addon import RenderSettings, render  # noqa: E402
 from caustic_addon.optics.dispersion import LAMBDA_C, LAMBDA_D, LAMBDA_F, cauchy_ior  # noqa: E402
 from caustic_addon.optics.spectrum import XYZ_TO_REC709, bands, cie_xyz  # noqa: E402
-from speed import machine  # noqa: E402
 
-RESULTS = HERE / "results"
 STRIPE = math.radians(0.05)  # half-width of the world's stripe of light
 FOV, WIDTH, HEIGHT = math.radians(10.0), 500, 8
 CAMERA_BELOW = 1.5  # metres below the prism's lowest point
@@ -247,12 +245,10 @@ def main() -> None:
                                                 - case["centroid_exit_deg"]["engine_bands"][2], 4)
         print(json.dumps(case), flush=True)
         cases.append(case)
-    result = dict(date=date.today().isoformat(), machine=machine(), blender=bpy.app.version_string,
-                  samples=args.samples, prism=dict(apex_deg=math.degrees(prism.APEX),
+    result = dict(blender=bpy.app.version_string, samples=args.samples, prism=dict(apex_deg=math.degrees(prism.APEX),
                                                    incidence_deg=math.degrees(prism.INCIDENCE), ior=prism.IOR),
                   cases=cases, engine_floor_abbe_20=engine_floor(20.0))
-    RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "cycles_dispersion.json").write_text(json.dumps(result, indent=2) + "\n")
+    record.write("cycles_dispersion", result)
     print(json.dumps(result["engine_floor_abbe_20"]))
 
 

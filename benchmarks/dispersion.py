@@ -1,13 +1,14 @@
-"""What dispersion and coloured glass cost and how exact they are.
+"""What dispersion and coloured glass cost, and how exact they are against
+Beer-Lambert's closed form and a dispersion-free render.
 
     .venv/bin/python benchmarks/dispersion.py [--repeats 2]
 
-1. Cost: speed.py's scene (a smooth 65k-triangle glass sphere, a point
-   lamp, 1M photons, adaptive) at 320x240, with no dispersion and with an
+1. Cost: speed.py's scene (benchmarks/scenes/glass_sphere.py: a smooth
+   65k-triangle glass sphere, a point lamp, 1M photons, adaptive) at 320x240, with no dispersion and with an
    Abbe number of 20 in 6 bands; and the same with beams (100k paths).
    Each figure is the best of `repeats` runs.
-2. Accuracy: a coloured slab (L = 0.2 m, colour (0.8, 0.5, 0.2) at 0.2 m,
-   n = 1.5) under a vertical sun, floor irradiance against Beer-Lambert with
+2. Accuracy: a coloured slab (benchmarks/scenes/slab.py: L = 0.2 m, colour
+   (0.8, 0.5, 0.2) at 0.2 m, n = 1.5) under a vertical sun, floor irradiance against Beer-Lambert with
    Fresnel and internal reflections; and the white point, a dispersion-free
    spectral render against the plain one.
 3. A picture: a glass ball (V = 15) in a sun, its floor just short of the
@@ -24,20 +25,20 @@ import json
 import math
 import sys
 import time
-from datetime import date
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
 
+from benchmarks import record  # noqa: E402
+from benchmarks.scenes import slab  # noqa: E402
+from benchmarks.scenes.glass_sphere import scene as benchmark_scene  # noqa: E402
 from caustic_addon import (Camera, Dielectric, Diffuse, Object, RenderSettings, Scene, SunLight,  # noqa: E402
                            render, shapes)
 from caustic_addon.cli.image_io import write_image  # noqa: E402
-import slab  # noqa: E402
-from speed import benchmark_scene, machine  # noqa: E402
 
-RESULTS = Path(__file__).resolve().parent / "results"
+RESULTS = record.RESULTS
 
 
 def best_seconds(scene: Scene, settings: RenderSettings, repeats: int) -> dict:
@@ -105,14 +106,14 @@ def picture() -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeats", type=int, default=2)
     args = parser.parse_args()
-    figures = {"date": date.today().isoformat(), "machine": machine(), "cost_seconds": cost(args.repeats),
-               "slab": slab_error(), "white_point": white_point(), "picture": picture()}
     RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "dispersion.json").write_text(json.dumps(figures, indent=2) + "\n")
+    figures = {"cost_seconds": cost(args.repeats), "slab": slab_error(), "white_point": white_point(),
+               "picture": picture()}
     print(json.dumps(figures, indent=2))
+    record.write("dispersion", figures)
 
 
 if __name__ == "__main__":

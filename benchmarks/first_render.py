@@ -1,4 +1,5 @@
-"""The first render after a fresh install: does the user wait for numba?
+"""The first render after a fresh install: how long the user waits for
+numba's kernels, against a render with them compiled or loaded from cache.
 
     .venv/bin/python benchmarks/first_render.py [dist/caustics-0.1.0-linux_x64.zip]
 
@@ -17,17 +18,20 @@ Writes benchmarks/results/first_render.json.
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import subprocess
 import sys
 import tempfile
-from datetime import date
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
-RESULTS = HERE / "results"
+sys.path.insert(0, str(REPO))  # the repository root
+
+from benchmarks import record  # noqa: E402
+
 MODULE = "bl_ext.user_default.caustics"
 
 CHILD = r"""
@@ -75,18 +79,19 @@ def run(zip_path: Path, user: Path, mode: str) -> dict:
 
 
 def main() -> None:
-    zip_path = Path(sys.argv[1]) if len(sys.argv) > 1 else sorted((REPO / "dist").glob("caustics-*-linux_x64.zip"))[-1]
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("zip", nargs="?", type=Path, help="the extension (default: the newest in dist/)")
+    args = parser.parse_args()
+    zip_path = args.zip or sorted((REPO / "dist").glob("caustics-*-linux_x64.zip"))[-1]
     with tempfile.TemporaryDirectory() as a, tempfile.TemporaryDirectory() as b:
         report = {
-            "date": date.today().isoformat(),
             "zip": zip_path.name,
             "fresh_render_at_once": run(zip_path, Path(a), "at_once"),
             "fresh_render_after_background_compile": run(zip_path, Path(b), "install"),
             "enabled_again_from_cache": run(zip_path, Path(b), "enable"),
         }
-    RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "first_render.json").write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps(report, indent=2))
+    record.write("first_render", report)
 
 
 if __name__ == "__main__":

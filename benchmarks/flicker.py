@@ -1,9 +1,10 @@
 """Flicker: how much of a caustic's change from frame to frame the motion
-does not explain, beams against photon maps (issue 19, item 3).
+does not explain, against a converged render's change, for beams and for
+photon maps.
 
     .venv/bin/python benchmarks/flicker.py [--frames 8] [--step 0.005]
 
-The ball lens of benchmarks/ball_lens.py slides along x by `step` metres a
+The ball lens of benchmarks/scenes/ball_lens.py slides along x by `step` metres a
 frame (0.3 pixel of the caustic's image at the default). What the motion
 explains is the change of a converged render, beams from 4 times the lamp
 rays with two levels of refinement: g[t+1] - g[t]. A mode's flicker is
@@ -17,28 +18,24 @@ noise that reshuffles each frame makes it large however slowly the ball
 moves. The temporal noise is the same residual as a share of the mean
 caustic. Each mode also renders a static frame twice, the maps traced
 again: its frames must be identical. Writes benchmarks/results/flicker.json
-and prints the table README quotes.
+and prints its table.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
-from datetime import date
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
 
-import ball_lens  # noqa: E402
+from benchmarks import record  # noqa: E402
+from benchmarks.scenes import ball_lens  # noqa: E402
 from caustic_addon import Camera, Dielectric, Diffuse, Object, PointLight, RenderSettings, Scene, render, shapes  # noqa: E402
-from speed import machine  # noqa: E402
 
-RESULTS = Path(__file__).resolve().parent / "results"
 PIXELS = (160, 120)
 MODES = {
     "beam, 40,000 lamp rays (the default)": dict(density="beam", lamp_rays=40_000),
@@ -104,11 +101,8 @@ def main() -> None:
     start = time.perf_counter()
     rows = measure(args.frames, args.step)
     table = markdown(rows)
-    RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "flicker.json").write_text(json.dumps(
-        dict(date=date.today().isoformat(), machine=machine(), frames=args.frames, step_m=args.step,
-             pixels=list(PIXELS), wall_seconds=time.perf_counter() - start, modes=rows, table=table),
-        indent=2) + "\n")
+    record.write("flicker", dict(frames=args.frames, step_m=args.step, pixels=list(PIXELS),
+                                 wall_seconds=time.perf_counter() - start, modes=rows, table=table))
     print("\n" + table)
 
 

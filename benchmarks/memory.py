@@ -9,6 +9,7 @@ Renders the ball lens (a 128 x 64 glass sphere over a floor, a point lamp;
 the default chunk size and threads, and prints for each the wall time, the
 photon rate, the peak resident set size (getrusage ru_maxrss) before and after
 the render, and the ratio of the two peaks. 10^8 photons take minutes.
+Writes benchmarks/results/memory.json.
 """
 
 from __future__ import annotations
@@ -21,10 +22,9 @@ import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
 
+from benchmarks import record  # noqa: E402
 from caustic_addon import Dielectric, Diffuse, Object, PointLight, RenderSettings, Scene, render, shapes  # noqa: E402
 from caustic_addon.scene import Camera  # noqa: E402
 
@@ -88,6 +88,9 @@ def main() -> None:
     small, large = rows
     print(f"peak RSS ratio {large['peak_rss_mb'] / small['peak_rss_mb']:.2f} for "
           f"{large['photons'] / small['photons']:.0f}x the photons (chunk size {large['chunk_size']:,})")
+    record.write("memory", dict(scene="ball lens, 128 x 64 sphere, 64 x 64 pixels, 1 spp, adaptive", rows=rows,
+                                peak_ratio=large["peak_rss_mb"] / small["peak_rss_mb"],
+                                photon_ratio=large["photons"] / small["photons"]))
 
 
 if __name__ == "__main__":

@@ -1,7 +1,10 @@
-"""Folds and cusps against an independent unbiased reference: Mitsuba 3's
-particle tracer (issue 18, item 3), on the ball lens's fold ring, on
-sunlight through a wavy water slab, and on water with one cosine wave whose
-exact caustic is known (benchmarks/sine_slab.py: sine_slab, the wave along
+"""The engine's folds and cusps against an independent unbiased reference,
+Mitsuba 3's particle tracer, and against exact images: on the ball lens's
+fold ring, on sunlight through a wavy water slab, and on water with one
+cosine wave whose exact caustic is known.
+
+The scenes: benchmarks/scenes/ball_lens.py; benchmarks/scenes/wavy_slab.py's
+under_water(); benchmarks/scenes/sine_slab.py (sine_slab, the wave along
 the quads' edges under a vertical sun; sine_slab_diagonal, across their
 diagonals under a slanted sun).
 
@@ -9,7 +12,7 @@ diagonals under a slanted sun).
         [--counts 1e4 3e4 ...]
         [--refinement 1] [--mitsuba-python /tmp/mitsuba-venv/bin/python] [--reference-passes 64]
 
-Mitsuba runs in its own venv (benchmarks/mitsuba_ptracer.py in a subprocess;
+Mitsuba runs in its own venv (benchmarks/references/mitsuba_ptracer.py in a subprocess;
 `pip install mitsuba`, its llvm_ad_rgb variant with Debian's libLLVM-19):
 it is never a dependency of the add-on or of the tests. Both renderers see
 the same triangles (the engine's meshes exported corner by corner, with
@@ -31,8 +34,8 @@ light. So that both count the same paths:
   looking down, since a particle tracer cannot see a diffuse floor through
   water (its connection to the camera is a shadow ray).
 
-Errors are relative L2 over the caustic's pixels (benchmarks/beams_at_scale
-.relative_l2), against Mitsuba's reference ("error") and against an exact
+Errors are relative L2 over the caustic's pixels
+(references/metrics.region_relative_l2), against Mitsuba's reference ("error") and against an exact
 one ("error_vs_exact"): the ball lens's pixels inside the shadow disc,
 against ball_lens.pixel_reference; the slabs' pixels that no wall's light
 reaches (water_reference.wall_free), against the cosine waves' exact image
@@ -55,52 +58,36 @@ import os
 import subprocess
 import sys
 import time
-from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-sys.path[:0] = [str(HERE), str(HERE.parent)]
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
 
-from caustic_addon import Camera, Object, RenderSettings, Scene, render, shapes  # noqa: E402
+from benchmarks import record  # noqa: E402
+from benchmarks.references import water_reference  # noqa: E402
+from benchmarks.references.metrics import region_relative_l2 as relative_l2  # noqa: E402
+from benchmarks.references.water_reference import BOTTOM, DEPTH  # noqa: E402
+from benchmarks.scenes import ball_lens, sine_slab, wavy_slab  # noqa: E402
+from caustic_addon import RenderSettings, Scene, render, shapes  # noqa: E402
 from caustic_addon.scene import Dielectric, PointLight, SunLight  # noqa: E402
-from water_reference import BOTTOM, DEPTH, EYE_HEIGHT, PIXX, PIXY  # noqa: E402
 
-RESULTS = HERE / "results"
+HERE = Path(__file__).resolve().parent
+RESULTS = record.RESULTS
+PTRACER = HERE / "references" / "mitsuba_ptracer.py"
 MITSUBA_PYTHON = "/tmp/mitsuba-venv/bin/python"
 MAX_DEPTH = 5
 COUNTS = (1e4, 3e4, 1e5, 3e5, 1e6)
 MITSUBA_SPP = (4, 16, 64, 256, 1024)
-SLAB_SIZE = 1.0
-SLAB_CELLS = round(SLAB_SIZE / 0.0125)
-SLAB_WAVES = ((0.012, 0.45, 0.3), (0.009, 0.31, 1.4), (0.006, 0.23, 2.5))
-
-
-def slab_scene() -> Scene:
-    """beams_at_scale's rippled water cut down to 1 m (the same waves on the
-    same 12.5 mm vertices, so the same caustic away from its rim; a
-    directional emitter's particles cover the scene's bounding disc, and at
-    2.4 m 97% of them missed the view), seen from under the water: a
-    camera 0.05 m below its flat bottom (z = 0.35) looking straight down at
-    the floor, 90 degrees across 240x180 (0.6 m by 0.45 m of floor)."""
-    import beams_at_scale
-    gallery = beams_at_scale.wavy_slab()
-    water = shapes.wavy_slab(SLAB_SIZE, DEPTH, SLAB_WAVES, SLAB_CELLS, (0.0, 0.0, BOTTOM))
-    objects = [o if o.name != "Water" else Object("Water", water, o.material) for o in gallery.objects]
-    camera = Camera.look_at((0.0, 0.0, EYE_HEIGHT), (0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), pixx=PIXX, pixy=PIXY,
-                            fov=math.radians(90.0))
-    return Scene(objects=objects, lights=gallery.lights, camera=camera)
+SLAB_SIZE, SLAB_CELLS, SLAB_WAVES = wavy_slab.SIZE, wavy_slab.CELLS, wavy_slab.WAVES
 
 
 def scene_of(name: str) -> Scene:
     if name == "ball_lens":
-        import ball_lens
         return ball_lens.scene()
     if name.startswith("sine_slab"):
-        import sine_slab
         return sine_slab.scene(name)
-    return slab_scene()
+    return wavy_slab.under_water()
 
 
 def _corners_and_normals(mesh) -> tuple[np.ndarray, np.ndarray]:
@@ -132,7 +119,6 @@ def export_scene(name: str, scene: Scene, path: Path) -> None:
     described = []
     (light,) = scene.lights
     if isinstance(light, PointLight):
-        import ball_lens
         glass = next(o for o in scene.objects if isinstance(o.material, Dielectric))
         centre = 0.5 * (glass.mesh.vertices.min(axis=0) + glass.mesh.vertices.max(axis=0))
         reach = float(np.linalg.norm(glass.mesh.vertices - centre, axis=1).max())
@@ -169,7 +155,7 @@ def mitsuba(name: str, scene: Scene, spp: int, passes: int, seed: int, args) -> 
     if not out.exists():
         scene_file = RESULTS / f"_mitsuba_{name}_scene.npz"
         export_scene(name, scene, scene_file)
-        subprocess.run([args.mitsuba_python, str(HERE / "mitsuba_ptracer.py"), str(scene_file), str(out),
+        subprocess.run([args.mitsuba_python, str(PTRACER), str(scene_file), str(out),
                         "--spp", str(spp), "--passes", str(passes), "--seed", str(seed),
                         "--threads", str(args.threads)], check=True)
     data = np.load(out)
@@ -180,7 +166,6 @@ def water_reference_image(scene: Scene) -> tuple[np.ndarray, float]:
     """The wavy slab's image by water_reference's own float64 particle
     tracer, 2 x 5e8 particles (cached in results/_own_wavy_slab.npz, not
     committed), and its noise (half the relative L2 between the halves)."""
-    import water_reference
     out = RESULTS / "_own_wavy_slab.npz"
     if not out.exists():
         (sun,) = scene.lights
@@ -199,10 +184,6 @@ def engine(scene: Scene, lamp_rays: int, refinement: int, threads: int) -> tuple
     figures = dict(lamp_rays=lamp_rays, refinement=refinement, paths=result.stats["lamp_rays"],
                    seconds=time.perf_counter() - wall, cpu_seconds=time.process_time() - cpu)
     return figures, result.passes["caustic"][..., 0].astype(np.float64)
-
-
-def relative_l2(ours: np.ndarray, truth: np.ndarray, region: np.ndarray) -> float:
-    return float(np.sqrt(np.sum((ours - truth)[region] ** 2) / np.sum(truth[region] ** 2)))
 
 
 def side_by_side(path: Path, images: list[np.ndarray], titles: list[str], region: np.ndarray, scale: float) -> None:
@@ -240,11 +221,8 @@ def main() -> None:
     args = parser.parse_args()
 
     RESULTS.mkdir(exist_ok=True)
-    path = RESULTS / "mitsuba_folds.json"
-    report = json.loads(path.read_text()) if path.exists() else {}
-    from speed import machine
-    report.update(date=datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC"), machine=machine(),
-                  load=os.getloadavg())
+    report = record.read("mitsuba_folds")
+    report.update(load=os.getloadavg())
     for name, reference_passes in zip(args.scenes, args.reference_passes):
         scene = scene_of(name)
         ref = mitsuba(name, scene, args.reference_spp, reference_passes, 1000, args)
@@ -253,14 +231,11 @@ def main() -> None:
         halves = ref["images"][0::2].mean(axis=0), ref["images"][1::2].mean(axis=0)
         entry = report.setdefault(name, {})
         if name == "ball_lens":
-            import ball_lens
             truth = ball_lens.pixel_reference(scene)
             region, exact = truth.region, truth.irradiance / math.pi
         elif name.startswith("sine_slab"):
-            import sine_slab
             region, exact = sine_slab.region(name), sine_slab.exact_radiance(name)
         else:
-            import water_reference
             exact, own_noise = water_reference_image(scene)
             top = DEPTH + sum(wave[0] for wave in SLAB_WAVES)
             region = water_reference.wall_free(SLAB_SIZE, top, scene.lights[0].direction)
@@ -293,7 +268,7 @@ def main() -> None:
                 best = caustic
                 print(name, figures, flush=True)
         entry[args.label] = rows
-        path.write_text(json.dumps(report, indent=2) + "\n")
+        record.write("mitsuba_folds", report)
         if best is not None:
             scale = float(np.quantile(reference[region], 0.995))
             # the caustic's box, with a margin

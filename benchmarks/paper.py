@@ -1,8 +1,9 @@
-"""Reproduce the paper's experiments (section 4) and measure its claims.
+"""The paper's experiments (section 4) reproduced on this engine, and each of
+its claims measured against physics (benchmarks/PAPER.md has the verdicts).
 
     .venv/bin/python benchmarks/paper.py [--quick]
 
-Renders every sweep of benchmarks/paper_scenes.py: index of refraction x
+Renders every sweep of benchmarks/scenes/paper_scenes.py: index of refraction x
 base shape at rest and raised (tables 1-3), lamp ray count (table 4), lamp
 energy (table 5), map scale (table 6) and object height (table 7); then
 times the engine's stages against the triangle count of the round glass.
@@ -15,30 +16,27 @@ heights and mesh sizes.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import sys
 import time
-from datetime import date
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
 
 import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-import paper_scenes as ps  # noqa: E402
+from benchmarks import record  # noqa: E402
+from benchmarks.scenes import paper_scenes as ps  # noqa: E402
 from caustic_addon import Dielectric, Object, RenderSettings, paper, render, shapes  # noqa: E402
 from caustic_addon.emission.aims import Sphere  # noqa: E402
-from speed import machine  # noqa: E402
 
-RESULTS = ROOT / "benchmarks" / "results"
+RESULTS = record.RESULTS
 # Index 1.5 (glass) and the heights between resting and RAISED are not in the
 # paper; they show where its trends turn.
 WATER, ZIRCONIA, DIAMOND = paper.INDICES.values()
@@ -318,7 +316,7 @@ def main() -> None:
     counts = ps.PAPER_SWEEPS["lamp_rays"][:-1] if args.quick else ps.PAPER_SWEEPS["lamp_rays"]
     RESULTS.mkdir(exist_ok=True)
 
-    report = {"date": date.today().isoformat(), "machine": machine(), "quick": args.quick,
+    report = {"quick": args.quick,
               "scene": {"lamp": paper.LAMP_POSITION, "lamp_power_w": paper.LAMP_POWER, "radius": paper.RADIUS,
                         "cylinder_height": paper.CYLINDER_HEIGHT, "cone_height": paper.CONE_HEIGHT, "gap": paper.GAP,
                         "floor": paper.FLOOR_SIZE, "resting_floor": ps.RESTING_FLOOR, "eye": paper.EYE, "target": paper.TARGET,
@@ -338,8 +336,8 @@ def main() -> None:
         report[name] = step()
         report["seconds"][name] = round(time.perf_counter() - clock, 1)
     report["seconds"]["total"] = round(time.perf_counter() - start, 1)
-    (RESULTS / "paper.json").write_text(json.dumps(report, indent=1) + "\n")
-    print(f"done in {report['seconds']['total']} s: {RESULTS / 'paper.json'}")
+    path = record.write("paper", report, indent=1)
+    print(f"done in {report['seconds']['total']} s: {path}")
 
 
 if __name__ == "__main__":

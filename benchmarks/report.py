@@ -494,8 +494,19 @@ def readme() -> str:
 
 # ------------------------------------------------------ headline figures
 
+def measured(*results: dict) -> str:
+    """Where and when `results` were measured: date and machine, once each."""
+    said = []
+    for d in results:
+        line = f"{when(d.get('date', '?'))}, {', '.join(d.get('machine', '?').split(', ')[:2])}"
+        if line not in said:
+            said.append(line)
+    return "; ".join(said)
+
+
 def headline() -> str:
-    """The few figures the repository's README leads with, as a table."""
+    """The few figures the repository's README leads with, as a table, each
+    row with where and when it was measured."""
     rows = []
     acc, cyc = load("accuracy"), load("cycles_accuracy")
     if acc and cyc:
@@ -504,7 +515,7 @@ def headline() -> str:
         rows.append(["ball lens, 320x240: time to 2% error against the exact caustic",
                      f"{reached(acc['time_to_reach']['beam']['2%'])} (beams)",
                      f"Cycles' lowest error: {percent(best['error'], 0)} ({name}, {count(best['samples'])} samples, "
-                     f"{seconds(best['seconds'])})"])
+                     f"{seconds(best['seconds'])})", measured(acc, cyc)])
     folds = load("mitsuba_folds")
     if folds:
         for scene in ("ball_lens", "wavy_slab"):
@@ -516,15 +527,16 @@ def headline() -> str:
                 rows.append([f"{MITSUBA_SCENES[scene].split(' (')[0]}: error against the exact image"
                              + (" (float64 tracer)" if scene == "wavy_slab" else ""),
                              f"{percent(engine[0]['error_vs_exact'])} in {seconds(engine[0]['seconds'])} "
-                             f"(1,000,000 lamp rays)",
-                             f"Mitsuba's particle tracer: {percent(m['error_vs_exact'])} in {seconds(m['seconds'])}"])
+                             f"(1,000,000 light rays)",
+                             f"Mitsuba's particle tracer: {percent(m['error_vs_exact'])} in {seconds(m['seconds'])}",
+                             measured(folds)])
     sized = load("sized_lamps")
     if sized:
         reach = sized["time_to_reach"]
-        rows.append(["sphere lamp through the ball lens: time to 5% error",
+        rows.append(["sphere light through the ball lens: time to 5% error",
                      reached(reach["sphere lamp"]["5%"]),
-                     f"Cycles path tracing: {reached(reach['Cycles path tracing']['5%'])}"])
-    return "\n".join(table(["measure", "this engine", "against"], rows))
+                     f"Cycles path tracing: {reached(reach['Cycles path tracing']['5%'])}", measured(sized)])
+    return "\n".join(table(["measure", "this engine", "against", "measured"], rows))
 
 
 def fill_readme(path: Path) -> None:

@@ -4,7 +4,7 @@ beam mode's two ways with a rough caster.
 
     .venv/bin/python benchmarks/rough_glass.py [--cycles-samples 1024] [--roughness 0.1 0.2 0.4]
 
-The scene is issue 4's ball lens (benchmarks/ball_lens.py) at 160x120,
+The scene is the ball lens (benchmarks/scenes/ball_lens.py) at 160x120,
 its glass given Roughness r (Multiscatter GGX, Blender's default), under a
 sphere lamp of radius RADIUS (Soft Falloff off) in place of the point lamp:
 Cycles' path tracing reaches a lamp through rough glass by the light
@@ -50,7 +50,6 @@ three ways at the default 40,000 lamp rays (sRGB).
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 import tempfile
@@ -58,27 +57,24 @@ import threading
 import time
 from contextlib import contextmanager
 from dataclasses import replace
-from datetime import date
 from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-sys.path[:0] = [str(HERE), str(HERE.parent)]
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
 
 import bpy  # noqa: E402
 
-import ball_lens  # noqa: E402
-import cycles_accuracy  # noqa: E402
-from accuracy import THRESHOLDS, time_to_reach  # noqa: E402
+from benchmarks import record  # noqa: E402
+from benchmarks.accuracy import THRESHOLDS, time_to_reach  # noqa: E402
+from benchmarks.scenes import ball_lens, ball_lens_cycles  # noqa: E402
+from benchmarks.sized_lamps import floor_region, relative_l2  # noqa: E402
 from caustic_addon import RenderSettings, render  # noqa: E402
 from caustic_addon.cli.image_io import write_image  # noqa: E402
 from caustic_addon.passes import beam, bounce  # noqa: E402
 from caustic_addon.sampling.sequences import r2_sequence  # noqa: E402
-from sized_lamps import floor_region, relative_l2  # noqa: E402
-from speed import machine  # noqa: E402
 
-RESULTS = HERE / "results"
+RESULTS = record.RESULTS
 RADIUS = 0.1
 PIXX, PIXY = 160, 120
 ROUGHNESS = [0.1, 0.2, 0.4]
@@ -177,10 +173,10 @@ def spread_beams(replicas: int):
 
 def cycles_scene(roughness: float) -> None:
     """The ball lens in bpy, its glass of `roughness`, under the sphere lamp."""
-    _, objects = cycles_accuracy.build_scene()
+    _, objects = ball_lens_cycles.build_scene()
     lamp = objects["Lamp"].data
     lamp.shadow_soft_size, lamp.use_soft_falloff = RADIUS, False
-    cycles_accuracy.set_mnee(objects, False)
+    ball_lens_cycles.set_mnee(objects, False)
     objects["Glass"].active_material.node_tree.nodes["Glass BSDF"].inputs["Roughness"].default_value = roughness
     scene = bpy.context.scene
     scene.render.resolution_x, scene.render.resolution_y = PIXX, PIXY
@@ -196,13 +192,13 @@ def cycles_renders(roughness: float, samples: int, sweep: list[int]):
     with tempfile.TemporaryDirectory() as folder:
         swept = []
         for count in sweep:
-            image, seconds = cycles_accuracy.render(count, folder)
+            image, seconds = ball_lens_cycles.render(count, folder)
             swept.append((count, seconds, image))
             print(f"  Cycles {count:6d} spp {seconds:8.2f} s", flush=True)
         renders = []
         for seed in (1, 2):
             scene.cycles.seed = seed
-            image, seconds = cycles_accuracy.render(samples, folder)
+            image, seconds = ball_lens_cycles.render(samples, folder)
             renders.append(image)
             print(f"  Cycles reference, seed {seed}: {samples} spp {seconds:.1f} s", flush=True)
     return renders[0], renders[1], swept
@@ -284,10 +280,9 @@ def main() -> None:
     write_image(RESULTS / "rough_glass.png", np.concatenate([grid, np.ones_like(grid[..., :1])], axis=-1), EXPOSURE)
     print("benchmarks/results/rough_glass.png: rows Roughness " + ", ".join(map(str, args.roughness))
           + "; columns " + ", ".join(shots[0]) + f" ({SHOWN:,} lamp rays)")
-    (RESULTS / "rough_glass.json").write_text(json.dumps(dict(
-        date=date.today().isoformat(), machine=machine(), blender=bpy.app.version_string, radius=RADIUS,
-        pixels=[PIXX, PIXY], cycles_samples=2 * args.cycles_samples, spread_replicas=SPREAD_REPLICAS,
-        runs=list(runs)), indent=2) + "\n")
+    record.write("rough_glass", dict(
+        blender=bpy.app.version_string, radius=RADIUS, pixels=[PIXX, PIXY], cycles_samples=2 * args.cycles_samples,
+        spread_replicas=SPREAD_REPLICAS, runs=list(runs)))
     print("\nroughness  width Cycles / engine   engine vs Cycles (noise)   time to reach " +
           "  ".join(f"{int(100 * t)}%" for t in THRESHOLDS))
     for run in runs:

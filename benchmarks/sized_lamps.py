@@ -3,17 +3,18 @@ long Cycles path-traced render, and what the size costs against a point lamp.
 
     .venv/bin/python benchmarks/sized_lamps.py [--cycles-samples 8192]
 
-The scene is issue 4's ball lens (benchmarks/ball_lens.py) at 160x120, lit
+The scene is the ball lens (benchmarks/scenes/ball_lens.py) at 160x120, lit
 by a sphere lamp of radius RADIUS (Soft Falloff off: a Lambertian sphere in
 both renderers) in place of the point lamp. Cycles path-traces it with MNEE
 off (plain path tracing finds a lamp with a size through glass, by the
 floor's BSDF samples) and Filter Glossy 0 (its default 1.0 roughens the
 glass after the floor's bounce, which blurs the caustic and misplaces a
 quarter of its light), box filter, no denoising, the floor white to camera
-rays and black to all others (as benchmarks/cycles_accuracy.py: the
-caustic and the direct light, not the floor's light bounced back onto
-itself). Two renders of --cycles-samples each, with different seeds, give
-the reference (their mean) and its own noise (half their difference).
+rays and black to all others (benchmarks/scenes/ball_lens_cycles.py, as
+cycles_accuracy.py: the caustic and the direct light, not the floor's light
+bounced back onto itself). Two renders of --cycles-samples each, with
+different seeds, give the reference (their mean) and its own noise (half
+their difference).
 
 Measured, each as a relative L2 error over the pixels that see the floor
 directly within REGION shadow radii (the caustic, the shadow's penumbra and
@@ -35,30 +36,26 @@ Writes benchmarks/results/sized_lamps.json.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import tempfile
 import time
 from dataclasses import replace
-from datetime import date
 from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-sys.path[:0] = [str(HERE), str(HERE.parent)]
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
 
 import bpy  # noqa: E402
 
-import ball_lens  # noqa: E402
-import cycles_accuracy  # noqa: E402
-from accuracy import THRESHOLDS, time_to_reach  # noqa: E402
+from benchmarks import record  # noqa: E402
+from benchmarks.accuracy import THRESHOLDS, time_to_reach  # noqa: E402
+from benchmarks.scenes import ball_lens, ball_lens_cycles  # noqa: E402
 from caustic_addon import RenderSettings, render  # noqa: E402
 from caustic_addon.passes.camera_rays import eye_rays  # noqa: E402
 from caustic_addon.tracing.accelerator import Accelerator  # noqa: E402
-from speed import machine  # noqa: E402
 
-RESULTS = HERE / "results"
+RESULTS = record.RESULTS
 RADIUS = 0.5
 PIXX, PIXY = 160, 120
 REGION = 1.5
@@ -115,10 +112,10 @@ def cycles_renders(samples: int, sweep: list[int]) -> tuple[np.ndarray, np.ndarr
 
 
 def _cycles_renders(samples: int, sweep: list[int]) -> tuple[np.ndarray, np.ndarray, list[tuple]]:
-    _, objects = cycles_accuracy.build_scene()
+    _, objects = ball_lens_cycles.build_scene()
     lamp = objects["Lamp"].data
     lamp.shadow_soft_size, lamp.use_soft_falloff = RADIUS, False
-    cycles_accuracy.set_mnee(objects, False)
+    ball_lens_cycles.set_mnee(objects, False)
     scene = bpy.context.scene
     scene.render.resolution_x, scene.render.resolution_y = PIXX, PIXY
     # Filter Glossy (1.0 by default) would roughen the glass after the floor's bounce
@@ -126,14 +123,14 @@ def _cycles_renders(samples: int, sweep: list[int]) -> tuple[np.ndarray, np.ndar
     with tempfile.TemporaryDirectory() as folder:
         swept = []
         for count in sweep:
-            image, seconds = cycles_accuracy.render(count, folder)
+            image, seconds = ball_lens_cycles.render(count, folder)
             swept.append((count, seconds, image))
             print(f"Cycles path tracing {count:6d} spp {seconds:8.2f} s", flush=True)
         scene.cycles.seed = 1
-        first, seconds = cycles_accuracy.render(samples, folder)
+        first, seconds = ball_lens_cycles.render(samples, folder)
         print(f"Cycles reference, seed 1: {samples} spp {seconds:.1f} s", flush=True)
         scene.cycles.seed = 2
-        second, seconds = cycles_accuracy.render(samples, folder)
+        second, seconds = ball_lens_cycles.render(samples, folder)
         print(f"Cycles reference, seed 2: {samples} spp {seconds:.1f} s", flush=True)
     return first, second, swept
 
@@ -187,12 +184,10 @@ def main() -> None:
     ratio = {key: (table["sphere lamp"][key] / table["point lamp"][key]
                    if table["sphere lamp"][key] and table["point lamp"][key] else None)
              for key in table["point lamp"]}
-    RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "sized_lamps.json").write_text(json.dumps(dict(
-        date=date.today().isoformat(), machine=machine(), blender=bpy.app.version_string, radius=RADIUS,
-        pixels=[PIXX, PIXY], cycles_samples=2 * args.cycles_samples, cycles_noise=cycles_noise,
-        engine_against_cycles=against_cycles, engine_converged_seconds=converged_seconds,
-        cycles_curve=cycles_curve, curves=curves, time_to_reach=table, sized_over_point=ratio), indent=2) + "\n")
+    record.write("sized_lamps", dict(
+        blender=bpy.app.version_string, radius=RADIUS, pixels=[PIXX, PIXY], cycles_samples=2 * args.cycles_samples,
+        cycles_noise=cycles_noise, engine_against_cycles=against_cycles, engine_converged_seconds=converged_seconds,
+        cycles_curve=cycles_curve, curves=curves, time_to_reach=table, sized_over_point=ratio))
     print("\ntime to reach         " + "  ".join(f"{int(100 * t):>6d}%" for t in THRESHOLDS))
     for name, row in table.items():
         print(f"{name:20s}" + "  ".join(f"{v:6.2f}s" if v is not None else "     -" for v in row.values()))

@@ -1,7 +1,9 @@
-"""Speed of the engine against raw Embree, on issue 2's scene: a smooth
-65k-triangle glass sphere over a floor, a point lamp, a 640x480 camera; and
-the photon pass with the same sphere as a mirror (a reflector), whose
-throughput per ray should be within 20% of the glass's (issue 7).
+"""The engine's photon and eye passes against raw Embree's rays per second,
+on a smooth 65k-triangle glass sphere over a floor (a point lamp, 640x480),
+and the photon pass with the same sphere as a mirror (a reflector), whose
+throughput per ray should be within 20% of the glass's.
+
+The scene is benchmarks/scenes/glass_sphere.py.
 
     .venv/bin/python benchmarks/speed.py [--repeats 3]
 
@@ -12,47 +14,21 @@ best of `repeats` runs, so a busy machine shows less.
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import platform
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
-from datetime import date
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
 
-from caustic_addon import (Camera, Dielectric, Diffuse, MapCache, Object, PointLight, Reflector,  # noqa: E402
-                           RenderSettings, Scene, render, shapes)
+from benchmarks import record  # noqa: E402
+from benchmarks.scenes.glass_sphere import scene as benchmark_scene  # noqa: E402
+from caustic_addon import MapCache, Reflector, RenderSettings, Scene, render  # noqa: E402
 from caustic_addon.emission.aims import Sphere, aims  # noqa: E402
 from caustic_addon.sampling.warps import sample_disc  # noqa: E402
 from caustic_addon.tracing.accelerator import Accelerator  # noqa: E402
-
-RESULTS = Path(__file__).resolve().parent / "results"
-
-
-def benchmark_scene(material=None) -> Scene:
-    """The glass sphere scene, or the same sphere of another `material`."""
-    return Scene(
-        objects=[Object("Floor", shapes.plane(10.0), Diffuse(albedo=0.8)),
-                 Object("Glass", shapes.uv_sphere(1.0, (0, 0, 1.5), 256, 128), material or Dielectric(1.5))],
-        lights=[PointLight((0, 0, 6), 1000.0)],
-        camera=Camera.look_at((0, -6, 5), (0, 0, 0.5), pixx=640, pixy=480),
-    )
-
-
-def machine() -> str:
-    model = "unknown CPU"
-    cpuinfo = Path("/proc/cpuinfo")
-    if cpuinfo.exists():
-        for line in cpuinfo.read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    return f"{model}, {os.cpu_count()} cores, {platform.system()} {platform.machine()}, Python {platform.python_version()}"
 
 
 def raw_embree_rays_per_second(scene: Scene, rays: int, threads: int) -> float:
@@ -102,9 +78,7 @@ def main() -> None:
     eye_rays_per_s = eye["rays_eye_pass"] / eye["seconds"]["eye"]
     mirror = min(mirror_runs, key=lambda s: s["seconds"]["lamp_pass"])
     mirror_rays_per_s = mirror["rays_lamp_pass"] / mirror["seconds"]["lamp_pass"]
-    report = {
-        "date": date.today().isoformat(),
-        "machine": machine(),
+    figures = {
         "scene": "smooth glass UV sphere, 65,536 triangles, over a floor; point lamp; 640x480, 1 spp",
         "raw_embree_rays_per_s": raw,
         "photons": photon["lamp_rays"],
@@ -125,8 +99,8 @@ def main() -> None:
         "bvh_s": photon["seconds"]["bvh"],
         "rerender_after_camera_move_s": cached_rerender,
     }
-    RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "speed.json").write_text(json.dumps(report, indent=2) + "\n")
+    record.write("speed", figures)
+    report = record.read("speed")
     print(f"{report['date']}, {report['machine']}")
     print(f"raw embreex (2 threads)   {raw / 1e6:6.2f} M rays/s")
     print(f"photon pass               {paths_per_s / 1e6:6.2f} M paths/s, {photon_rays_per_s / 1e6:.2f} M rays/s "

@@ -1,39 +1,38 @@
-"""The caustic seen through glass (issue 18, item 3): the ball lens's focus
-and fold ring, magnified by the ball, at 1 and 4 samples per pixel with the
-default Edge Samples, against a 256-sample render, over the pixels whose
-centre ray meets the ball first. The edge pass's eye rays carry ray
-differentials through the glass (passes/differentials.py), so the caustic
-there is the mean over each ray's footprint.
+"""The caustic seen through glass: the ball lens's focus and fold ring,
+magnified by the ball, at 1 and 4 samples per pixel with the default Edge
+Samples, against a 256-sample render, over the pixels whose centre ray
+meets the ball first.
+
+The edge pass's eye rays carry ray differentials through the glass
+(passes/differentials.py), so the caustic there is the mean over each ray's
+footprint.
 
     .venv/bin/python benchmarks/through_glass.py [--repeats 3]
 
 Writes benchmarks/results/through_glass.json and through_glass.png (the
 caustic pass, 1 sample, 4 samples, 256 samples, under the ball's top) and
-prints the figures README quotes. Time is the whole render's wall time, the
+prints its figures. Time is the whole render's wall time, the
 fastest of `repeats` runs.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
-from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
 
-import ball_lens  # noqa: E402
+from benchmarks import record  # noqa: E402
+from benchmarks.scenes import ball_lens  # noqa: E402
 from caustic_addon import RenderSettings, render  # noqa: E402
 from caustic_addon.passes.camera_rays import eye_rays  # noqa: E402
 from caustic_addon.tracing.accelerator import Accelerator  # noqa: E402
-from speed import machine  # noqa: E402
 
-RESULTS = Path(__file__).resolve().parent / "results"
+RESULTS = record.RESULTS
 LAMP_RAYS = 100_000
 REFERENCE_SPP = 256
 
@@ -49,7 +48,7 @@ def through_the_ball(scene) -> np.ndarray:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     scene = ball_lens.scene()
@@ -68,10 +67,8 @@ def main() -> None:
         images.insert(-1, caustic)
         print(f"{spp} samples: {100 * error:.2f}% from {REFERENCE_SPP} samples over {int(mask.sum())} pixels "
               f"seen through the ball, {best:.2f} s", flush=True)
-    RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "through_glass.json").write_text(json.dumps(dict(
-        date=datetime.now(timezone.utc).isoformat(timespec="minutes"), machine=machine(), lamp_rays=LAMP_RAYS,
-        reference_spp=REFERENCE_SPP, pixels=int(mask.sum()), rows=rows), indent=2))
+    record.write("through_glass", dict(lamp_rays=LAMP_RAYS, reference_spp=REFERENCE_SPP, pixels=int(mask.sum()),
+                                       rows=rows))
     strip = np.concatenate([image[:110, 60:260, 0] for image in images], axis=1)
     strip = np.clip(strip / np.percentile(images[-1][:110, 60:260, 0], 99.5), 0.0, 1.0) ** (1 / 2.2)
     import matplotlib

@@ -1,7 +1,7 @@
 """What the world's light through the casters costs, and what it is worth
 (passes/world_paths.py): the gallery's scenes that have a world, rendered
 at 240x180 with the default settings three ways, each against a render
-with 64 World Samples whose every blocked direction is followed:
+with 64 World Samples whose every blocked direction is followed.
 
 - `followed`: the default: blocked directions go on through the casters,
   with Russian roulette where the sky could bring under ROULETTE_SHARE of
@@ -18,24 +18,19 @@ eye rays and the relative L2 error of each.
 
 from __future__ import annotations
 
-import json
+import argparse
 import sys
 import time
-from datetime import date
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
 
 import numpy as np  # noqa: E402
 
-import gallery  # noqa: E402
+from benchmarks import gallery, record  # noqa: E402
 from caustic_addon import RenderSettings, render  # noqa: E402
 from caustic_addon.passes import world_paths  # noqa: E402
-from speed import machine  # noqa: E402
 
-RESULTS = Path(__file__).resolve().parent / "results"
 SCENES = ("ball_lens", "wavy_water", "softbox", "sunny_sky")
 WAYS = {"followed": (world_paths.ROULETTE_SHARE, world_paths.MIN_CHANCE), "every": (0.0, 1.0), "stopped": None}
 
@@ -65,6 +60,7 @@ def rendered(scene, way, **settings) -> tuple[np.ndarray, float, int]:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()
     rows = {}
     for name in SCENES:
         scene = getattr(gallery, name)()
@@ -77,10 +73,7 @@ def main() -> None:
             error = float(np.sqrt(((image - reference) ** 2).mean() / (reference ** 2).mean()))
             rows[name][way] = dict(seconds=round(seconds, 3), eye_rays=rays, relative_l2=round(error, 5))
             print(f"{name:12s} {way:9s} {seconds:6.2f} s  {rays / 1e6:6.2f} M eye rays  {100 * error:6.2f}%")
-    RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "world_paths.json").write_text(json.dumps(
-        dict(date=str(date.today()), machine=machine(), resolution=[240, 180], reference_world_samples=64,
-             scenes=rows), indent=1))
+    record.write("world_paths", dict(resolution=[240, 180], reference_world_samples=64, scenes=rows), indent=1)
 
 
 if __name__ == "__main__":

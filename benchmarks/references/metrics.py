@@ -1,6 +1,8 @@
-"""The accuracy metric every benchmark and test uses: relative L2 error of
-radially averaged caustic irradiance against the exact reference, over the
-caustic region (the sphere's shadow disc), weighted by annulus area."""
+"""The accuracy metrics the benchmarks and tests use: the relative L2 error
+of radially averaged caustic irradiance against the exact reference, over
+the caustic region (the sphere's shadow disc), weighted by annulus area
+(`relative_l2`); and the relative L2 error of an image against a reference
+image over a region of pixels (`region_relative_l2`)."""
 
 from __future__ import annotations
 
@@ -28,3 +30,11 @@ def relative_l2(estimate: np.ndarray, reference: np.ndarray, r_edges: np.ndarray
     """sqrt(sum A_i (e_i - r_i)^2 / sum A_i r_i^2) over annuli of area A_i."""
     area = np.diff(r_edges ** 2)
     return float(np.sqrt(np.sum(area * (estimate - reference) ** 2) / np.sum(area * reference ** 2)))
+
+
+def region_relative_l2(image: np.ndarray, reference: np.ndarray, region: np.ndarray) -> float:
+    """||image - reference|| / ||reference|| over the pixels of `region`
+    ((h,w) bool), for images of the same shape: a caustic against its
+    reference, pixel by pixel."""
+    difference = (image - reference)[region]
+    return float(np.sqrt(np.sum(difference ** 2) / np.sum(reference[region] ** 2)))

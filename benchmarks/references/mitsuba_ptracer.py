@@ -3,7 +3,7 @@ reference of benchmarks/mitsuba_folds.py. Runs in Mitsuba's own venv (never
 the add-on's), LLVM variant:
 
     DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so \\
-        /tmp/mitsuba-venv/bin/python benchmarks/mitsuba_ptracer.py scene.npz out.npz --spp 64 --passes 16
+        /tmp/mitsuba-venv/bin/python benchmarks/references/mitsuba_ptracer.py scene.npz out.npz --spp 64 --passes 16
 
 The scene file (mitsuba_folds.export_scene) holds a JSON description under
 "meta" (camera, lamp, max_depth; each shape's material) and each shape's

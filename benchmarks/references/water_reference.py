@@ -1,5 +1,5 @@
 """The image of sunlight through meshed water, traced by a particle tracer
-of its own: an independent reference for mitsuba_folds' slab scenes, with
+of its own: an independent reference for mitsuba_folds.py's slab scenes, with
 a thousandth of the noise that Mitsuba's particle tracer reaches in minutes.
 
 The water is shapes.wavy_slab's, rebuilt here from the field its docstring
@@ -14,8 +14,8 @@ Particles leave a horizontal plane above the water on a jittered grid, each
 carrying S |d_z| of the plane's area, are refracted into the water and out
 of its flat bottom (Snell; the unpolarised Fresnel transmittance as a
 weight), and land on the floor, where they are binned by the pixel of the
-camera looking straight down from under the water (mitsuba_folds
-.slab_scene's). In float64 throughout. Left out: the light reflected inside
+camera looking straight down from under the water (scenes/wavy_slab
+.under_water's). In float64 throughout. Left out: the light reflected inside
 the water (2% of 2%), and the light through the walls, whose pixels
 `wall_free` names.
 """
@@ -27,7 +27,7 @@ import math
 import numba
 import numpy as np
 
-# mitsuba_folds.slab_scene's pool: the water's bottom 0.35 m above the floor,
+# scenes/wavy_slab.under_water's pool: the water's bottom 0.35 m above the floor,
 # 0.25 m deep, the camera 0.3 m up looking down, 90 degrees across 240x180
 BOTTOM, DEPTH, IOR = 0.35, 0.25, 1.33
 EYE_HEIGHT, PIXX, PIXY = 0.3, 240, 180

@@ -1,4 +1,4 @@
-"""Issue 4's ball-lens scene and its pixel-level error metric.
+"""The ball-lens scene and its pixel-level error metric.
 
 A glass sphere (R = 1, n = 1.5, centre 1.5 m up) on the axis of a 1000 W
 point lamp 6 m up, over a white floor, seen by a 320x240 camera from the
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-import reference
+from benchmarks.references import reference
 from caustic_addon import Camera, Dielectric, Diffuse, Object, PointLight, Scene, shapes
 from caustic_addon.passes.camera_rays import eye_rays
 from caustic_addon.tracing.accelerator import Accelerator

@@ -19,8 +19,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from caustic_addon import Mesh, RenderSettings, Scene, paper
+from benchmarks.references import reference
 from caustic_addon.maps.illumination_map import IlluminationMap
-import reference
 
 GLASS_IOR = 1.5
 # m: enough for the caustics of resting objects, for the 5 mm maps
@@ -204,7 +204,7 @@ def floor_distance(scene: Scene) -> float:
 
 
 def reference_r50(scene: Scene, step: float = 1e-3) -> float:
-    """r50 (m) of the exact caustic (benchmarks/reference.py) of the round
+    """r50 (m) of the exact caustic (benchmarks/references/reference.py) of the round
     glass in `scene`, turned so that the lamp sits on the axis: the same
     lamp and floor distances along the line from the lamp through the
     centre, the floor square to it. Annuli `step` m wide out to the floor's

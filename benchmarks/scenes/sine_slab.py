@@ -26,7 +26,7 @@ pixel's light, folds included. Internal reflections (2% of 2% of the light)
 are left out, and so is the light through the walls, whose pixels `region`
 leaves out.
 
-The camera is mitsuba_folds.slab_scene's: 0.05 m under the water, looking
+The camera is wavy_slab.under_water's: 0.05 m under the water, looking
 straight down, 90 degrees across 240x180, so a pixel is 2.5 mm of floor.
 """
 
@@ -36,10 +36,10 @@ import math
 
 import numpy as np
 
+from benchmarks.references.water_reference import (BOTTOM, DEPTH, EYE_HEIGHT, IOR, PIXEL, PIXX, PIXY,
+                                                   fresnel_transmittance, refract, wall_free)
 from caustic_addon import Camera, Object, Scene, shapes
 from caustic_addon.scene import Dielectric, Diffuse, SunLight
-from water_reference import (BOTTOM, DEPTH, EYE_HEIGHT, IOR, PIXEL, PIXX, PIXY, fresnel_transmittance, refract,
-                             wall_free)
 
 SIZE, CELLS = 1.0, 80
 AMPLITUDE, WAVELENGTH = 0.012, 0.2

@@ -6,7 +6,7 @@ A pixel shows the mean, over its square, of the radiance of what it sees (a
 box filter). The map's cells cannot give that mean where a caustic folds:
 pixels cut cells, and a fold's irradiance, which rises as 1/sqrt of the
 distance to it, is held in a cell as the cell's mean, so part of its light
-goes to the wrong pixel (README, Folds and cusps). But a plane maps to the
+goes to the wrong pixel (benchmarks/README.md: folds and cusps). But a plane maps to the
 image by a projective map, which takes a beam's triangle to the triangle of
 its projected corners, and a beam's irradiance is uniform over it: so the
 projected beams, rasterised with exact coverage (raster.py) on the pixel

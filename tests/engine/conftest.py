@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-BENCHMARKS = str(Path(__file__).resolve().parents[2] / "benchmarks")
-if BENCHMARKS not in sys.path:
-    sys.path.insert(0, BENCHMARKS)
-
+# The benchmarks' scenes and references are imported as packages of the
+# repository root (pytest.ini's pythonpath): `from benchmarks.scenes import
+# ball_lens`, `from benchmarks.references import reference`. This folder's
+# own helpers (scenes.py) are imported by name.
 HERE = str(Path(__file__).resolve().parent)
 if HERE not in sys.path:
     sys.path.insert(0, HERE)

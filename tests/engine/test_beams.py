@@ -11,7 +11,7 @@ from caustic_addon.maps.charts import PlaneChart
 from caustic_addon.maps.illumination_map import MapEstimate
 from caustic_addon.maps.raster import signed_areas
 from caustic_addon.sampling.warps import concentric_disc
-from metrics import annulus_means, annulus_points, relative_l2
+from benchmarks.references.metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
 
 
@@ -27,7 +27,7 @@ def test_concentric_map_is_equal_area_and_fills_the_disc():
 
 
 def radial_error(photons: int) -> float:
-    import reference
+    from benchmarks.references import reference
 
     r_edges = np.linspace(0.0, shadow_radius(), 61)
     exact = reference.ball_lens_irradiance(1.0, 1.5, 1.5, 6.0, 1000.0 / (4 * math.pi), r_edges)
@@ -53,7 +53,7 @@ def test_the_ball_lens_fold_ring_is_on_the_fine_grid_and_pixel_sharp():
     RMS off, the last bin at 20%). On the fine grid the means over those
     bins are exact within the ~1 mm smear of its cells, which leaves the
     last bin 15% dim and spills light just past the fold (15% RMS)."""
-    import reference
+    from benchmarks.references import reference
 
     intensity = 1000.0 / (4 * math.pi)
     edges = np.linspace(0.0, shadow_radius(), 8001)
@@ -72,13 +72,13 @@ def test_the_ball_lens_fold_ring_is_on_the_fine_grid_and_pixel_sharp():
 
 def test_the_folds_of_water_with_one_wave_converge_to_its_exact_caustic():
     """A slanted sun through water whose top is one cosine wave, meshed
-    with its crests along the triangles' diagonals (benchmarks/sine_slab.py):
+    with its crests along the triangles' diagonals (benchmarks/scenes/sine_slab.py):
     the exact image of that mesh, summed in 1D, has fold lines where the
     light piles up fivefold. At 300,000 lamp rays the beams are within 1.6%
     of it per pixel (Mitsuba's particle tracer needs about 12,000 particles
     a pixel for as much), as close at the folds (the brightest 5% of the
     pixels), and the mean within 0.4%."""
-    import sine_slab
+    from benchmarks.scenes import sine_slab
 
     exact = sine_slab.exact_radiance("sine_slab_diagonal", samples_per_metre=1 << 22)
     region = sine_slab.region("sine_slab_diagonal")

@@ -113,7 +113,7 @@ def test_the_caustic_seen_through_a_ball_lens_is_its_footprint_mean_at_one_sampl
     caustic's sharp lines past the pixel, so the edge pass refines most of
     these pixels; read at one point per sample, as before its rays carried
     differentials, it was 31% off."""
-    import ball_lens
+    from benchmarks.scenes import ball_lens
 
     scene = ball_lens.scene(80, 60)
     accel = Accelerator(scene.objects, scene.extent(), threads=1)

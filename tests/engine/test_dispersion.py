@@ -12,8 +12,7 @@ from caustic_addon.optics.dispersion import LAMBDA_C, LAMBDA_D, LAMBDA_F, cauchy
 from caustic_addon.optics.media import absorption_from_color, volume_absorption
 from caustic_addon.optics.spectrum import XYZ_TO_REC709, bands, cie_xyz, photon_band
 from caustic_addon.scene import SunLight
-import prism
-import slab
+from benchmarks.scenes import prism, slab
 from scenes import ball_lens, quick, shadow_radius, top_camera, unobstructed_irradiance
 
 
@@ -167,7 +166,7 @@ def test_blue_focuses_closer_to_the_lens_than_red(density, paths, tolerance):
 
 
 def test_a_prism_fans_the_bands_as_snell_and_cauchy_say():
-    """benchmarks/prism.py: a 45-degree prism (n_d 1.5, Abbe number 20) in
+    """benchmarks/scenes/prism.py: a 45-degree prism (n_d 1.5, Abbe number 20) in
     a sun throws its spectrum on a floor; paths of two specular events (in
     at one face, out at the other). Its closed form traces Snell's law with
     Fresnel's transmittance at both faces for each band's Cauchy index,
@@ -195,7 +194,7 @@ def test_a_prism_fans_the_bands_as_snell_and_cauchy_say():
 
 
 def test_coloured_glass_slab_is_beer_lambert_exact():
-    """benchmarks/slab.py: a slab whose absorption is the colour c at its
+    """benchmarks/scenes/slab.py: a slab whose absorption is the colour c at its
     thickness gives the floor S (1 - F)^2 c / (1 - F^2 c^2), to 4 standard
     deviations of the photon noise."""
     photons = 400_000

@@ -6,7 +6,7 @@ import numpy as np
 from caustic_addon import render
 from caustic_addon.passes.eye import edge_pixels
 from caustic_addon.tracing.hits import MISS
-import ball_lens as ball_lens_side
+from benchmarks.scenes import ball_lens as ball_lens_side
 from scenes import quick
 
 

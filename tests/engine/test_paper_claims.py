@@ -1,4 +1,4 @@
-"""The paper's claims (section 4) on its scenes (benchmarks/paper_scenes.py).
+"""The paper's claims (section 4) on its scenes (benchmarks/scenes/paper_scenes.py).
 
 Where physics agrees with the paper a test asserts the paper's trend; where
 it does not, it asserts what physics says, and its docstring says why
@@ -13,7 +13,7 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
-import paper_scenes as ps
+from benchmarks.scenes import paper_scenes as ps
 from caustic_addon import paper, render
 
 PHOTONS = 300_000

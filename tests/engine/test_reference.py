@@ -1,11 +1,11 @@
-"""The float64 ball-lens reference (benchmarks/reference.py) against optics it must reproduce."""
+"""The float64 ball-lens reference (benchmarks/references/reference.py) against optics it must reproduce."""
 
 import math
 
 import numpy as np
 import pytest
 
-import reference as ref
+from benchmarks.references import reference as ref
 
 R, N_GLASS, CENTRE_Z, LAMP_Z = 1.0, 1.5, 1.5, 6.0
 SCENE = (R, N_GLASS, CENTRE_Z, LAMP_Z)

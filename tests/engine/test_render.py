@@ -127,11 +127,11 @@ def test_absorption_darkens_the_caustic_by_beer_lambert():
 
 def test_caustic_matches_the_exact_ball_lens_reference():
     """Radial caustic irradiance against the exact float64 reference
-    (benchmarks/reference.py): within 8% relative L2 over the shadow disc at
+    (benchmarks/references/reference.py): within 8% relative L2 over the shadow disc at
     1M photons. The remaining error is the map cells' blur of the axis
     singularity and of the bright ring."""
-    import reference
-    from metrics import annulus_means, annulus_points, relative_l2
+    from benchmarks.references import reference
+    from benchmarks.references.metrics import annulus_means, annulus_points, relative_l2
 
     r_edges = np.linspace(0.0, shadow_radius(), 61)
     exact = reference.ball_lens_irradiance(1.0, 1.5, 1.5, 6.0, 1000.0 / (4 * math.pi), r_edges)

@@ -137,7 +137,7 @@ def test_the_ball_lens_at_one_sample_shows_the_exact_pixel_means():
     lamp rays (0.57% at 4 samples), the cells' light put in the wrong
     pixels where the irradiance rises steeply; the screen layer gives
     0.48% (what is left is the 256-segment sphere and the beams' grid)."""
-    import ball_lens
+    from benchmarks.scenes import ball_lens
 
     scene = ball_lens.scene()
     truth = ball_lens.pixel_reference(scene)
@@ -152,7 +152,7 @@ def test_a_moved_camera_gets_its_own_screen_layer_from_the_kept_beams(monkeypatc
     the kept beams make the new view's screen layer, with no lamp pass, and
     the image is the one a fresh render gives. Past KEPT_BEAMS the beams are
     not kept, and the lamps are traced again."""
-    import ball_lens
+    from benchmarks.scenes import ball_lens
 
     cache = MapCache()
     scene = ball_lens.scene(64, 48)

@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-import slab
+from benchmarks.scenes import slab
 from caustic_addon import Dielectric, RenderSettings, SunLight, render
 from scenes import ball_lens
 

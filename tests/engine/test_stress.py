@@ -31,7 +31,7 @@ from caustic_addon.scene.material_table import Materials
 from caustic_addon.tracing.accelerator import Accelerator
 from caustic_addon.tracing.hits import Hits, MISS
 from caustic_addon.util.vectors import dot
-from metrics import annulus_means, annulus_points, relative_l2
+from benchmarks.references.metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius, top_camera, unobstructed_irradiance
 
 # Few examples, no example database, the same examples on every run and machine.
@@ -788,8 +788,8 @@ def test_air_bubble_in_water_diverges_light():
     landed flux at most what was sent toward it, the caustic under its centre
     darker than unobstructed light, and its radial profile within 5% (relative
     L2 over the shadow disc; the noise at 100k photons is 1.5%) of the exact
-    float64 reference, benchmarks/reference.py, which takes any n > 0."""
-    import reference
+    float64 reference, benchmarks/references/reference.py, which takes any n > 0."""
+    from benchmarks.references import reference
 
     n = 1 / 1.33
     scene = ball_lens(ior=n, pixels=8)
