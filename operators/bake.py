@@ -9,7 +9,7 @@ import bpy
 
 from ..export import InputError, SceneRead, read_scene, render_settings
 from ..jobs import JobRunner, RenderJob, StepError
-from ..writeback.bake import bake_maps
+from ..writeback.bake import bake_maps, forget_selectors
 from ..writeback.bake_group import baked_nodes, files_on_disk, unwire
 from ..writeback.results import record_run
 from .engine_run import EngineOperator
@@ -75,6 +75,7 @@ class CAUSTIC_OT_unbake(bpy.types.Operator):
     def execute(self, context):
         files = sorted({path for material in bpy.data.materials for path in files_on_disk(material)})
         removed = sum(unwire(material) for material in bpy.data.materials)
+        forget_selectors()
         self.report({'INFO'}, f"Removed {removed} baked caustic{'s' if removed != 1 else ''}")
         for folder in sorted({os.path.dirname(path) for path in files}):
             names = [os.path.basename(path) for path in files if os.path.dirname(path) == folder]

@@ -13,11 +13,11 @@ import bpy
 
 from ..export import InputError, render_settings
 from ..jobs import JobRunner, RenderJob, StepError
-from ..writeback.bake_group import follow_frames, unwire
+from ..writeback.bake_group import follow_frames
 from ..writeback.images import working_colorspace
 from ..writeback.output import OutputError, check_saved, check_writable, frame_range, write_float_exr
 from ..writeback.results import record_run
-from ..writeback.bake import IMAGE_PREFIX, bakeable, map_rgba, wire_bake
+from ..writeback.bake import IMAGE_PREFIX, bakeable, map_rgba, wire_bakes
 from .bake import read_for_bake
 from .engine_run import EngineOperator
 from .frame_range import FrameRange, frames_text
@@ -89,15 +89,18 @@ class BakeFrames(FrameRange, EngineOperator):
     def _wire(self, frames: list[int]) -> None:
         """Each receiver's material shows its sequence from the first frame baked for len(`frames`) frames."""
         _, read, maps = self._first
-        for name, material in self._plan.items():
-            unwire(material)
-            image = bpy.data.images.load(self._path(name, frames[0]), check_existing=False)
-            image.name = IMAGE_PREFIX + name
-            image.source = 'SEQUENCE'
-            if self.directory.startswith("//"):
-                image.filepath = bpy.path.relpath(image.filepath)
-            image.colorspace_settings.name = working_colorspace()
-            follow_frames(wire_bake(read, name, material, image, maps[name]), frames[0], len(frames))
+        for group in wire_bakes(read, self._plan, maps, lambda name: self._sequence(name, frames[0])).values():
+            follow_frames(group, frames[0], len(frames))
+
+    def _sequence(self, name: str, first: int):
+        """The image sequence of receiver `name`'s baked frames, from frame `first`."""
+        image = bpy.data.images.load(self._path(name, first), check_existing=False)
+        image.name = IMAGE_PREFIX + name
+        image.source = 'SEQUENCE'
+        if self.directory.startswith("//"):
+            image.filepath = bpy.path.relpath(image.filepath)
+        image.colorspace_settings.name = working_colorspace()
+        return image
 
     def _status(self, runner: JobRunner) -> str:
         return (f"Baking caustics: frame {runner.step} ({len(runner.done) + 1} of {len(runner.steps)}), "

@@ -69,12 +69,25 @@ def _view_share(nodes, links, share):
     return facing, ramp
 
 
-def make_group(name: str, image, imap, albedo: np.ndarray, uv_layer: str, share=None):
+def _selected(nodes, links, selector: tuple[str, int]):
+    """A Math node that is 1 on objects whose custom property selector[0]
+    is selector[1], else 0 (an Attribute node of the object)."""
+    attribute, compare = nodes.new('ShaderNodeAttribute'), nodes.new('ShaderNodeMath')
+    attribute.attribute_type, attribute.attribute_name = 'OBJECT', selector[0]
+    compare.operation = 'COMPARE'
+    compare.inputs[1].default_value, compare.inputs[2].default_value = float(selector[1]), 0.5
+    links.new(attribute.outputs['Fac'], compare.inputs[0])
+    return attribute, compare
+
+
+def make_group(name: str, image, imap, albedo: np.ndarray, uv_layer: str, share=None, selector=None):
     """A shader node group: Shader and Albedo in, Shader out = in + emission
     of the map `image` (irradiance, W/m^2) times Albedo / pi; Albedo is
     `albedo (3,)` unless `wire` links the material's own colour to it, and
     is times `share(cos_v (k,)) -> (k,)` toward the eye if given (a
-    Principled BSDF's diffuse share under its specular layer)."""
+    Principled BSDF's diffuse share under its specular layer). With a
+    `selector` (custom property, number) the emission shows only on the
+    objects whose property is that number."""
     group = bpy.data.node_groups.new(name, 'ShaderNodeTree')
     group[TAG] = True
     group.interface.new_socket(name="Shader", in_out='INPUT', socket_type='NodeSocketShader')
@@ -103,7 +116,16 @@ def make_group(name: str, image, imap, albedo: np.ndarray, uv_layer: str, share=
         links.new(ramp.outputs['Color'], viewed.inputs[1])
         links.new(viewed.outputs['Vector'], radiance.inputs[0])
         facing.location, ramp.location, viewed.location = (220.0, -400.0), (440.0, -400.0), (660.0, -400.0)
-    links.new(radiance.outputs['Vector'], emission.inputs['Color'])
+    if selector is None:
+        links.new(radiance.outputs['Vector'], emission.inputs['Color'])
+    else:
+        attribute, compare = _selected(nodes, links, selector)
+        only = nodes.new('ShaderNodeVectorMath')
+        only.operation = 'SCALE'
+        links.new(radiance.outputs['Vector'], only.inputs[0])
+        links.new(compare.outputs['Value'], only.inputs['Scale'])
+        links.new(only.outputs['Vector'], emission.inputs['Color'])
+        attribute.location, compare.location, only.location = (660.0, 250.0), (880.0, 250.0), (1100.0, 250.0)
     links.new(inputs.outputs['Shader'], add.inputs[0])
     links.new(emission.outputs['Emission'], add.inputs[1])
     links.new(add.outputs['Shader'], outputs.inputs[0])

@@ -210,3 +210,74 @@ def test_a_sphere_without_uvs_bakes_through_its_box_chart(addon, tmp_path):
     assert lit.sum() > 500
     assert abs(difference.mean()) < 0.02
     assert np.percentile(np.abs(difference), 99) < 0.1
+
+
+def test_a_material_shared_by_two_receivers_shows_each_one_s_own_caustic(addon, tmp_path, reports):
+    """A floor and a wall with one material (both bent, so charted by their
+    UV maps, which overlap), each under its own glass ball and lamp: the
+    bake gives each its own image and numbers the two objects, and Cycles
+    shows the same picture as when each has a material of its own (read
+    without the numbers, each image would show on both), each caustic at
+    its receiver's peak of the caustic pass. Unbake takes the numbers off."""
+    shared = scenes.diffuse_material("Plaster")
+    floor, wall = scenes.add_plane(6.0, shared), scenes.add_plane(6.0, shared, name="Wall")
+    for plane in (floor, wall):
+        plane.data.vertices[0].co.z = 0.05
+    wall.rotation_euler, wall.location = (math.pi / 2, 0.0, 0.0), (0.0, 1.5, 3.0)
+    balls = [scenes.add_sphere(0.5, (0.8, -0.6, 0.75), scenes.glass_material(), name="Ball"),
+             scenes.add_sphere(0.4, (-1.0, 0.7, 1.8), bpy.data.materials["Glass"], name="Marble")]
+    lamps = [scenes.add_point_light((0.5, -0.2, 3.5), 1000.0),
+             scenes.add_point_light((-1.2, -2.5, 1.9), 1000.0, name="Side")]
+    scenes.add_camera((0.0, -6.0, 2.2), target=(0.0, 0.5, 1.0))
+    scenes.set_resolution(64, 48)
+    bpy.context.scene.caustic.lamp_rays = 200_000
+    bpy.context.view_layer.update()
+    material_before = material_state(shared)
+    for ball in balls:
+        ball.visible_camera = False
+    read = addon.export.read_scene(bpy.context)
+    caustic = addon.caustic_addon.render(read.scene, addon.export.render_settings(
+        bpy.context.scene.caustic, spp=16)).passes["caustic"].sum(axis=-1)
+    for ball in balls:
+        ball.visible_camera = True
+
+    def baked_in_cycles():
+        assert bpy.ops.caustic.bake() == {'FINISHED'}
+        for hidden in balls + lamps:
+            hidden.hide_render = True
+        bpy.context.scene.cycles.max_bounces = 0  # each receiver's caustic seen, not lighting the other
+        image = cycles_render(str(tmp_path), samples=16)[..., :3].sum(axis=-1)
+        for hidden in balls + lamps:
+            hidden.hide_render = False
+        return image
+
+    reports()
+    shared_image = baked_in_cycles()
+    assert "is shared by" not in reports()
+    assert {floor["caustic_receiver"], wall["caustic_receiver"]} == {1, 2}
+    assert {"Caustic Map Floor", "Caustic Map Wall"} <= set(bpy.data.images.keys())
+    for window in caustic_peaks(caustic, 2):
+        ratio = shared_image[window].sum() / caustic[window].sum()
+        print(f"baked caustic in Cycles / caustic pass, 7x7 around a peak: {ratio:.3f}")
+        assert abs(ratio - 1.0) < 0.25
+
+    assert bpy.ops.caustic.unbake() == {'FINISHED'}
+    assert "caustic_receiver" not in floor and "caustic_receiver" not in wall
+    assert material_state(shared) == material_before
+    wall.material_slots[0].material = shared.copy()
+    own_image = baked_in_cycles()
+    assert "caustic_receiver" not in floor and "caustic_receiver" not in wall
+    difference = np.abs(shared_image - own_image).sum() / own_image.sum()
+    print(f"one shared material against a material each: relative L1 {difference:.4f}")
+    assert difference < 0.02
+
+
+def caustic_peaks(image, count):
+    """Windows of 7x7 pixels around the `count` brightest peaks of `image`, each clear of the others."""
+    image, windows = image.copy(), []
+    for _ in range(count):
+        row, col = np.unravel_index(image.argmax(), image.shape)
+        window = (slice(max(row - 3, 0), row + 4), slice(max(col - 3, 0), col + 4))
+        windows.append(window)
+        image[max(row - 6, 0):row + 7, max(col - 6, 0):col + 7] = 0.0
+    return windows
