@@ -38,6 +38,7 @@ import hashlib
 import inspect
 import platform
 import shutil
+import sys
 import threading
 from pathlib import Path
 
@@ -209,10 +210,12 @@ def inline(func):
 
 
 def kernels_cached() -> bool:
-    """Whether every kernel declared so far is in the cache, so that
-    compile_kernels() only loads them."""
+    """Whether every kernel declared so far is in the cache for this
+    Python, so that compile_kernels() only loads them (numba names a
+    kernel's index file <name>-<line>.py<major><minor>.nbi)."""
     folder = cache_folder()
-    return folder.is_dir() and sum(1 for _ in folder.rglob("*.nbi")) >= len(_KERNELS)
+    python = f"py{sys.version_info.major}{sys.version_info.minor}"
+    return folder.is_dir() and sum(1 for _ in folder.rglob(f"*.{python}.nbi")) >= len(_KERNELS)
 
 
 def compile_kernels() -> int:
