@@ -261,6 +261,28 @@ def aims(light: Light, targets: list[Sphere], scene_sphere: Sphere) -> list[Aim]
     return out
 
 
+def overlapping(aims: list[Aim]) -> list[np.ndarray]:
+    """For each of one lamp's `aims`, the indices (ascending) of the aims
+    that may hold a ray it holds, itself among them, conservatively: cones
+    whose half-angles (widened by contains' tolerance) reach across the
+    angle between their axes; a sun's discs whose radii reach across the
+    distance between their centres, across the sun's direction. The other
+    aims hold none of its rays."""
+    axes = np.array([aim.axis for aim in aims]).reshape(-1, 3)
+    if aims and aims[0].is_disc:
+        centers = np.array([aim.center for aim in aims]).reshape(-1, 3)
+        reach = np.array([aim.radius for aim in aims]) * (1.0 + 1e-9) + 1e-12
+        out = []
+        for i, aim in enumerate(aims):
+            apart = centers - centers[i]
+            apart -= (apart @ aim.axis)[:, None] * aim.axis
+            out.append(np.flatnonzero(np.linalg.norm(apart, axis=1) <= reach + reach[i]))
+        return out
+    half = np.arccos(np.clip(np.array([aim.cos_max for aim in aims]) - _EDGE_TOLERANCE, -1.0, 1.0)) + 1e-9
+    return [np.flatnonzero(np.arccos(np.clip(axes @ axes[i], -1.0, 1.0)) <= half + half[i])
+            for i in range(len(aims))]
+
+
 def balance_density(aims: list[Aim], density: np.ndarray, origins: np.ndarray, dirs: np.ndarray) -> np.ndarray:
     """(n,) samples per unit measure at rays `origins, dirs (n,3)` of one
     lamp whose aims take `density (k,)` samples per unit measure each: the

@@ -12,15 +12,16 @@ import numpy as np
 
 from ..sampling.warps import concentric_disc
 from ..scene import Light
-from .aims import Aim, Sphere, aims, balance_density, share
+from .aims import Aim, Sphere, aims, balance_density, overlapping, share
 
 
 @dataclass
 class BeamSource:
     """A grid of `grid` x `grid` points over one aim of a lamp, the disc
     turned by `roll` radians about the aim's axis. `overlap` lists every
-    aim of the same lamp with its grid's sample density (points per unit
-    measure), to share the rays that several aims hold. `cell (4,3)`: the
+    aim of the same lamp that may hold its rays (aims.overlapping) with its
+    grid's sample density (points per unit measure), to share the rays
+    that several aims hold. `cell (4,3)`: the
     corners, less the lamp's position (a sun's: its direction), of the cell
     of a lamp with a size that the lamp (one of its points,
     lamp_points.lamp_cells) stands for (None: a lamp of size 0)."""
@@ -135,7 +136,10 @@ def beam_sources(lights: list[Light], targets: list[Sphere], scene_sphere: Spher
         # rings of the concentric map 2 / (grid - 1) apart in rho
         sources.append(BeamSource(aim.widened(1.0 + 2.0 * phase[0] / (grid - 1)), energy, grid,
                                   roll=2.0 * math.pi * phase[1], cell=cell))
+    by_light: dict[int, list[BeamSource]] = {}
     for source in sources:
-        source.overlap = [(other.aim, 1.0 / other.cell_measure) for other in sources
-                          if other.aim.light is source.aim.light]
+        by_light.setdefault(id(source.aim.light), []).append(source)
+    for same in by_light.values():
+        for source, near in zip(same, overlapping([other.aim for other in same])):
+            source.overlap = [(same[j].aim, 1.0 / same[j].cell_measure) for j in near]
     return sources

@@ -24,7 +24,7 @@ from ..sampling.sequences import r2_sequence
 from ..sampling.warps import sample_disc
 from ..scene import Light, SunLight
 from . import radiometry
-from .aims import Aim, Sphere, aims, balance_density, share
+from .aims import Aim, Sphere, aims, balance_density, overlapping, share
 
 
 # Hash streams of a photon's point on a lamp with a size (the transport uses
@@ -102,6 +102,7 @@ class AimedEmitter(Emitter):
         self.starts = np.concatenate([[0], np.cumsum(counts)])
         self.count = int(self.starts[-1])
         self.density = counts / np.array([aim.measure for aim in aims])
+        self.near = overlapping(aims)
 
     def emit(self, start: int, stop: int) -> Photons:
         i = np.arange(start, stop)
@@ -110,11 +111,11 @@ class AimedEmitter(Emitter):
         ids = i + self.id_base
         lamp = np.stack([hash_uniform(ids, _LAMP_STREAM, self.seed), hash_uniform(ids, _LAMP_STREAM + 1, self.seed)],
                         axis=1)
-        origins, dirs = np.empty((len(i), 3)), np.empty((len(i), 3))
+        origins, dirs, density = np.empty((len(i), 3)), np.empty((len(i), 3)), np.empty(len(i))
         for k in np.unique(which):
-            sel = which == k
+            sel, near = which == k, self.near[k]
             origins[sel], dirs[sel] = self.aims[k].rays(disc[sel], lamp[sel])
-        density = balance_density(self.aims, self.density, origins, dirs)
+            density[sel] = balance_density([self.aims[j] for j in near], self.density[near], origins[sel], dirs[sel])
         flux = self.aims[0].emitted(self.energy, dirs) / density[:, None]
         return _kept(origins, dirs, flux, ids)
 

@@ -84,11 +84,14 @@ class Contacts:
         touching: dict[int, set[int]] = {}
         reach = CONTACT_EPSILONS * accel.epsilon
         bounds = [(o.mesh.vertices.min(axis=0) - reach, o.mesh.vertices.max(axis=0) + reach) for o in accel.objects]
+        lo, hi = np.array([b[0] for b in bounds]).reshape(-1, 3), np.array([b[1] for b in bounds]).reshape(-1, 3)
         for a, obj in enumerate(accel.objects):
+            if not obj.is_caster:
+                continue
             # parts of one body (its materials) meet along edges, not faces
-            near = [b for b in range(len(accel.objects))
-                    if accel.body[b] != accel.body[a] and _overlap(bounds[a], bounds[b])]
-            if not obj.is_caster or not near:
+            near = np.flatnonzero((accel.body != accel.body[a]) & np.all(lo[a] <= hi, axis=1)
+                                  & np.all(lo <= hi[a], axis=1)).tolist()
+            if not near:
                 continue
             for b, prims in self._probe(a, near, bounds).items():
                 touching.setdefault(a, set()).add(b)
@@ -292,10 +295,6 @@ def _other_first(mine_obj, mine_prim, other_obj, other_prim, dirs, medium, face_
             out[i] = other_first1(row(dirs, i), medium[i], m, o, row(face_normal, mine_prim[i]),
                                   row(face_normal, other_prim[i]), closed[m], closed[o], caster[m], caster[o])
     return out
-
-
-def _overlap(a, b) -> bool:
-    return bool(np.all(a[0] <= b[1]) and np.all(b[0] <= a[1]))
 
 
 def _union(a, b):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from caustic_addon import PointLight, SpotLight, SunLight
-from caustic_addon.emission.aims import Aim, Sphere
+from caustic_addon.emission.aims import Aim, Sphere, aims, balance_density, overlapping
 from caustic_addon.emission.photons import PointSphereEmitter, make_emitters
 from caustic_addon.sampling.warps import sample_disc
 
@@ -87,3 +87,28 @@ def test_photon_budget_follows_the_flux_each_lamp_sends_to_the_targets():
     assert counts[0] / counts[1] == pytest.approx(fluxes[0] / fluxes[1], rel=0.01)
     ids = np.concatenate([e.emit(0, e.count).ids for e in emitters])
     assert len(np.unique(ids)) == len(ids)
+
+
+@pytest.mark.parametrize("light", [PointLight((0.0, 0.0, 4.0), 100.0, radius=0.3),
+                                   SunLight((0.3, -0.2, -1.0), 3.0, angle=math.radians(2.0))],
+                         ids=["point", "sun"])
+def test_an_aim_shares_its_rays_only_with_the_aims_that_can_hold_them(light):
+    """Many casters: each aim's rays are weighed against only the aims that
+    may hold them (aims.overlapping), which is what keeps a lamp's pass
+    linear in the casters. Over casters strewn near and far, every aim that
+    holds a ray of another is among its overlapping ones, and the density
+    summed over those alone is the sum over all, to the bit."""
+    rng = np.random.default_rng(5)
+    targets = [Sphere(np.array([x, y, 0.3]), r) for x, y, r in
+               zip(rng.uniform(-3, 3, 60), rng.uniform(-3, 3, 60), rng.uniform(0.05, 0.6, 60))]
+    every = aims(light, targets, Sphere(np.zeros(3), 6.0))
+    density = rng.uniform(1.0, 2.0, len(every))
+    near = overlapping(every)
+    assert all(i in held for i, held in enumerate(near)) and 60 < sum(map(len, near)) < 60 * 30
+    disc = sample_disc(1.0, rng.uniform(size=(4000, 2)))
+    for i, aim in enumerate(every):
+        origins, dirs = aim.rays(disc, rng.uniform(size=(4000, 2)))
+        holding = {j for j, other in enumerate(every) if other.contains(origins, dirs).any()}
+        assert holding <= set(near[i].tolist())
+        assert np.array_equal(balance_density([every[j] for j in near[i]], density[near[i]], origins, dirs),
+                              balance_density(every, density, origins, dirs))
