@@ -6,6 +6,7 @@ from .animation import CAUSTIC_OT_render_animation
 from .bake import CAUSTIC_OT_bake, CAUSTIC_OT_unbake
 from .bake_animation import CAUSTIC_OT_bake_animation
 from .compare import CAUSTIC_OT_compare_cycles
+from .dispersion import CAUSTIC_OT_toggle_dispersion
 from .paper_scene import CAUSTIC_OT_add_paper_scene
 from .presets import CAUSTIC_OT_apply_preset
 from .render import CAUSTIC_OT_render
@@ -26,6 +27,7 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory((
     CAUSTIC_OT_render_animation_with_caustics,
     CAUSTIC_OT_apply_preset,
     CAUSTIC_OT_add_paper_scene,
+    CAUSTIC_OT_toggle_dispersion,
 ))
 
 

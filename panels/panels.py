@@ -128,8 +128,10 @@ class CAUSTIC_PT_object(_CausticPanel, bpy.types.Panel):
             sub.active = settings.use_ior
             sub.prop(settings, "ior", text="")
             row = layout.row(heading="Dispersion")
-            row.prop(settings, "use_dispersion", text="")
-            if settings.use_dispersion:
+            on = settings.abbe > 0.0
+            row.operator("caustic.toggle_dispersion", text="", emboss=False,
+                         icon='CHECKBOX_HLT' if on else 'CHECKBOX_DEHLT')
+            if on:
                 row.prop(settings, "abbe", text="")
             layout.prop(settings, "absorption_from")
             if settings.absorption_from == 'COEFFICIENT':

@@ -1,23 +1,12 @@
-"""Object.caustic: how one object takes part in the caustic render."""
+"""Object.caustic: how one object takes part in the caustic render.
+
+The group holds properties only: Blender 4.2's bpy module crashes at exit
+once a group it had registered carried Python callbacks (get, set, update)
+or attributes. So dispersion is on where `abbe` is above 0, and the
+sidebar's Dispersion toggle is an operator (caustic.toggle_dispersion)."""
 
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty, PointerProperty
-
-
-DEFAULT_ABBE = 40.0
-
-
-def _dispersion_on(self) -> bool:
-    return self.abbe > 0.0
-
-
-def _set_dispersion(self, on: bool) -> None:
-    """Dispersion is an Abbe number above 0 (scripts and older files set
-    `abbe` alone): turning it off keeps the number for turning it on again."""
-    if on and self.abbe <= 0.0:
-        self.abbe = self.abbe_off if self.abbe_off > 0.0 else DEFAULT_ABBE
-    elif not on and self.abbe > 0.0:
-        self.abbe_off, self.abbe = self.abbe, 0.0
 
 
 class CausticObjectSettings(bpy.types.PropertyGroup):
@@ -37,13 +26,9 @@ class CausticObjectSettings(bpy.types.PropertyGroup):
         name="IOR",
         description="Index of refraction: 1.33 for water, 1.5 for glass, 2.42 for diamond",
         default=1.5, min=0.01, soft_min=1.0, soft_max=3.0)
-    use_dispersion: BoolProperty(
-        name="Dispersion",
-        description="Split white light into its colors, as a prism or a diamond does",
-        get=_dispersion_on, set=_set_dispersion)
     abbe: FloatProperty(
         name="Abbe Number",
-        description="How little the glass disperses: 58 for crown glass, 55 for diamond; lower disperses more",
+        description="How little the glass disperses: 58 for crown glass, 55 for diamond; lower disperses, 0 is off",
         default=0.0, min=0.0, soft_min=10.0, soft_max=100.0)
     abbe_off: FloatProperty(
         name="Abbe Number while Off", description="The Abbe number that Dispersion turns back on",

@@ -49,8 +49,6 @@ class CausticRunResults(bpy.types.PropertyGroup):
         default=False)
 
 
-RESULTS = tuple(CausticRunResults.__annotations__)
-
 
 def register():
     bpy.utils.register_class(CausticRunResults)

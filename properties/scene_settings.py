@@ -5,17 +5,6 @@ Energy). What a run measures is on WindowManager.caustic (run_results.py)."""
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty, IntProperty, PointerProperty
 
-from .run_results import RESULTS
-
-
-def _moved(name: str) -> property:
-    """Scene.caustic.`name` for a script written before the run's figures
-    moved to the window manager: an error that says where they are."""
-    def moved(self):
-        raise AttributeError(f"Scene.caustic.{name} is now bpy.context.window_manager.caustic.{name}: a run's "
-                             "figures are no longer saved in the .blend")
-    return property(moved)
-
 
 class CausticSceneSettings(bpy.types.PropertyGroup):
     lamp_rays: IntProperty(
@@ -96,9 +85,6 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
         description="Stop the Cycles reference render after this long; 0 for no limit",
         default=0.0, min=0.0, soft_max=600.0, subtype='TIME_ABSOLUTE', unit='TIME_ABSOLUTE')
 
-
-for _name in RESULTS:
-    setattr(CausticSceneSettings, _name, _moved(_name))
 
 def register():
     bpy.utils.register_class(CausticSceneSettings)

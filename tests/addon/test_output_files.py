@@ -130,7 +130,7 @@ def test_a_user_s_image_of_the_result_s_name_is_left_alone(reports):
     reports()
     for _ in range(2):
         assert bpy.ops.caustic.render() == {'FINISHED'}
-        assert 'lamp rays into "Caustic Render.001"' in reports()
+        assert 'light rays into "Caustic Render.001"' in reports()
     assert {image.name for image in bpy.data.images if image.name.startswith("Caustic Render")} == {
         "Caustic Render", "Caustic Render.001", "Caustic Render Ambient", "Caustic Render Caustic",
         "Caustic Render Direct"}
