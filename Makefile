@@ -53,14 +53,13 @@ ifeq ($(MAKECMDGOALS),test)
 MAKEFLAGS += --jobs=2 --output-sync=target
 endif
 
-# (4.5's two parts in two runs: the engine's tests and the add-on's have
-# helper modules of the same names.)
-suite_of = $(if $(filter 4.5,$(1)),tests/addon && $(call venv_of,$(1))/bin/python -m pytest -c tests/pytest.ini \
-	tests/engine/test_shipped_numpy_api.py,tests)
+pytest_of = $(call venv_of,$(1))/bin/python -m pytest -c tests/pytest.ini
 
+# 4.5's two parts run in two pytest runs: the engine's tests and the
+# add-on's have helper modules of the same names.
 $(addprefix test-,$(NEWEST) $(OLDER)): test-%: venv package
 	@echo "== Blender $* =="
-	$(call venv_of,$*)/bin/python -m pytest -c tests/pytest.ini $(call suite_of,$*)
+	$(if $(filter 4.5,$*),$(call pytest_of,$*) tests/addon && $(call pytest_of,$*) tests/engine/test_shipped_numpy_api.py,$(call pytest_of,$*) tests)
 
 # The extension: one zip per platform in dist/, each with the embreex, numba
 # and llvmlite wheels for Blender 4.2-5.0 (Python 3.11) and 5.1+ (Python 3.13).

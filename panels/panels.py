@@ -153,23 +153,23 @@ class CAUSTIC_PT_compare(_CausticPanel, bpy.types.Panel):
         layout.prop(props, "cycles_samples")
         layout.prop(props, "cycles_time_limit")
         layout.operator("caustic.compare_cycles", icon='IMAGE_REFERENCE')
-        props = context.window_manager.caustic
-        if props.cycles_seconds > 0:
+        run = context.window_manager.caustic
+        if run.cycles_seconds > 0:
             col = layout.column(align=True)
-            col.label(text=f"Caustics: {props.last_seconds:.1f} s   Cycles: {props.cycles_seconds:.1f} s")
-            if props.cycles_reference == 'MNEE':
+            col.label(text=f"Caustics: {run.last_seconds:.1f} s   Cycles: {run.cycles_seconds:.1f} s")
+            if run.cycles_reference == 'MNEE':
                 col.label(text="Cycles lacks part of the caustic (MNEE)", icon='ERROR')
-                if props.cycles_caustic_ratio > 0:
-                    col.label(text=f"Caustic light Cycles holds: {1.0 / props.cycles_caustic_ratio:.0%}")
+                if run.cycles_caustic_ratio > 0:
+                    col.label(text=f"Caustic light Cycles holds: {1.0 / run.cycles_caustic_ratio:.0%}")
             else:
-                over = " (caustics)" if props.cycles_reference == 'PATH_TRACED' else ""
-                col.label(text=f"Relative L2{over}: {props.cycles_relative_l2:.3f}")
-                col.label(text=f"Noise of Cycles{over}: {props.cycles_noise:.3f}")
-                if props.cycles_reference == 'PATH_TRACED':
-                    col.label(text=f"Caustic light: {props.cycles_caustic_ratio:.2f} "
-                                   f"± {props.cycles_caustic_noise:.2f} of Cycles'")
-                if props.cycles_psnr_outside:
+                over = " (caustics)" if run.cycles_reference == 'PATH_TRACED' else ""
+                col.label(text=f"Relative L2{over}: {run.cycles_relative_l2:.3f}")
+                col.label(text=f"Noise of Cycles{over}: {run.cycles_noise:.3f}")
+                if run.cycles_reference == 'PATH_TRACED':
+                    col.label(text=f"Caustic light: {run.cycles_caustic_ratio:.2f} "
+                                   f"± {run.cycles_caustic_noise:.2f} of Cycles'")
+                if run.cycles_psnr_outside:
                     col.label(text="Cycles too noisy to judge the caustics", icon='ERROR')
-            where = " outside caustics" if props.cycles_psnr_outside else ""
-            col.label(text=f"PSNR{where}: {props.cycles_psnr:.1f} dB" if math.isfinite(props.cycles_psnr)
+            where = " outside caustics" if run.cycles_psnr_outside else ""
+            col.label(text=f"PSNR{where}: {run.cycles_psnr:.1f} dB" if math.isfinite(run.cycles_psnr)
                       else "PSNR: identical")

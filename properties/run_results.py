@@ -49,7 +49,6 @@ class CausticRunResults(bpy.types.PropertyGroup):
         default=False)
 
 
-
 def register():
     bpy.utils.register_class(CausticRunResults)
     bpy.types.WindowManager.caustic = PointerProperty(type=CausticRunResults)

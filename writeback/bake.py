@@ -5,6 +5,8 @@ several receivers share shows each one's caustic on that receiver alone:
 the bake numbers their objects in the custom property SELECTOR, which each
 group compares."""
 
+from collections import Counter
+
 import bpy
 import numpy as np
 
@@ -58,15 +60,13 @@ def wire_bakes(read: SceneRead, plan: dict, maps, image_of) -> dict:
     SELECTOR so that each shows its own. Returns {receiver name: group}."""
     for material in {material.name: material for material in plan.values()}.values():
         unwire(material)
-    sharing = {}
-    for name, material in plan.items():
-        sharing.setdefault(material.name, []).append(name)
+    sharing = Counter(material.name for material in plan.values())
     for name in plan:
         bpy.data.objects[read.sources[name]].pop(SELECTOR, None)
     numbers, groups = {}, {}
     for name, material in plan.items():
         number = None
-        if len(sharing[material.name]) > 1:
+        if sharing[material.name] > 1:
             source = bpy.data.objects[read.sources[name]]
             number = numbers.setdefault(source.name, len(numbers) + 1)
             source[SELECTOR] = number

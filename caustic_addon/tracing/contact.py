@@ -83,8 +83,9 @@ class Contacts:
         self.partners: dict[int, _Subscene] = {}
         touching: dict[int, set[int]] = {}
         reach = CONTACT_EPSILONS * accel.epsilon
-        bounds = [(o.mesh.vertices.min(axis=0) - reach, o.mesh.vertices.max(axis=0) + reach) for o in accel.objects]
-        lo, hi = np.array([b[0] for b in bounds]).reshape(-1, 3), np.array([b[1] for b in bounds]).reshape(-1, 3)
+        # each object's box, (objects,3) corners
+        lo = np.array([o.mesh.vertices.min(axis=0) - reach for o in accel.objects]).reshape(-1, 3)
+        hi = np.array([o.mesh.vertices.max(axis=0) + reach for o in accel.objects]).reshape(-1, 3)
         for a, obj in enumerate(accel.objects):
             if not obj.is_caster:
                 continue
@@ -93,7 +94,7 @@ class Contacts:
                                   & np.all(lo <= hi[a], axis=1)).tolist()
             if not near:
                 continue
-            for b, prims in self._probe(a, near, bounds).items():
+            for b, prims in self._probe(a, near, lo, hi).items():
                 touching.setdefault(a, set()).add(b)
                 touching.setdefault(b, set()).add(a)
                 corners = np.take(accel.corners, prims, axis=0).reshape(-1, 3)
@@ -108,9 +109,10 @@ class Contacts:
             self.lo[index], self.hi[index] = lo, hi
         self.caster = np.array([o.is_caster for o in accel.objects], dtype=bool)
 
-    def _probe(self, a: int, near: list[int], bounds) -> dict[int, np.ndarray]:
+    def _probe(self, a: int, near: list[int], box_lo: np.ndarray, box_hi: np.ndarray) -> dict[int, np.ndarray]:
         """{object b: the faces of caster `a` (global indices) that touch it}
-        for the objects `near` whose boxes meet a's: probes along each face's
+        for the objects `near` whose boxes (`box_lo`, `box_hi` (objects,3)
+        corners) meet a's: probes along each face's
         normal, from CONTACT_EPSILONS epsilons behind to as far in front,
         at the points _PROBE_BARYCENTRICS."""
         accel = self.accel
@@ -119,7 +121,7 @@ class Contacts:
         lo, hi = corners.min(axis=1), corners.max(axis=1)
         candidate = np.zeros(len(corners), dtype=bool)
         for b in near:
-            candidate |= np.all((lo <= bounds[b][1]) & (hi >= bounds[b][0]), axis=1)
+            candidate |= np.all((lo <= box_hi[b]) & (hi >= box_lo[b]), axis=1)
         candidate &= dot(accel.face_normal[first:end], accel.face_normal[first:end]) > 0.0
         prims = first + np.flatnonzero(candidate)
         if len(prims) == 0:

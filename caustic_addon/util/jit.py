@@ -26,8 +26,9 @@ before), not for this machine's, so one cache serves every machine of a
 platform: on x86-64 that is x86-64-v2, SSE4.2 and what comes with it,
 which Blender requires since 4.2 (its creator_cpu_check.cc); elsewhere
 numba's "generic". numba's generic x86-64 has no SSE4.1 rounding, so
-each floor and fmod would be a call into numba's helper library. Arrays must match the signature exactly (`f8[:, ::1]`
-is C-contiguous float64): a kernel never compiles again for other types.
+each floor and fmod would be a call into numba's helper library. Arrays
+must match the signature exactly (`f8[:, ::1]` is C-contiguous float64): a
+kernel never compiles again for other types.
 
 Scalar helpers that kernels call (`@inline`) are inlined into each kernel."""
 
