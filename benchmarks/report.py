@@ -138,7 +138,7 @@ def mitsuba_folds(d: dict) -> Table:
 def speed(d: dict) -> Table:
     raw = d["raw_embree_rays_per_s"]
     return ["measure", "figure"], [
-        ["raw embreex, 2 threads", f"{rate(raw)} rays/s"],
+        ["Embree alone, 2 threads", f"{rate(raw)} rays/s (through embreex: {rate(d['embreex_rays_per_s'])})"],
         [f"photon pass, {count(d['photons'])} photons", f"{seconds(d['photon_pass_s'])}: "
          f"{rate(d['photon_paths_per_s'])} paths/s, {rate(d['photon_pass_rays_per_s'])} rays/s "
          f"({percent(d['photon_pass_fraction_of_raw'], 0)} of raw)"],
@@ -158,15 +158,28 @@ def passes(d: dict) -> Table:
     for view, rates in d["pass_rates"].items():
         for name, r in rates.items():
             rows.append([f"{name} pass, {view.replace('_', ' ')}",
-                         f"{rate(r['rays_per_s'])} rays/s, {percent(r['share_of_raw'], 0)} of raw Embree's "
-                         f"{rate(r['raw_rays_per_s'])}", percent(targets["pass_share_of_raw"], 0)])
+                         f"{rate(r['rays_per_s'])} rays/s, {number(r['vs_embreex'], 2)}x embreex's "
+                         f"{rate(r['embreex_rays_per_s'])}; Embree {percent(r['embree_share'], 0)} of the pass "
+                         f"({number(r['embree_packets_of_8_s'] / r['embree_s'], 2)}x its time with closest hits "
+                         "in packets of 8)",
+                         f"{targets[name + '_vs_embreex']}x"])
     for level, t in d["seconds_to"].items():
+        share = f"; Embree {percent(d['embree_share_at_5%'], 0)} of it" if level == "5%" else ""
         rows.append([f"ball lens 320x240 to {level} error, beams", f"{reached(t)} at "
-                     f"{count(d['lamp_rays_to'][level])} lamp rays", seconds(targets[f"seconds_to_{level}"])])
+                     f"{count(d['lamp_rays_to'][level])} lamp rays{share}", seconds(targets[f"seconds_to_{level}"])])
     full = d["render_1920x1080_4spp"]
-    rows.append(["ball lens 1920x1080, 4 spp, beams", f"{seconds(full['wall_s'])} wall, {seconds(full['cpu_s'])} CPU",
-                 seconds(targets["seconds_1920x1080_4spp"])])
+    rows.append(["ball lens 1920x1080, 4 spp, beams", f"{seconds(full['wall_s'])} wall, {seconds(full['cpu_s'])} CPU; "
+                 f"Embree {percent(full['embree_share'], 0)} of the wall", seconds(targets["seconds_1920x1080_4spp"])])
     return ["measure", "figure", "target"], rows
+
+
+def bvh_build(d: dict) -> Table:
+    rows = []
+    for name, r in d["scenes"].items():
+        cells = [f"{1e3 * r[q]['build_s']:.1f} ms + {seconds(r[q]['casts_s'])}" for q in d["qualities"]]
+        rows.append([f"{name} ({count(r['triangles'])} triangles, {count(r['objects'])} objects, "
+                     f"{count(r['rays'])} rays)", f"{1e3 * r['embreex_build_s']:.1f} ms", *cells])
+    return ["scene", "embreex's build", *(f"{q} quality: build + casts" for q in d["qualities"])], rows
 
 
 def beams_at_scale(d: dict) -> Table:
@@ -343,7 +356,7 @@ def generic(d: dict) -> Table:
 
 FORMATTERS: dict[str, Callable[[dict], Table]] = {
     "accuracy": accuracy, "cycles_accuracy": cycles_accuracy, "mitsuba_folds": mitsuba_folds,
-    "speed": speed, "passes": passes, "beams_at_scale": beams_at_scale, "memory": memory,
+    "speed": speed, "passes": passes, "bvh_build": bvh_build, "beams_at_scale": beams_at_scale, "memory": memory,
     "first_render": first_render, "animation": animation, "allocator": allocator,
     "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass, "through_glass": through_glass,
     "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "world_paths": world_paths,
@@ -358,8 +371,9 @@ SECTIONS = [
         ("mitsuba_folds", "Folds and cusps against Mitsuba's particle tracer"),
     ]),
     ("Speed", [
-        ("speed", "The photon and eye passes against raw Embree"),
+        ("speed", "The photon and eye passes against Embree alone"),
         ("passes", "Each pass on its own rays, and the speed targets"),
+        ("bvh_build", "Building the BVH, and Embree's build qualities"),
         ("beams_at_scale", "Beams from 10k to 50M lamp rays"),
         ("memory", "Memory against photon count"),
         ("first_render", "The first render after installing"),

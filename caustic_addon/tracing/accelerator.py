@@ -1,9 +1,10 @@
 """One Embree scene per render, shared by the photon pass and the eye pass.
 
-embreex facts this module absorbs (see shared notes): tnear is always 0, so
-callers offset secondary origins with `offset()`; Embree's Ng is unnormalised
-and its sign follows Embree's winding, so we use our own outward face normals
-instead; `run` releases the GIL, so batches are split over worker threads.
+Embree facts this module absorbs (tracing/embree.py has the rest): tnear is
+0, so callers offset secondary origins with `offset()`; Embree's Ng is
+unnormalised and its sign follows Embree's winding, so we use our own
+outward face normals instead; the casting kernels release the GIL, so
+batches are split over worker threads.
 """
 
 from __future__ import annotations
@@ -13,14 +14,14 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import fields
 
 import numpy as np
-from embreex import rtcore_scene
-from embreex.mesh_construction import TriangleMesh
 
 from ..scene import Object
 from ..util.jit import inline, kernel, named_kernel
 from ..util.parallel import threads_here
 from ..util.vectors import dot1, float_rows, length, normalize, normalize1, row, set_row, sum1
+from . import embree
 from .contact import Contacts
+from .embree import PACKET, intersect1, occluded8, packet_blocked, packet_record, ray_record, set_packet_ray
 from .hits import HIT_TYPES, MISS, Hits
 from .topology import open_edges, signed_volume, triangle_normals
 
@@ -57,12 +58,12 @@ def _same_material(a, b) -> bool:
 
 
 class _View:
-    """The objects one kind of ray sees, in an Embree scene of their own:
-    `objects (k,)` maps its geometry ids to object indices; `embree` is None
-    where that kind of ray sees nothing."""
+    """Some of the objects in an Embree scene of their own: `objects (k,)`
+    maps its geometry ids to object indices; `scene` is None where there
+    are none."""
 
-    def __init__(self, embree, objects: np.ndarray):
-        self.embree, self.objects = embree, objects
+    def __init__(self, scene: embree.Scene | None, objects: np.ndarray):
+        self.scene, self.objects = scene, objects
 
 
 # The numba type of each of the Accelerator's tables, by the name kernels
@@ -70,6 +71,10 @@ class _View:
 GEOMETRY_TYPES = {"body": "i8[::1]", "surface_of": "i8[::1]", "closed": "b1[::1]", "corners": "f8[:, :, ::1]",
                   "face_normal": "f8[:, ::1]", "corner_normal": "f8[:, :, ::1]", "min_barycentric": "f8[:, ::1]",
                   "prim_offset": "i8[::1]", "epsilon": "f8"}
+# The numba type of what a cast takes: the Embree scene's handle, the rays,
+# their lengths (none: unbounded), the objects its geometry ids stand for.
+CAST_TYPES = {"scene": "u8", "origins": "f8[:, ::1]", "dirs": "f8[:, ::1]", "dists": "f8[::1]",
+              "members": "i8[::1]"}
 
 
 class Accelerator:
@@ -94,8 +99,9 @@ class Accelerator:
     Embree scene of its own.
     """
 
-    def __init__(self, objects: list[Object], extent: float, threads: int = 2):
+    def __init__(self, objects: list[Object], extent: float, threads: int = 2, quality: str = "medium"):
         self.objects = objects
+        self.quality = quality
         self.epsilon = EPSILON_FRACTION * extent
         self.threads = max(1, threads)
         self.warnings: list[str] = []
@@ -147,6 +153,7 @@ class Accelerator:
         self.corner_normal = _table(corner_normals, (0, 3, 3))
         self.owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
         self.prim_offset = np.asarray(offsets, dtype=np.int64)
+        self._geometries = [embree.Geometry(obj.mesh.vertices, obj.mesh.triangles) for obj in objects]
         self._all = self.view_of(np.arange(len(objects)))
         self._views = self._ray_views()
         for body in np.unique(self.body[self.closed]):
@@ -155,14 +162,12 @@ class Accelerator:
         self.rays_cast = 0  # counts the passes' rays, not the probes'
 
     def view_of(self, indices: np.ndarray) -> _View:
-        """The objects `indices (k,)` in an Embree scene."""
+        """The objects `indices (k,)` in an Embree scene, built at the
+        accelerator's quality."""
         if len(indices) == 0:
-            return _View(None, indices)
-        embree = rtcore_scene.EmbreeScene()
-        for index in indices:
-            mesh = self.objects[index].mesh
-            TriangleMesh(embree, mesh.vertices.astype(np.float32), mesh.triangles.astype(np.int32))
-        return _View(embree, np.asarray(indices, dtype=np.int64))
+            return _View(None, np.asarray(indices, dtype=np.int64))
+        return _View(embree.Scene([self._geometries[i] for i in indices], self.quality),
+                     np.asarray(indices, dtype=np.int64))
 
     def _ray_views(self) -> list[_View]:
         """The _View each kind of ray sees, by kind; kinds that see the same
@@ -234,27 +239,17 @@ class Accelerator:
         with self._count_lock:
             self.rays_cast += n
 
-    def _run(self, embree, origins: np.ndarray, dirs: np.ndarray, finish=None, **kwargs) -> list:
-        """Embree scene `embree` over the batch, split across the threads
-        util.parallel.threads_here gives: per part of rows a..b, embreex's
-        result, or `finish(a, b, result)` where given, run on the part's
-        thread."""
-        n = len(origins)
+    def _split(self, n: int, part) -> None:
+        """`part(a, b)` over rows 0..n, split across the threads
+        util.parallel.threads_here gives, each part on its own thread."""
         self.count_rays(n)
-        o32 = np.ascontiguousarray(origins, dtype=np.float32)
-        d32 = np.ascontiguousarray(dirs, dtype=np.float32)
-        dists = kwargs.pop("dists", None)
-
-        def part(a: int, b: int):
-            result = embree.run(o32[a:b], d32[a:b], dists=None if dists is None else dists[a:b], **kwargs)
-            return result if finish is None else finish(a, b, result)
-
         threads = threads_here(self.threads)
         if threads == 1 or n < _MIN_SPLIT:
-            return [part(0, n)]
+            part(0, n)
+            return
         bounds = np.linspace(0, n, threads + 1).astype(int)
-        futures = [self._pool.submit(part, bounds[i], bounds[i + 1]) for i in range(threads)]
-        return [f.result() for f in futures]
+        for future in [self._pool.submit(part, bounds[i], bounds[i + 1]) for i in range(threads)]:
+            future.result()
 
     def intersect(self, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray | None = None,
                   kind: np.ndarray | None = None, leaving: np.ndarray | None = None) -> Hits:
@@ -357,46 +352,42 @@ class Accelerator:
         return hits
 
     def _closest(self, origins: np.ndarray, dirs: np.ndarray, view: _View | None = None) -> Hits:
-        """Closest hits among the objects of `view` (None: all of them),
-        each thread decoding its own part of the batch."""
-        view = self._all if view is None else view
-        if len(origins) == 0 or view.embree is None:
-            return Hits.misses(origins)
-        origins = np.ascontiguousarray(origins, dtype=np.float64)
-        hits = Hits.empty(len(origins))
-        self._run(view.embree, origins, dirs, output=1,
-                  finish=lambda a, b, raw: self._decode(raw, origins[a:b], view.objects, hits, a))
-        return hits
+        """Closest hits among the objects of `view` (None: all of them)."""
+        return self.closest_in(self._all if view is None else view, origins, dirs)
 
-    def as_hits(self, raw: dict, origins: np.ndarray, members: np.ndarray) -> Hits:
-        """Hits from embreex's output `raw` for rays from `origins (n,3)`,
-        cast in an Embree scene whose geomIDs are the objects `members`;
-        every ray a miss where `raw` is empty."""
-        if not raw:
+    def closest_in(self, view: _View, origins: np.ndarray, dirs: np.ndarray, dists: np.ndarray | None = None) -> Hits:
+        """Closest hits of rays `origins, dirs (n,3)` among the objects of
+        `view`, within `dists (n,)` where given, each thread casting and
+        decoding its own part of the batch (see _cast)."""
+        if len(origins) == 0 or view.scene is None:
+            self.count_rays(len(origins))
             return Hits.misses(origins)
-        origins = np.ascontiguousarray(origins, dtype=np.float64)
+        origins, dirs = float_rows(origins, dirs)
+        dists = np.zeros(0) if dists is None else np.ascontiguousarray(dists, dtype=np.float64)
         hits = Hits.empty(len(origins))
-        self._decode(raw, origins, members, hits, 0)
-        return hits
 
-    def _decode(self, raw: dict, origins: np.ndarray, members: np.ndarray, hits: Hits, start: int) -> None:
-        """Write embreex's output `raw` for rays from `origins (k,3)` into
-        rows start..start+k of `hits` (see _decoded)."""
-        stop = start + len(origins)
-        _decoded(**{name: np.ascontiguousarray(raw[key], dtype=code) for name, (key, code) in _RAW.items()},
-                 origins=origins, members=np.ascontiguousarray(members, dtype=np.int64), prim_offset=self.prim_offset,
-                 corners=self.corners, min_barycentric=self.min_barycentric,
-                 **{f"out_{field}": getattr(hits, field)[start:stop] for field in HIT_TYPES})
+        def part(a: int, b: int) -> None:
+            _cast(scene=view.scene.handle, origins=origins[a:b], dirs=dirs[a:b], dists=dists[a:b],
+                  members=view.objects, prim_offset=self.prim_offset, corners=self.corners,
+                  min_barycentric=self.min_barycentric,
+                  **{f"out_{field}": getattr(hits, field)[a:b] for field in HIT_TYPES})
+
+        self._split(len(origins), part)
+        return hits
 
     def occluded(self, origins: np.ndarray, dirs: np.ndarray, dists: np.ndarray) -> np.ndarray:
         """(n,) bool: is anything that casts shadows between `origins` and
         `origins + dists * dirs`?"""
-        embree = self._views[SHADOW].embree
-        if len(origins) == 0 or embree is None:
-            return np.zeros(len(origins), dtype=bool)
-        parts = self._run(embree, origins, dirs, query="OCCLUDED",
-                          dists=np.ascontiguousarray(dists, dtype=np.float32))
-        return np.concatenate(parts) != MISS
+        scene = self._views[SHADOW].scene
+        out = np.zeros(len(origins), dtype=bool)
+        if len(origins) == 0 or scene is None:
+            self.count_rays(len(origins))
+            return out
+        origins, dirs = float_rows(origins, dirs)
+        dists = np.ascontiguousarray(dists, dtype=np.float64)
+        self._split(len(origins), lambda a, b: _occlusions(scene.handle, origins[a:b], dirs[a:b], dists[a:b],
+                                                           out[a:b]))
+        return out
 
     def shading_normal(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         """(n,3) shading_normal1 at triangles `prim (n,)`, barycentrics `u, v (n,)`."""
@@ -415,12 +406,6 @@ class Accelerator:
 def _table(parts: list[np.ndarray], empty: tuple[int, ...]) -> np.ndarray:
     """The per-triangle arrays `parts` of each object end to end, C-contiguous float64."""
     return np.ascontiguousarray(np.concatenate(parts), dtype=np.float64) if parts else np.zeros(empty)
-
-
-# embreex's output arrays that _decoded reads, and their types
-# embreex's output arrays: the name _decoded gives each, its key and its type.
-_RAW = {"raw_geom": ("geomID", "i4"), "raw_prim": ("primID", "i4"), "raw_tfar": ("tfar", "f4"),
-        "raw_u": ("u", "f4"), "raw_v": ("v", "f4")}
 
 
 @inline
@@ -508,25 +493,44 @@ def surface_point1(corners, min_barycentric, prim, u, v):
             b0 * corners[prim, 0, 2] + b1 * corners[prim, 1, 2] + b2 * corners[prim, 2, 2])
 
 
-@named_kernel("void", HIT_TYPES, GEOMETRY_TYPES, {name: f"{code}[::1]" for name, (_, code) in _RAW.items()},
-              {"origins": "f8[:, ::1]", "members": "i8[::1]"})
-def _decoded(raw_geom, raw_prim, raw_tfar, raw_u, raw_v, origins, members, prim_offset, corners, min_barycentric,
-             out_t, out_obj, out_prim, out_u, out_v, out_points):
-    """Hits from embreex's arrays for rays from `origins (k,3)`: geomID
-    `raw_geom` indexes `members` (object indices), primID `raw_prim` the
-    object's own triangles (global: plus `prim_offset`), the point is
-    surface_point1; a miss (geomID < 0) has t = inf, MISS and the ray's
-    origin."""
-    for i in range(len(raw_geom)):
-        out_u[i], out_v[i] = raw_u[i], raw_v[i]
-        if raw_geom[i] < 0:
+@named_kernel("void", HIT_TYPES, GEOMETRY_TYPES, CAST_TYPES)
+def _cast(scene, origins, dirs, dists, members, prim_offset, corners, min_barycentric,
+          out_t, out_obj, out_prim, out_u, out_v, out_points):
+    """Closest hits of rays `origins, dirs (k,3)` in Embree scene `scene`,
+    within `dists (k,)` (empty: unbounded): geomID indexes `members`
+    (object indices), primID the object's own triangles (global: plus
+    `prim_offset`), the point is surface_point1; a miss has t = inf, MISS
+    and the ray's origin."""
+    floats, words, address = ray_record()
+    bounded = len(dists) > 0
+    for i in range(len(origins)):
+        far = dists[i] if bounded else np.inf
+        geom, prim, t, u, v = intersect1(scene, floats, words, address, row(origins, i), row(dirs, i), far)
+        out_u[i], out_v[i] = u, v
+        if geom < 0:
             out_t[i], out_obj[i], out_prim[i] = np.inf, MISS, MISS
             set_row(out_points, i, row(origins, i))
             continue
-        obj = members[raw_geom[i]]
-        face = raw_prim[i] + prim_offset[obj]
-        out_t[i], out_obj[i], out_prim[i] = raw_tfar[i], obj, face
-        set_row(out_points, i, surface_point1(corners, min_barycentric, face, out_u[i], out_v[i]))
+        obj = members[geom]
+        face = prim + prim_offset[obj]
+        out_t[i], out_obj[i], out_prim[i] = t, obj, face
+        set_row(out_points, i, surface_point1(corners, min_barycentric, face, u, v))
+
+
+@kernel("void(u8, f8[:, ::1], f8[:, ::1], f8[::1], b1[::1])")
+def _occlusions(scene, origins, dirs, dists, out):
+    """out (k,): whether anything in Embree scene `scene` lies within
+    `dists (k,)` along each ray; in packets of eight, which take half the
+    time of single rays on 1920x1080's shadow rays (benchmarks/passes.py)."""
+    floats, words, valid, address, valid_address = packet_record()
+    n = len(origins)
+    for start in range(0, n, PACKET):
+        count = min(PACKET, n - start)
+        for k in range(count):
+            set_packet_ray(floats, words, valid, k, row(origins, start + k), row(dirs, start + k), dists[start + k])
+        occluded8(scene, floats, valid, address, valid_address, count)
+        for k in range(count):
+            out[start + k] = packet_blocked(floats, k)
 
 
 @kernel("void(i8[::1], i8[::1], f8[:, ::1], i8[::1], b1[::1], i8[::1], f8[:, ::1], b1[::1])")

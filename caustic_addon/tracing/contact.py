@@ -53,18 +53,11 @@ class _Subscene:
     object indices, in geomID order."""
 
     def __init__(self, accel, members: list[int]):
-        view = accel.view_of(np.asarray(members, dtype=np.int64))
-        self.accel, self.embree, self.members = accel, view.embree, view.objects
+        self.accel, self.view = accel, accel.view_of(np.asarray(members, dtype=np.int64))
 
     def closest(self, origins: np.ndarray, dirs: np.ndarray, dists: np.ndarray) -> Hits:
         """Closest hits within `dists (n,)` of rays `origins, dirs (n,3)`, in the accelerator's indices."""
-        self.accel.count_rays(len(origins))
-        if len(origins) == 0:
-            return self.accel.as_hits({}, origins, self.members)
-        raw = self.embree.run(np.ascontiguousarray(origins, dtype=np.float32),
-                              np.ascontiguousarray(dirs, dtype=np.float32),
-                              dists=np.ascontiguousarray(dists, dtype=np.float32), output=1)
-        return self.accel.as_hits(raw, origins, self.members)
+        return self.accel.closest_in(self.view, origins, dirs, dists)
 
 
 class Contacts:

@@ -1,9 +1,10 @@
 """Run in a fresh interpreter with BLENDER_USER_RESOURCES set: install the
 extension zip given as argv[1] through Blender's own extension system, prove
-its embreex, numba and llvmlite wheels are the ones imported (the venv has
-its own copies) and that numba compiles with them, count the engine's
-kernels loaded from the zip's compiled ones and those compiled here, render
-a small caustic scene, and print one line of JSON for the test to read."""
+its embreex (and the Embree library in its wheel), numba and llvmlite
+wheels are the ones imported (the venv has its own copies) and that numba
+compiles with them, count the engine's kernels loaded from the zip's
+compiled ones and those compiled here, render a small caustic scene, and
+print one line of JSON for the test to read."""
 
 import glob
 import importlib.machinery
@@ -68,6 +69,7 @@ print(json.dumps({
     "enabled": MODULE in bpy.context.preferences.addons,
     "addon_file": sys.modules[MODULE].__file__,
     "embreex_file": embreex.__file__,
+    "embree_library": str(sys.modules[MODULE + ".caustic_addon.tracing.embree"].library_path()),
     "numba_file": numba.__file__,
     "numba_extension": numba._helperlib.__file__,
     "llvmlite_file": llvmlite.__file__,

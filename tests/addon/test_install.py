@@ -3,6 +3,7 @@ its platform's wheels and, for this platform, its compiled kernels, and
 Blender's extension system installs one into a throw-away user folder,
 where the engine runs on the zip's embreex and numba and compiles nothing."""
 
+import fnmatch
 import json
 import os
 import subprocess
@@ -13,6 +14,8 @@ from pathlib import Path
 
 import pytest
 from test_manifest import MANIFEST, platform_of
+
+from caustic_addon.tracing.embree import LIBRARY_PLACES
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
@@ -43,6 +46,19 @@ def test_each_zip_carries_the_wheels_of_its_platform_and_no_other(zips):
         assert kernels == ({"py311", "py313"} if platform == "linux-x64" else set()), platform
 
 
+def test_each_zip_s_embreex_wheel_carries_embree_where_the_engine_loads_it_from(zips):
+    """The engine casts through the libembree4 of embreex's wheel
+    (tracing/embree.py): exactly one file of each platform's wheels sits
+    where it looks."""
+    for platform, path in zips.items():
+        with zipfile.ZipFile(path) as archive:
+            for name in (n for n in archive.namelist() if Path(n).name.startswith("embreex-")):
+                with zipfile.ZipFile(archive.open(name)) as wheel:
+                    found = [n for n in wheel.namelist() for folder, pattern in LIBRARY_PLACES
+                             if fnmatch.fnmatch(n, f"{folder}/{pattern}") and "/" not in n[len(folder) + 1:]]
+                assert len(found) == 1, (platform, name, found)
+
+
 def test_zip_installs_with_its_wheels_and_renders(tmp_path, zips):
     user = tmp_path / "user"
     env = dict(os.environ, BLENDER_USER_RESOURCES=str(user))
@@ -52,7 +68,8 @@ def test_zip_installs_with_its_wheels_and_renders(tmp_path, zips):
     report = json.loads(next(line for line in run.stdout.splitlines()[::-1] if line.startswith("{")))
     assert report["installed"] == ["FINISHED"] and report["enabled"]
     assert Path(report["addon_file"]).is_relative_to(user / "extensions" / "user_default" / "caustics")
-    for module in ("embreex_file", "numba_file", "numba_extension", "llvmlite_file", "llvmlite_library"):
+    for module in ("embreex_file", "embree_library", "numba_file", "numba_extension", "llvmlite_file",
+                   "llvmlite_library"):
         assert Path(report[module]).is_relative_to(report["site_packages"]), (module, report[module])
     assert Path(report["site_packages"]).is_relative_to(user)
     # Blender picked the wheels of this Python out of the zip's two, and they

@@ -472,8 +472,8 @@ def test_rays_touching_vertices_from_outside_stay_outside():
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "Embree's triangle test is not watertight, even in the robust mode that embreex 4's "
-    "EmbreeScene() (the Accelerator's) defaults to: of the rays from the lamp aimed exactly at the "
+    "Embree's triangle test is not watertight, even in the robust mode the Accelerator's scenes "
+    "are built in (tracing/embree.py): of the rays from the lamp aimed exactly at the "
     "near-side vertices of the 128x64 ball lens 90 of 3713, and of those at edge midpoints 84 of "
     "11264, pass through the front surface and meet the back face from inside (a 'phantom exit'; "
     "with robust=False it is 737 and 901). The transport survives it: Accelerator.intersect passes "
