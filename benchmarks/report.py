@@ -228,6 +228,17 @@ def animation(d: dict) -> Table:
             "wall a frame", "CPU a frame"], rows
 
 
+def farm(d: dict) -> Table:
+    rows = [["one local Render Caustic Animation of the 6 frames", seconds(d["local_run_s"]), NONE],
+            ["a process start alone (bpy, the add-on, the file)", seconds(d["process_start_s"]), NONE]]
+    for chunk_size, r in d["one_worker"].items():
+        chunks = f"{r['chunks']} chunk{'s' * (r['chunks'] > 1)}"
+        rows.append([f"the job on one Worker, {chunks} of {chunk_size}", seconds(r["job_s"]),
+                     seconds(r["overhead_per_chunk_s"])])
+    rows.append(["the job on two Workers, chunks of 2", seconds(d["two_workers_chunks_of_2_s"]), NONE])
+    return ["run", "wall", "over the local run, a chunk"], rows
+
+
 def allocator(d: dict) -> Table:
     names = {"default": "glibc's default", "engine": "the engine's setting"}
     rows = [[blender, names.get(setting, setting), seconds(f["seconds_per_frame"]), seconds(f["cpu_seconds_per_frame"]),
@@ -357,7 +368,7 @@ def generic(d: dict) -> Table:
 FORMATTERS: dict[str, Callable[[dict], Table]] = {
     "accuracy": accuracy, "cycles_accuracy": cycles_accuracy, "mitsuba_folds": mitsuba_folds,
     "speed": speed, "passes": passes, "bvh_build": bvh_build, "beams_at_scale": beams_at_scale, "memory": memory,
-    "first_render": first_render, "animation": animation, "allocator": allocator,
+    "first_render": first_render, "animation": animation, "farm": farm, "allocator": allocator,
     "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass, "through_glass": through_glass,
     "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "world_paths": world_paths,
     "flicker": flicker, "gallery": gallery,
@@ -378,6 +389,7 @@ SECTIONS = [
         ("memory", "Memory against photon count"),
         ("first_render", "The first render after installing"),
         ("animation", "Animated caustics in Blender"),
+        ("farm", "The render farm's overhead per chunk"),
         ("allocator", "The engine's malloc setting"),
     ]),
     ("Features", [

@@ -5,6 +5,8 @@ frames written; a second Esc stops that frame too. A frame whose
 geometry, lamps and settings of the lamp pass are those of the frame
 before reuses its maps (jobs.MAP_CACHE keeps the last scene's). The scene's current frame is put back."""
 
+import time
+
 import bpy
 
 from ..export import InputError, read_scene, render_settings
@@ -13,7 +15,7 @@ from ..writeback.images import show_image, write_image
 from ..writeback.output import OutputError, check_writable, frame_paths, frame_range, save_frame
 from ..writeback.results import RESULT_IMAGE, write_result
 from .engine_run import EngineOperator
-from .frame_range import FrameRange, frames_text
+from .frame_range import FrameRange, frames_text, print_saved
 
 
 class CAUSTIC_OT_render_animation(FrameRange, EngineOperator, bpy.types.Operator):
@@ -53,10 +55,13 @@ class CAUSTIC_OT_render_animation(FrameRange, EngineOperator, bpy.types.Operator
         context = bpy.context
         # the frame for the format's writer; the last frame's image and passes are kept once the run ends
         image = write_image(RESULT_IMAGE, job.result.image, pack=False)
+        saving = time.perf_counter()
         try:
             save_frame(context.scene, context.view_layer.name, image, job.result, self._paths[frame])
         except OutputError as exc:
             raise StepError(f"Frame {frame} {exc}") from exc
+        if bpy.app.background:
+            print_saved(self._paths[frame], job.seconds, time.perf_counter() - saving)
         self._warn(job.result.warnings)
         self._reused += bool(job.result.stats["maps_cached"])
         self._seconds += job.seconds

@@ -13,6 +13,17 @@ def frames_text(frames: list[int]) -> str:
     return f"frame {frames[0]}" if len(frames) == 1 else f"frames {frames[0]}-{frames[-1]}"
 
 
+def _clock(seconds: float) -> str:
+    return f"{int(seconds // 60):02d}:{seconds % 60:05.2f}"
+
+
+def print_saved(path: str, seconds: float, saving: float) -> None:
+    """The lines Blender prints for a frame written in the background,
+    which farm managers count frames by (Flamenco's blender-render command)."""
+    print(f"Saved: '{path}'")
+    print(f"Time: {_clock(seconds + saving)} (Saving: {_clock(saving)})", flush=True)
+
+
 class FrameRange:
     """Mixin for an EngineOperator over frames; `_begin` when its runner is
     made, `_read_frame` in each frame's preparation, `_finish` in `_done`."""

@@ -6,14 +6,12 @@ the paper's scene script, run as Blender would run it."""
 import importlib.util
 import json
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import bpy
 import numpy as np
-import pytest
 
 import blender_scenes as scenes
 
@@ -105,59 +103,3 @@ def test_chunks_of_a_frame_range_give_the_files_of_one_run(tmp_path):
                            f"frame_end={end})", cpus)
     chunks = {name: (tmp_path / "chunks" / name).read_bytes() for name in sorted(os.listdir(tmp_path / "chunks"))}
     assert chunks == whole
-
-
-# Flamenco's job compiler API, as far as the job type uses it (flamenco.blender.org, "Job Types").
-FLAMENCO_HARNESS = r"""
-function frameChunker(frames, size) {
-    const [first, last] = frames.split("-").map(Number);
-    const chunks = [];
-    for (let start = first; start <= last; start += size) {
-        const end = Math.min(start + size - 1, last);
-        chunks.push(start == end ? `${start}` : `${start}-${end}`);
-    }
-    return chunks;
-}
-const author = {
-    Task: (name, type) => ({ name, type, commands: [], addCommand(command) { this.commands.push(command); } }),
-    Command: (type, parameters) => ({ type, parameters }),
-};
-const job = { settings: JSON.parse(process.argv[1]), tasks: [], addTask(task) { this.tasks.push(task); } };
-compileJob(job);
-console.log(JSON.stringify({ label: JOB_TYPE.label, tasks: job.tasks }));
-"""
-
-
-def flamenco_tasks(settings):
-    """The tasks Flamenco compiles from examples/flamenco/caustics.js for a job of `settings`."""
-    job_type = (REPO / "examples" / "flamenco" / "caustics.js").read_text()
-    run = subprocess.run(["node", "-e", job_type + FLAMENCO_HARNESS, json.dumps(settings)],
-                         capture_output=True, text=True, timeout=60)
-    assert run.returncode == 0, run.stderr
-    return json.loads(run.stdout)["tasks"]
-
-
-@pytest.mark.skipif(shutil.which("node") is None, reason="needs Node.js to run the Flamenco job type")
-def test_the_flamenco_job_type_makes_a_task_per_chunk_that_renders_it(tmp_path):
-    from test_animation import moving_glass
-    settings = dict(mode="caustics", frames="1-3", chunk_size=2, render_output_path="//frames/it's_####",
-                    bake_folder="//caustic_bake/", blendfile="/farm/shot.blend")
-    tasks = flamenco_tasks(settings)
-    assert [task["name"] for task in tasks] == ["caustics-1-2", "caustics-3"]
-    for task in tasks:
-        (command,) = task["commands"]
-        assert command["type"] == "blender-render" and command["parameters"]["blendfile"] == "/farm/shot.blend"
-    moving_glass(16, 12)
-    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "shot.blend"))
-    for task in tasks:
-        flag, expression = task["commands"][0]["parameters"]["args"]
-        assert flag == "--python-expr"
-        exec(expression, {})
-    assert sorted(os.listdir(tmp_path / "frames")) == [f"it's_{f:04d}.exr" for f in (1, 2, 3)]
-
-    baking = flamenco_tasks(dict(settings, mode="bake"))
-    args = baking[1]["commands"][0]["parameters"]["args"]
-    assert args[2:] == ["--render-output", "//frames/it's_####", "--frame-start", "3", "--frame-end", "3",
-                        "--render-anim"]
-    exec(args[1], {})
-    assert sorted(os.listdir(tmp_path / "caustic_bake")) == ["Floor_0003.exr"]
