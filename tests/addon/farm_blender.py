@@ -41,9 +41,11 @@ def render_frames(bpy, spec: str) -> None:
         start = time.perf_counter()
         scene.frame_start = scene.frame_end = frame
         bpy.ops.render.render(animation=True)
-        seconds = time.perf_counter() - start
-        print(f"Saved: '{bpy.path.abspath(scene.render.frame_path(frame=frame))}'")
-        print(f"Time: {int(seconds // 60):02d}:{seconds % 60:05.2f} (Saving: 00:00.00)", flush=True)
+        if bpy.app.version >= (5, 0, 0):
+            # Blender 5's bpy module logs these lines through a logger it does not print; 4.x's prints them
+            seconds = time.perf_counter() - start
+            print(f"Saved: '{bpy.path.abspath(scene.render.frame_path(frame=frame))}'")
+            print(f"Time: {int(seconds // 60):02d}:{seconds % 60:05.2f} (Saving: 00:00.00)", flush=True)
 
 
 def main(argv: list[str]) -> int:
