@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -51,15 +50,6 @@ def many_balls(count: int) -> Scene:
                  camera=Camera.look_at((0.0, -2.0 * half, 2.0 * half), (0.0, 0.0, 0.0), pixx=320, pixy=240))
 
 
-def best_of(repeats: int, work) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        work()
-        times.append(time.perf_counter() - start)
-    return min(times)
-
-
 def through_embreex(meshes) -> None:
     scene = rtcore_scene.EmbreeScene()
     for mesh in meshes:
@@ -78,11 +68,11 @@ def measure(scene, settings: RenderSettings, repeats: int) -> dict:
         render(scene, settings)
     figures = {"triangles": sum(len(m.triangles) for m in meshes), "objects": len(meshes),
                "rays": sum(len(b) for b in batches),
-               "embreex_build_s": best_of(repeats, lambda: through_embreex(meshes))}
+               "embreex_build_s": record.fastest(repeats, lambda: through_embreex(meshes))}
     for quality in QUALITIES:
         replay = casts.Replay(scene.objects, batches, quality=quality)
         try:
-            figures[quality] = {"build_s": best_of(repeats, lambda: directly(meshes, quality)),
+            figures[quality] = {"build_s": record.fastest(repeats, lambda: directly(meshes, quality)),
                                 "casts_s": replay.seconds("direct1", repeats=repeats)}
         finally:
             replay.close()

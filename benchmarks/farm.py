@@ -46,15 +46,6 @@ from test_animation import moving_glass  # noqa: E402
 RENDER = "import bpy; bpy.ops.caustic.render_animation(filepath='//local/glass_####')"
 
 
-def best(repeats: int, work) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        work()
-        times.append(time.perf_counter() - start)
-    return min(times)
-
-
 def local(blend: str, expression: str) -> None:
     subprocess.run([sys.executable, str(farm.HERE / "farm_blender.py"), "-b", blend, "--python-expr", expression],
                    check=True, capture_output=True, timeout=600)
@@ -87,18 +78,19 @@ def main() -> None:
             blend = str(the_farm.shared / "shot.blend")
             bpy.ops.wm.save_as_mainfile(filepath=blend)
             local(blend, RENDER)  # the kernels compiled for this engine, once
-            figures = {"local_run_s": best(args.repeats, lambda: local(blend, RENDER)),
-                       "process_start_s": best(args.repeats, lambda: local(blend, "pass")), "one_worker": {}}
+            figures = {"local_run_s": record.fastest(args.repeats, lambda: local(blend, RENDER)),
+                       "process_start_s": record.fastest(args.repeats, lambda: local(blend, "pass")),
+                       "one_worker": {}}
             time.sleep(6)  # the Worker has signed on
             for chunk_size in (6, 2, 1):
-                seconds = best(args.repeats, lambda: job_seconds(the_farm, blend, chunk_size))
+                seconds = record.fastest(args.repeats, lambda: job_seconds(the_farm, blend, chunk_size))
                 chunks = 6 // chunk_size
                 figures["one_worker"][chunk_size] = {
                     "chunks": chunks, "job_s": seconds,
                     "overhead_per_chunk_s": (seconds - figures["local_run_s"]) / chunks}
             the_farm.start_worker("worker-2")
             time.sleep(6)
-            figures["two_workers_chunks_of_2_s"] = best(args.repeats, lambda: job_seconds(the_farm, blend, 2))
+            figures["two_workers_chunks_of_2_s"] = record.fastest(args.repeats, lambda: job_seconds(the_farm, blend, 2))
         finally:
             the_farm.close()
             addon.unregister()

@@ -3,6 +3,7 @@ stamped with when, where and at which commit they were measured.
 
     from benchmarks import record
     record.write("speed", {"photon_pass_s": 0.67, ...})
+    record.fastest(3, lambda: render(scene, settings))  # seconds, the best of 3
 
 `write` puts "date" (UTC, minutes), "machine" (CPU model, cores, OS,
 Python) and "commit" (`git rev-parse --short HEAD`, "+dirty" when tracked
@@ -16,12 +17,23 @@ import json
 import os
 import platform
 import subprocess
+import time
 from datetime import datetime, timezone
 from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parent / "results"
 REPO = RESULTS.parents[1]
 STAMP = ("date", "machine", "commit")
+
+
+def fastest(repeats: int, work) -> float:
+    """The seconds of the fastest of `repeats` calls of `work()`."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        work()
+        times.append(time.perf_counter() - start)
+    return min(times)
 
 
 def machine() -> str:
