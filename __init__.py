@@ -1,10 +1,10 @@
-"""Caustics for Blender: registers the add-on's properties, operators, panels
-and the handlers that keep its images right through undo. The rendering engine
-is `caustic_addon`, which never imports bpy."""
+"""Caustics for Blender: registers the add-on's properties, operators, panels,
+the handlers that keep its images right through undo and Live's. The rendering
+engine is `caustic_addon`, which never imports bpy."""
 
-from . import operators, panels, properties, writeback
+from . import live, operators, panels, properties, writeback
 
-_MODULES = (properties, operators, writeback, panels)
+_MODULES = (properties, operators, writeback, live, panels)
 
 
 def register():

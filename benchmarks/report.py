@@ -239,6 +239,14 @@ def farm(d: dict) -> Table:
     return ["run", "wall", "over the local run, a chunk"], rows
 
 
+def live(d: dict) -> Table:
+    rows = [[name, f"{f['triangles']:,}", number(f["updates_per_s"], 2), seconds(f["latency_median_s"]),
+             seconds(f["latency_p95_s"]), f"{f['main_thread_ms_median']:.0f} ms", f"{f['refine_main_thread_ms']:.0f} ms",
+             percent(f["preview_error"])] for name, f in d["scenes"].items()]
+    return ["scene", "triangles", "previews a second", "latency, median", "p95", "main thread, a preview",
+            "main thread, the refine", "preview's error"], rows
+
+
 def allocator(d: dict) -> Table:
     names = {"default": "glibc's default", "engine": "the engine's setting"}
     rows = [[blender, names.get(setting, setting), seconds(f["seconds_per_frame"]), seconds(f["cpu_seconds_per_frame"]),
@@ -368,7 +376,7 @@ def generic(d: dict) -> Table:
 FORMATTERS: dict[str, Callable[[dict], Table]] = {
     "accuracy": accuracy, "cycles_accuracy": cycles_accuracy, "mitsuba_folds": mitsuba_folds,
     "speed": speed, "passes": passes, "bvh_build": bvh_build, "beams_at_scale": beams_at_scale, "memory": memory,
-    "first_render": first_render, "animation": animation, "farm": farm, "allocator": allocator,
+    "first_render": first_render, "animation": animation, "live": live, "farm": farm, "allocator": allocator,
     "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass, "through_glass": through_glass,
     "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "world_paths": world_paths,
     "flicker": flicker, "gallery": gallery,
@@ -389,6 +397,7 @@ SECTIONS = [
         ("memory", "Memory against photon count"),
         ("first_render", "The first render after installing"),
         ("animation", "Animated caustics in Blender"),
+        ("live", "Live caustics while the glass is dragged"),
         ("farm", "The render farm's overhead per chunk"),
         ("allocator", "The engine's malloc setting"),
     ]),

@@ -5,7 +5,7 @@ visibility and holdout, as Cycles reads them)."""
 
 from __future__ import annotations
 
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from typing import Optional
 
 import bpy
@@ -133,7 +133,7 @@ def object_visibility(instance, view_layer) -> Visibility:
 
 
 def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surfaces: dict,
-                 warnings: list[str]) -> list[tuple[Object, Optional[str]]]:
+                 warnings: list[str], meshes: Optional[dict] = None) -> list[tuple[Object, Optional[str]]]:
     """[(engine Object in world space, name of its material or None)]: one
     for each material the mesh's triangles use, named `name` if there is
     one and "name [material]" if there are several, which are then parts of
@@ -142,9 +142,15 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
     read, and warned about, once. A glass or mirror with no faces, glass
     scaled to 0 along an axis, and an object scaled to nothing are left out
     with a warning that names them; faces an object's scale flattens to no
-    area are dropped."""
-    with evaluated_mesh(ob) as mesh:
-        local, material_index, uv_maps = _local_mesh(mesh)
+    area are dropped. `meshes` keeps each object's mesh in object space
+    by `name` between reads, for a caller that drops those that changed
+    (Live): a mesh found there, of the same object, is not read again."""
+    uid = ob.original.session_uid
+    kept = meshes.get(name) if meshes is not None else None
+    with evaluated_mesh(ob) if kept is None or kept[0] != uid else nullcontext() as mesh:
+        local, material_index, uv_maps = _local_mesh(mesh) if mesh is not None else kept[1:]
+        if meshes is not None:
+            meshes[name] = (uid, local, material_index, uv_maps)
         if local is None:
             _warn_faceless(ob, name, surfaces, warnings)
             return []

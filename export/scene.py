@@ -42,19 +42,20 @@ class SceneRead:
     instanced: set[str] = field(default_factory=set)
 
 
-def read_scene(context, with_camera: bool = True, depsgraph=None) -> SceneRead:
+def read_scene(context, with_camera: bool = True, depsgraph=None, meshes: Optional[dict] = None) -> SceneRead:
     """The engine scene of the context's view layer, as a render sees it,
     or of `depsgraph` when given (one a render is evaluating: its handlers
     read it). Raises InputError if it has no camera (when `with_camera`), no
     light (neither a lamp nor a world) or no receiver. A scene without a
     camera, or a view layer disabled for rendering, which Blender does not
     render, is read as the viewport shows it, and a warning names what a
-    render would see otherwise."""
+    render would see otherwise. `meshes` keeps the meshes read from
+    `depsgraph` between reads (meshes.mesh_objects)."""
     scene, view_layer = (context.scene, context.view_layer) if depsgraph is None else (depsgraph.scene, None)
     if with_camera:
         check_camera(scene)
     if depsgraph is not None:
-        read = _read_objects(scene, depsgraph, with_camera)
+        read = _read_objects(scene, depsgraph, with_camera, meshes=meshes)
     elif scene.camera is not None and view_layer.use:
         check_render_size(scene.render)
         read = read_as_render(scene, view_layer, lambda depsgraph: _read_objects(scene, depsgraph, with_camera))
@@ -81,7 +82,8 @@ def read_scene(context, with_camera: bool = True, depsgraph=None) -> SceneRead:
     return read
 
 
-def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[str]] = None) -> SceneRead:
+def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[str]] = None,
+                  meshes: Optional[dict] = None) -> SceneRead:
     """The camera, lamps and meshes of `depsgraph`; with `renderable`, only
     the objects it names (and instances of them)."""
     camera = read_camera(scene, depsgraph) if with_camera else dummy_camera()
@@ -102,7 +104,8 @@ def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[
             warnings.append(f"'{name}': {ob.type.lower()} objects are not supported; convert it to a mesh")
         elif ob.type == 'MESH' and source.caustic.role != 'IGNORE':
             visibility = object_visibility(inst, depsgraph.view_layer)
-            for obj, material in mesh_objects(ob, name, matrix, visibility, surfaces, warnings):
+            kept = None if inst.is_instance else meshes
+            for obj, material in mesh_objects(ob, name, matrix, visibility, surfaces, warnings, kept):
                 read.scene.objects.append(obj)
                 read.sources[obj.name], read.materials[obj.name] = source.name, material
                 if inst.is_instance:

@@ -9,6 +9,8 @@ import time
 import traceback
 from dataclasses import replace
 
+import numpy as np
+
 from ..caustic_addon import (Cancelled, MapCache, RenderResult, RenderSettings, Scene, SceneError, memory_refusal,
                              render)
 
@@ -33,13 +35,20 @@ def refusal(scene: Scene, settings: RenderSettings, besides: dict[str, tuple[flo
         "Blender's images of the render": (IMAGE_BYTES_PER_PIXEL * pixels, LOWER_RESOLUTION), **(besides or {})})
 
 
+def map_rgba(imap) -> np.ndarray:
+    """(h,w,4) float32 of a map's irradiance, top row first (map row 0 is the chart's lowest y): a bake's image."""
+    rgba = np.ones(imap.shape + (4,), dtype=np.float32)
+    rgba[..., :3] = imap.irradiance()
+    return rgba[::-1]
+
+
 class RenderJob:
     """fraction and stage follow the engine's progress; after the run, either
     `result` is set or `error` holds the message for the user (None when
-    cancelled)."""
+    cancelled). `cache` keeps the maps a later job can reuse."""
 
-    def __init__(self, scene: Scene, settings: RenderSettings):
-        self.scene, self.settings = scene, settings
+    def __init__(self, scene: Scene, settings: RenderSettings, cache: MapCache = MAP_CACHE):
+        self.scene, self.settings, self.cache = scene, settings, cache
         self.fraction, self.stage = 0.0, ""
         self.result: RenderResult | None = None
         self.error: str | None = None
@@ -55,7 +64,7 @@ class RenderJob:
         clock = time.perf_counter()
         try:
             self.result = render(self.scene, self.settings, progress=self._progress, cancel=self._cancel.is_set,
-                                 cache=MAP_CACHE)
+                                 cache=self.cache)
         except Cancelled:
             self.cancelled = True
         except SceneError as exc:

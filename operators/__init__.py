@@ -7,6 +7,7 @@ from .bake import CAUSTIC_OT_bake, CAUSTIC_OT_unbake
 from .bake_animation import CAUSTIC_OT_bake_animation
 from .compare import CAUSTIC_OT_compare_cycles
 from .dispersion import CAUSTIC_OT_toggle_dispersion
+from .live import CAUSTIC_OT_toggle_live
 from .paper_scene import CAUSTIC_OT_add_paper_scene
 from .presets import CAUSTIC_OT_apply_preset
 from .render import CAUSTIC_OT_render
@@ -28,6 +29,7 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory((
     CAUSTIC_OT_apply_preset,
     CAUSTIC_OT_add_paper_scene,
     CAUSTIC_OT_toggle_dispersion,
+    CAUSTIC_OT_toggle_live,
 ))
 
 

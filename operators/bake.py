@@ -15,9 +15,11 @@ from ..writeback.results import record_run
 from .engine_run import EngineOperator
 
 
-def read_for_bake(context, depsgraph=None) -> SceneRead:
-    """The scene to bake (as `depsgraph` evaluates it, if given); InputError if nothing in it casts caustics."""
-    read = read_scene(context, with_camera=False, depsgraph=depsgraph)
+def read_for_bake(context, depsgraph=None, meshes=None) -> SceneRead:
+    """The scene to bake (as `depsgraph` evaluates it, if given, with the
+    meshes kept in `meshes`: export.read_scene); InputError if nothing in it
+    casts caustics."""
+    read = read_scene(context, with_camera=False, depsgraph=depsgraph, meshes=meshes)
     if not read.scene.casters:
         raise InputError("Nothing to bake: no object is transparent or a reflector")
     return read

@@ -1,5 +1,5 @@
 """Caustics in F12 and animation renders with no bake step: with
-Scene.caustic.use_bake_on_render, the render handlers bake each frame's
+Scene.caustic.use_bake_on_render, or Live on, the render handlers bake each frame's
 caustics into the receivers' materials just before the frame renders, so
 EEVEE and Cycles show the current frame's caustic.
 
@@ -24,9 +24,9 @@ from bpy.app.handlers import persistent
 
 from ..export import InputError, render_settings
 from ..export.render_view import ENGINE as READER_ENGINE
-from ..jobs import RenderJob
+from ..jobs import RenderJob, map_rgba
 from ..writeback.images import own_image, write_image
-from ..writeback.bake import IMAGE_PREFIX, bake_maps, map_rgba
+from ..writeback.bake import IMAGE_PREFIX, bake_maps
 from .bake import read_for_bake
 
 
@@ -36,9 +36,12 @@ _baked_ahead = False
 
 def _wanted(scene) -> bool:
     # the add-on's own scene read is a render too: it must not bake
-    if not scene.caustic.use_bake_on_render or scene.render.engine == READER_ENGINE or _baked_ahead:
+    if not (scene.caustic.use_bake_on_render or scene.caustic.use_live) or scene.render.engine == READER_ENGINE \
+            or _baked_ahead:
         return False
     if threading.current_thread() is not threading.main_thread():
+        if not scene.caustic.use_bake_on_render:
+            return False  # Live keeps the current frame's caustic in the materials
         print("Caustics: Bake While Rendering works in command-line renders only; this render uses the "
               "caustics baked before it (in the interface, use Render > Render Image with Caustics or "
               "Render Animation with Caustics)")

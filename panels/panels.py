@@ -7,6 +7,7 @@ import bpy
 from ..operators.paper_scene import CAUSTIC_OT_add_paper_scene
 from ..operators.presets import CAUSTIC_OT_apply_preset
 from ..operators.engine_run import EngineOperator
+from ..live import session as live
 
 
 class CAUSTIC_MT_presets(bpy.types.Menu):
@@ -43,11 +44,37 @@ class CAUSTIC_PT_render(_CausticPanel, bpy.types.Panel):
             col.label(text=f"Light rays traced: {run.last_lamp_rays:,}")
             if run.last_refined:
                 col.label(text=f"  of which refinement added {run.last_refined:,}")
-        row = layout.row(align=True)
-        row.operator("caustic.bake", icon='TEXTURE')
-        row.operator("caustic.bake_animation", text="Animation", icon='RENDER_ANIMATION')
-        row.operator("caustic.unbake", text="", icon='X')
-        layout.prop(props, "use_bake_on_render")
+        draw_bake(layout, props)
+
+
+def draw_bake(layout, props) -> None:
+    """Live, Bake and what they say: the sidebar's and the viewport header's."""
+    layout.prop(props, "use_live", icon='PLAY' if not props.use_live else 'PAUSE', toggle=True)
+    session = live.SESSION
+    if props.use_live and session is not None and session.message:
+        layout.label(text=session.message, icon='ERROR')
+    row = layout.row(align=True)
+    row.operator("caustic.bake", icon='TEXTURE')
+    row.operator("caustic.bake_animation", text="Animation", icon='RENDER_ANIMATION')
+    row.operator("caustic.unbake", text="", icon='X')
+    layout.prop(props, "use_bake_on_render")
+
+
+class CAUSTIC_PT_header(bpy.types.Panel):
+    """The viewport header's Caustics popover."""
+
+    bl_space_type = 'VIEW_3D'
+    bl_region_type = 'HEADER'
+    bl_label = "Caustics"
+
+    def draw(self, context):
+        draw_bake(self.layout, context.scene.caustic)
+
+
+def draw_header(self, context) -> None:
+    """The popover's button in the 3D Viewport's header."""
+    icon = 'LIGHT_SUN' if context.scene.caustic.use_live else 'LIGHT'
+    self.layout.popover(panel="CAUSTIC_PT_header", text="Caustics", icon=icon)
 
 
 class CAUSTIC_PT_photons(_CausticPanel, bpy.types.Panel):

@@ -71,6 +71,10 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
         description="Uniform ambient light that every surface reflects in its color",
         subtype='COLOR', size=3, default=(0.0, 0.0, 0.0), min=0.0, soft_max=1.0)
 
+    use_live: BoolProperty(
+        name="Live",
+        description="Keep the receivers' caustics up to date as you work, in the viewport and in renders",
+        default=False)
     use_bake_on_render: BoolProperty(
         name="Bake While Rendering",
         description="Bake each frame's caustics just before Blender renders it, in command-line renders",

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..export import SceneRead
 from ..export.materials import albedo_socket
+from ..jobs import map_rgba
 from .bake_group import make_group, material_output, unwire, wire
 from .images import write_image
 
@@ -36,13 +37,6 @@ def bakeable(read: SceneRead, names) -> tuple[dict, list[str]]:
         else:
             plan[name] = material
     return plan, warnings
-
-
-def map_rgba(imap) -> np.ndarray:
-    """(h,w,4) float32 of a map's irradiance, top row first (map row 0 is the chart's lowest y)."""
-    rgba = np.ones(imap.shape + (4,), dtype=np.float32)
-    rgba[..., :3] = imap.irradiance()
-    return rgba[::-1]
 
 
 def bake_maps(read: SceneRead, maps) -> tuple[list[str], list[str]]:

@@ -114,10 +114,11 @@ def cycles_frames(tmp_path, name, frames):
     return {frame: file_pixels(tmp_path / name / f"f_{frame}.exr") for frame in frames}
 
 
-def test_bake_while_rendering_gives_each_frame_its_own_caustic(tmp_path):
-    """A Cycles animation render with Bake While Rendering on equals the
-    render of a Bake Animation's sequence, frame by frame, and differs from
-    frame 1's bake held still."""
+@pytest.mark.parametrize("switch", ["use_bake_on_render", "use_live"])
+def test_bake_while_rendering_gives_each_frame_its_own_caustic(tmp_path, switch):
+    """A Cycles animation render with Bake While Rendering, or Live, on
+    equals the render of a Bake Animation's sequence, frame by frame, and
+    differs from frame 1's bake held still."""
     sliding_ball(tmp_path)
     scene = bpy.context.scene
     assert bpy.ops.caustic.bake_animation() == {'FINISHED'}
@@ -128,7 +129,7 @@ def test_bake_while_rendering_gives_each_frame_its_own_caustic(tmp_path):
     held = cycles_frames(tmp_path, "held", [2])
     bpy.ops.caustic.unbake()
 
-    scene.caustic.use_bake_on_render = True
+    setattr(scene.caustic, switch, True)
     scene.frame_set(1)
     live = cycles_frames(tmp_path, "live", [2, 3])
     for frame in (2, 3):

@@ -1,0 +1,201 @@
+"""Live caustics while a user drags the caster: the gallery's scenes
+(benchmarks/gallery.py) built in Blender, Live on, and the caster (the
+water: its height field moved sideways) dragged through 60 positions along
+an arc, as a mouse moves it, one position every 1/30 s.
+
+    .venv/bin/python benchmarks/live.py [--positions 60]
+
+Blender's event loop is played by hand, as the bpy module runs none: at
+each step the caster moves, the depsgraph updates (Live's handler), Live's
+timer runs, and the depsgraph updates again. Recorded per scene:
+
+- latency: seconds from a change to the images that show it (median, p95);
+- updates a second: previews shown over the drag's length;
+- the main thread's milliseconds per update: the scene read and the
+  images' write;
+- the preview's error: relative L2 of the last preview's map against the
+  refined map at the same position, the refined map averaged down to the
+  preview's cells.
+
+Writes benchmarks/results/live.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO / "tests" / "addon"))
+
+import bpy  # noqa: E402
+from mathutils import Vector  # noqa: E402
+
+import conftest  # noqa: E402
+from benchmarks import gallery, record  # noqa: E402
+from caustic_addon import Dielectric, Diffuse, PointLight, Reflector, SunLight  # noqa: E402
+
+SCENES = {"ball lens": gallery.ball_lens, "mirror ring": gallery.mirror_ring, "gem": gallery.dispersive_gem,
+          "wavy pool": gallery.wavy_water}
+STEP_S = 1 / 30
+ARC_M = 0.3
+
+
+def material(name: str, kind: str, **inputs):
+    mat = bpy.data.materials.new(name)
+    if bpy.app.version < (5, 0, 0):
+        mat.use_nodes = True
+    nodes = mat.node_tree.nodes
+    nodes.remove(nodes["Principled BSDF"])
+    shader = nodes.new(kind)
+    for socket, value in inputs.items():
+        shader.inputs[socket].default_value = value
+    mat.node_tree.links.new(shader.outputs[0], nodes["Material Output"].inputs["Surface"])
+    return mat
+
+
+def add_object(obj):
+    """The engine object `obj` (world space) as a Blender mesh object."""
+    mesh = bpy.data.meshes.new(obj.name)
+    vertices, triangles = obj.mesh.vertices, obj.mesh.triangles
+    mesh.vertices.add(len(vertices))
+    mesh.vertices.foreach_set("co", vertices.astype(np.float32).ravel())
+    mesh.loops.add(triangles.size)
+    mesh.loops.foreach_set("vertex_index", triangles.astype(np.int32).ravel())
+    mesh.polygons.add(len(triangles))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, triangles.size, 3, dtype=np.int32))
+    mesh.polygons.foreach_set("loop_total", np.full(len(triangles), 3, dtype=np.int32))
+    mesh.update()
+    if obj.mesh.corner_normals is not None:
+        mesh.shade_smooth()
+    m = obj.material
+    if isinstance(m, Dielectric):
+        mesh.materials.append(material(obj.name, 'ShaderNodeBsdfGlass', IOR=float(m.ior), Roughness=0.0))
+    elif isinstance(m, Reflector):
+        mesh.materials.append(material(obj.name, 'ShaderNodeBsdfGlossy', Roughness=0.0,
+                                       Color=(*np.broadcast_to(m.color, 3).tolist(), 1.0)))
+    else:
+        mesh.materials.append(material(obj.name, 'ShaderNodeBsdfDiffuse',
+                                       Color=(*np.broadcast_to(m.albedo, 3).tolist(), 1.0)))
+    ob = bpy.data.objects.new(obj.name, mesh)
+    bpy.context.scene.collection.objects.link(ob)
+    if isinstance(m, Dielectric) and math.isfinite(m.abbe):
+        ob.caustic.abbe = float(m.abbe)
+    return ob
+
+
+def add_light(light):
+    if isinstance(light, PointLight):
+        data = bpy.data.lights.new("Lamp", 'POINT')
+        data.energy, data.shadow_soft_size = float(light.power), 0.0
+        ob = bpy.data.objects.new("Lamp", data)
+        ob.location = np.asarray(light.position).tolist()
+    elif isinstance(light, SunLight):
+        data = bpy.data.lights.new("Sun", 'SUN')
+        data.energy, data.angle = float(light.strength), 0.0
+        ob = bpy.data.objects.new("Sun", data)
+        down = np.asarray(light.direction, dtype=float)
+        ob.rotation_mode = 'QUATERNION'
+        ob.rotation_quaternion = Vector((-down).tolist()).to_track_quat('Z', 'Y')
+    else:
+        raise TypeError(type(light).__name__)
+    bpy.context.scene.collection.objects.link(ob)
+
+
+def build(make) -> object:
+    """The gallery scene `make()` in a fresh file; returns its caster."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = make()
+    objects = [add_object(obj) for obj in scene.objects]
+    for light in scene.lights:
+        add_light(light)
+    return next(ob for ob, obj in zip(objects, scene.objects) if not isinstance(obj.material, Diffuse))
+
+
+def step(session_module) -> None:
+    bpy.context.view_layer.update()
+    session_module.tick()
+    bpy.context.view_layer.update()
+
+
+def floor_map(name: str) -> np.ndarray:
+    image = bpy.data.images["Caustic Map " + name]
+    w, h = image.size
+    rgba = np.empty(w * h * 4, dtype=np.float32)
+    image.pixels.foreach_get(rgba)
+    return rgba.reshape(h, w, 4)[..., :3].astype(np.float64)
+
+
+def preview_error(preview: np.ndarray, full: np.ndarray) -> float:
+    """Relative L2 of `preview` against `full` averaged down to its cells."""
+    fy, fx = full.shape[0] // preview.shape[0], full.shape[1] // preview.shape[1]
+    h, w = preview.shape[0] * fy, preview.shape[1] * fx
+    coarse = full[:h, :w].reshape(preview.shape[0], fy, preview.shape[1], fx, 3).mean(axis=(1, 3))
+    return float(np.linalg.norm(preview - coarse) / np.linalg.norm(coarse))
+
+
+def drag(session_module, caster, positions: int) -> dict:
+    """Drag `caster` along the arc, then let Live refine."""
+    receiver = next(o.name for o in bpy.data.objects if o.type == 'MESH' and o is not caster)
+    bpy.context.view_layer.update()
+    assert bpy.ops.caustic.toggle_live() == {'FINISHED'}
+    while session_module.SESSION.schedule.shown != "refine":
+        step(session_module)
+        time.sleep(0.005)
+    session = session_module.SESSION
+    session.updates.clear()
+    start = time.perf_counter()
+    for k in range(positions):
+        angle = 2 * math.pi * k / positions
+        caster.location = (ARC_M * math.sin(angle), ARC_M * (1 - math.cos(angle)) / 2, 0.0)
+        due = start + (k + 1) * STEP_S
+        while True:
+            step(session_module)
+            if time.perf_counter() >= due:
+                break
+            time.sleep(0.002)
+    dragged = time.perf_counter() - start
+    while session.schedule.job is not None or session.schedule.pending:
+        step(session_module)
+        time.sleep(0.002)
+    previews = [u for u in session.updates if u.kind == "preview"]
+    preview = floor_map(receiver)
+    while session.schedule.shown != "refine":
+        step(session_module)
+        time.sleep(0.005)
+    refine = [u for u in session.updates if u.kind == "refine"][-1]
+    latency = np.array([u.latency for u in previews])
+    result = dict(
+        triangles=sum(len(o.data.polygons) for o in bpy.data.objects if o.type == 'MESH'),
+        drag_s=dragged, previews=len(previews), updates_per_s=len(previews) / dragged,
+        latency_median_s=float(np.median(latency)), latency_p95_s=float(np.percentile(latency, 95)),
+        main_thread_ms_median=float(np.median([u.main_thread for u in previews]) * 1000),
+        refine_main_thread_ms=refine.main_thread * 1000,
+        preview_error=preview_error(preview, floor_map(receiver)))
+    assert bpy.ops.caustic.toggle_live() == {'FINISHED'}
+    return result
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--positions", type=int, default=60)
+    args = parser.parse_args()
+    addon = conftest.load_addon()
+    addon.register()
+    addon.jobs.kernels.wait()
+    figures = {}
+    for name, make in SCENES.items():
+        figures[name] = drag(addon.live.session, build(make), args.positions)
+        print(name, {k: round(v, 4) if isinstance(v, float) else v for k, v in figures[name].items()}, flush=True)
+    record.write("live", dict(positions=args.positions, step_s=STEP_S, scenes=figures))
+    addon.unregister()
+
+
+if __name__ == "__main__":
+    main()
