@@ -15,7 +15,13 @@ timer runs, and the depsgraph updates again. Recorded per scene:
   images' write;
 - the preview's error: relative L2 of the last preview's map against the
   refined map at the same position, the refined map averaged down to the
-  preview's cells.
+  preview's cells;
+- the process's resident memory over the drag: its growth at the peak and
+  at the end.
+
+Then the ball lens plays 48 frames at 24 fps with Live on, its ball
+keyframed along the arc, and again held still: frames shown a second, and
+how many updates found their maps kept (a still scene's frames are equal).
 
 Writes benchmarks/results/live.json.
 """
@@ -24,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -44,6 +51,7 @@ from caustic_addon import Dielectric, Diffuse, PointLight, Reflector, SunLight  
 SCENES = {"ball lens": gallery.ball_lens, "mirror ring": gallery.mirror_ring, "gem": gallery.dispersive_gem,
           "wavy pool": gallery.wavy_water}
 STEP_S = 1 / 30
+FPS = 24
 ARC_M = 0.3
 
 
@@ -140,9 +148,14 @@ def preview_error(preview: np.ndarray, full: np.ndarray) -> float:
     return float(np.linalg.norm(preview - coarse) / np.linalg.norm(coarse))
 
 
-def drag(session_module, caster, positions: int) -> dict:
-    """Drag `caster` along the arc, then let Live refine."""
-    receiver = next(o.name for o in bpy.data.objects if o.type == 'MESH' and o is not caster)
+def resident_mb() -> float:
+    """This process's resident memory, MB."""
+    with open("/proc/self/statm") as statm:
+        return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e6
+
+
+def live_on(session_module):
+    """Live on, refined once; its session, with no figures yet."""
     bpy.context.view_layer.update()
     assert bpy.ops.caustic.toggle_live() == {'FINISHED'}
     while session_module.SESSION.schedule.shown != "refine":
@@ -150,6 +163,14 @@ def drag(session_module, caster, positions: int) -> dict:
         time.sleep(0.005)
     session = session_module.SESSION
     session.updates.clear()
+    return session
+
+
+def drag(session_module, caster, positions: int) -> dict:
+    """Drag `caster` along the arc, then let Live refine."""
+    receiver = next(o.name for o in bpy.data.objects if o.type == 'MESH' and o is not caster)
+    session = live_on(session_module)
+    resident = [resident_mb()]
     start = time.perf_counter()
     for k in range(positions):
         angle = 2 * math.pi * k / positions
@@ -160,6 +181,7 @@ def drag(session_module, caster, positions: int) -> dict:
             if time.perf_counter() >= due:
                 break
             time.sleep(0.002)
+        resident.append(resident_mb())
     dragged = time.perf_counter() - start
     while session.schedule.job is not None or session.schedule.pending:
         step(session_module)
@@ -177,9 +199,38 @@ def drag(session_module, caster, positions: int) -> dict:
         latency_median_s=float(np.median(latency)), latency_p95_s=float(np.percentile(latency, 95)),
         main_thread_ms_median=float(np.median([u.main_thread for u in previews]) * 1000),
         refine_main_thread_ms=refine.main_thread * 1000,
-        preview_error=preview_error(preview, floor_map(receiver)))
+        preview_error=preview_error(preview, floor_map(receiver)),
+        resident_growth_mb=max(resident) - resident[0], resident_last_mb=resident[-1] - resident[0])
     assert bpy.ops.caustic.toggle_live() == {'FINISHED'}
     return result
+
+
+def playback(session_module, caster, frames: int, moving: bool) -> dict:
+    """Play `frames` frames at FPS with Live on, the caster keyframed along
+    the arc if `moving`, else still: frames shown a second, and how many
+    updates found their maps kept (the still caster's frames are equal)."""
+    scene = bpy.context.scene
+    if moving:
+        for frame in (1, frames):
+            caster.location = (ARC_M * (frame - 1) / (frames - 1), 0.0, 0.0)
+            caster.keyframe_insert("location", frame=frame)
+    scene.frame_start, scene.frame_end = 1, frames
+    scene.frame_set(1)
+    session = live_on(session_module)
+    start = time.perf_counter()
+    for frame in range(2, frames + 1):
+        scene.frame_set(frame)
+        due = start + (frame - 1) / FPS
+        while True:
+            step(session_module)
+            if time.perf_counter() >= due:
+                break
+            time.sleep(0.002)
+    played = time.perf_counter() - start
+    previews = [u for u in session.updates if u.kind == "preview"]
+    assert bpy.ops.caustic.toggle_live() == {'FINISHED'}
+    return dict(frames=frames - 1, played_s=played, shown_per_s=len(previews) / played,
+                maps_kept=sum(u.maps_cached for u in previews))
 
 
 def main() -> None:
@@ -193,7 +244,10 @@ def main() -> None:
     for name, make in SCENES.items():
         figures[name] = drag(addon.live.session, build(make), args.positions)
         print(name, {k: round(v, 4) if isinstance(v, float) else v for k, v in figures[name].items()}, flush=True)
-    record.write("live", dict(positions=args.positions, step_s=STEP_S, scenes=figures))
+    played = {kind: playback(addon.live.session, build(SCENES["ball lens"]), 48, kind == "moving")
+              for kind in ("moving", "still")}
+    print("playback", played, flush=True)
+    record.write("live", dict(positions=args.positions, step_s=STEP_S, scenes=figures, fps=FPS, playback=played))
     addon.unregister()
 
 

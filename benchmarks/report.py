@@ -240,11 +240,15 @@ def farm(d: dict) -> Table:
 
 
 def live(d: dict) -> Table:
-    rows = [[name, f"{f['triangles']:,}", number(f["updates_per_s"], 2), seconds(f["latency_median_s"]),
+    rows = [[f"drag the {name}", f"{f['triangles']:,}", number(f["updates_per_s"], 2), seconds(f["latency_median_s"]),
              seconds(f["latency_p95_s"]), f"{f['main_thread_ms_median']:.0f} ms", f"{f['refine_main_thread_ms']:.0f} ms",
-             percent(f["preview_error"])] for name, f in d["scenes"].items()]
-    return ["scene", "triangles", "previews a second", "latency, median", "p95", "main thread, a preview",
-            "main thread, the refine", "preview's error"], rows
+             percent(f["preview_error"]), f"{f['resident_growth_mb']:.0f} MB"] for name, f in d["scenes"].items()]
+    for kind, f in d.get("playback", {}).items():
+        rows.append([f"play {f['frames']} frames at {d['fps']} fps, the ball {kind}", NONE,
+                     number(f["shown_per_s"], 2), NONE, NONE, NONE, NONE, NONE,
+                     f"maps kept {f['maps_kept']} times"])
+    return ["run", "triangles", "updates a second", "latency, median", "p95", "main thread, a preview",
+            "main thread, the refine", "preview's error", "memory growth"], rows
 
 
 def allocator(d: dict) -> Table:

@@ -1,7 +1,7 @@
 """The Blender scene converted into the engine's: objects, materials, lamps, camera, world and settings."""
 
 from .errors import InputError
-from .scene import SceneRead, read_scene
+from .scene import SceneRead, read_for_bake, read_scene
 from .settings import render_settings
 
-__all__ = ["InputError", "SceneRead", "read_scene", "render_settings"]
+__all__ = ["InputError", "SceneRead", "read_for_bake", "read_scene", "render_settings"]

@@ -82,6 +82,16 @@ def read_scene(context, with_camera: bool = True, depsgraph=None, meshes: Option
     return read
 
 
+def read_for_bake(context, depsgraph=None, meshes=None) -> SceneRead:
+    """The scene to bake (as `depsgraph` evaluates it, if given, with the
+    meshes kept in `meshes`: export.read_scene); InputError if nothing in it
+    casts caustics."""
+    read = read_scene(context, with_camera=False, depsgraph=depsgraph, meshes=meshes)
+    if not read.scene.casters:
+        raise InputError("Nothing to bake: no object is transparent or a reflector")
+    return read
+
+
 def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[str]] = None,
                   meshes: Optional[dict] = None) -> SceneRead:
     """The camera, lamps and meshes of `depsgraph`; with `renderable`, only

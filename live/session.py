@@ -20,26 +20,27 @@ import bpy
 from bpy.app.handlers import persistent
 
 from ..caustic_addon import MapCache
-from ..export import InputError, render_settings
+from ..export import InputError, read_for_bake, render_settings
 from ..export.render_view import ENGINE as READER_ENGINE
 from ..jobs.live import PREVIEW, REFINE, LiveJob, LiveSchedule, preview_settings
-from ..operators.bake import read_for_bake
 from ..operators.engine_run import EngineOperator
 from ..writeback.live import LiveImages, pack_live, remove_live
 from .changes import forget_meshes, moves_caustic, settings_key
 
 # Seconds between the timer's calls while Live is on.
-INTERVAL = 0.02
+INTERVAL = 0.01
 
 
 @dataclass
 class Update:
     """One update shown: its kind, seconds from the first change it shows
-    to its images, and the main thread's seconds for it (read and write)."""
+    to its images, the main thread's seconds for it (read and write), and
+    whether its maps were kept from an earlier update."""
 
     kind: str
     latency: float
     main_thread: float
+    maps_cached: bool
 
 
 @dataclass
@@ -128,7 +129,8 @@ def _finish_update(live: Live) -> None:
     job.drop_maps()
     now = time.perf_counter()
     latency = now - job.changed_at if job.changed_at is not None else float("nan")
-    live.updates = live.updates[-(KEPT_FIGURES - 1):] + [Update(kind, latency, live.read_seconds + now - clock)]
+    live.updates = live.updates[-(KEPT_FIGURES - 1):] + [Update(kind, latency, live.read_seconds + now - clock,
+                                                                       job.result.stats["maps_cached"])]
     for area in bpy.context.screen.areas if bpy.context.screen is not None else ():
         if area.type == 'VIEW_3D':
             area.tag_redraw()

@@ -1,28 +1,19 @@
 """CAUSTIC_OT_bake and CAUSTIC_OT_unbake: each receiver's illumination map
 as a packed float image, shown by its material through one node group (see
-writeback.bake_group); unbake takes all of it out again. In the UI the bake
-runs like Render, with progress and Esc."""
+writeback.bake_group); unbake takes all of it out again, and turns Live
+off. In the UI the bake runs like Render, with progress and Esc."""
 
 import os
 
 import bpy
 
-from ..export import InputError, SceneRead, read_scene, render_settings
+from ..export import InputError, read_for_bake, render_settings
 from ..jobs import JobRunner, RenderJob, StepError
+from ..live import session as live
 from ..writeback.bake import bake_maps, forget_selectors
 from ..writeback.bake_group import baked_nodes, files_on_disk, unwire
 from ..writeback.results import record_run
 from .engine_run import EngineOperator
-
-
-def read_for_bake(context, depsgraph=None, meshes=None) -> SceneRead:
-    """The scene to bake (as `depsgraph` evaluates it, if given, with the
-    meshes kept in `meshes`: export.read_scene); InputError if nothing in it
-    casts caustics."""
-    read = read_scene(context, with_camera=False, depsgraph=depsgraph, meshes=meshes)
-    if not read.scene.casters:
-        raise InputError("Nothing to bake: no object is transparent or a reflector")
-    return read
 
 
 class BakeFrame(EngineOperator):
@@ -75,6 +66,10 @@ class CAUSTIC_OT_unbake(bpy.types.Operator):
         return any(baked_nodes(material) for material in bpy.data.materials)
 
     def execute(self, context):
+        if context.scene.caustic.use_live:
+            context.scene.caustic.use_live = False
+            live.stop()
+            self.report({'INFO'}, "Live is off: it would bake the caustics again at the next change")
         files = sorted({path for material in bpy.data.materials for path in files_on_disk(material)})
         removed = sum(unwire(material) for material in bpy.data.materials)
         forget_selectors()

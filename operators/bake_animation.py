@@ -11,14 +11,13 @@ import os
 
 import bpy
 
-from ..export import InputError, render_settings
+from ..export import InputError, read_for_bake, render_settings
 from ..jobs import JobRunner, RenderJob, StepError, map_rgba
 from ..writeback.bake_group import follow_frames
 from ..writeback.images import working_colorspace
 from ..writeback.output import OutputError, check_saved, check_writable, frame_range, write_float_exr
 from ..writeback.results import record_run
 from ..writeback.bake import IMAGE_PREFIX, bakeable, wire_bakes
-from .bake import read_for_bake
 from .engine_run import EngineOperator
 from .frame_range import FrameRange, frames_text
 

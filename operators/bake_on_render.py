@@ -22,12 +22,11 @@ import threading
 import bpy
 from bpy.app.handlers import persistent
 
-from ..export import InputError, render_settings
+from ..export import InputError, read_for_bake, render_settings
 from ..export.render_view import ENGINE as READER_ENGINE
 from ..jobs import RenderJob, map_rgba
 from ..writeback.images import own_image, write_image
 from ..writeback.bake import IMAGE_PREFIX, bake_maps
-from .bake import read_for_bake
 
 
 # True while a render that start_render began runs: its frames are baked already.

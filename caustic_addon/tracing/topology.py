@@ -2,10 +2,19 @@
 
 from __future__ import annotations
 
+import hashlib
+import threading
+from collections import OrderedDict
+
 import numpy as np
 
 from ..util.rows import row_ids
 from ..util.vectors import cross_rows, length
+
+# open_edges' answers for the last meshes it was asked about.
+_SEEN_KEPT = 16
+_SEEN: OrderedDict = OrderedDict()
+_SEEN_LOCK = threading.Lock()
 
 
 def triangle_normals(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -32,8 +41,40 @@ def open_edges(triangles: np.ndarray, vertices: np.ndarray) -> np.ndarray:
     """(k,2) vertex indices of the edges not shared by exactly two
     triangles. Vertices at the same position count as one, so meshes split
     for UVs or sharp edges still read as closed; triangles that repeat a
-    vertex, and copies of a triangle, are left out."""
-    weld = row_ids(np.round(vertices, 9))
+    vertex, and copies of a triangle, are left out. The answer depends only
+    on which vertices coincide and on the triangles, so the last meshes'
+    answers are kept by those: a mesh that only moved (an animation, Live)
+    is not analysed again."""
+    weld = _weld(vertices)
+    digest = hashlib.sha1(weld.tobytes())
+    digest.update(np.ascontiguousarray(triangles, dtype=np.int64).tobytes())
+    key = digest.digest()
+    with _SEEN_LOCK:
+        if key in _SEEN:
+            _SEEN.move_to_end(key)
+            return _SEEN[key]
+    edges = _open_edges(triangles, weld)
+    with _SEEN_LOCK:
+        _SEEN[key] = edges
+        while len(_SEEN) > _SEEN_KEPT:
+            _SEEN.popitem(last=False)
+    return edges
+
+
+def _weld(vertices: np.ndarray) -> np.ndarray:
+    """(nv,) labels of the vertices, equal where their positions are (to
+    1e-9), numbered in the order they first appear, so that they stay the
+    same when the mesh moves."""
+    ids = row_ids(np.round(vertices, 9))
+    first = np.full(int(ids.max(initial=-1)) + 1, len(ids), dtype=np.int64)
+    np.minimum.at(first, ids, np.arange(len(ids)))
+    rank = np.empty(len(first), dtype=np.int64)
+    rank[np.argsort(first)] = np.arange(len(first))
+    return rank[ids]
+
+
+def _open_edges(triangles: np.ndarray, weld: np.ndarray) -> np.ndarray:
+    """open_edges of `triangles (nt,3)` whose vertices are welded as `weld (nv,)` says."""
     a, b, c = np.sort(weld[triangles], axis=1).T
     # sorted, a triangle that repeats a vertex repeats it in neighbours
     proper = (a != b) & (b != c)

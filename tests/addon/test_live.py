@@ -332,3 +332,39 @@ def test_an_edited_mesh_is_read_again(live):
     parts["ball"].location.x += 0.6  # where the vertices are now, for focus_on_floor
     focus = focus_on_floor(parts["lamp"], parts["ball"])
     assert np.linalg.norm(brightest_point(parts["floor"].active_material)[:2] - focus[:2]) < 0.05
+
+
+def test_unbake_turns_live_off_and_removes_its_caustic(live, reports):
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=20_000)
+    bpy.context.view_layer.update()
+    floor_before = material_state(parts["floor"].active_material)
+    live_on(live, parts)
+    reports()
+    assert bpy.ops.caustic.unbake() == {'FINISHED'}
+    assert "Live is off" in reports()
+    assert not bpy.context.scene.caustic.use_live and live.SESSION is None
+    parts["ball"].location.x = 0.6
+    bpy.context.view_layer.update()
+    assert material_state(parts["floor"].active_material) == floor_before
+
+
+def test_live_waits_while_a_render_runs(live, addon):
+    """While Render, Bake or Compare runs (EngineOperator.running, set by
+    their modal run), Live starts nothing and stops what it runs; it takes
+    the scene up again afterwards."""
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=20_000)
+    session = live_on(live, parts)
+    shown = len(session.updates)
+    running = addon.operators.engine_run.EngineOperator
+    running.running = True
+    try:
+        parts["ball"].location.x = 0.6
+        for _ in range(20):
+            bpy.context.view_layer.update()
+            live.tick()
+            assert session.schedule.job is None
+            time.sleep(0.02)
+    finally:
+        running.running = False
+    pump(live)
+    assert len(session.updates) == shown + 2

@@ -320,3 +320,17 @@ def test_open_edges_are_counted_and_placed():
     scene.objects[1].mesh = Mesh(glass.vertices, glass.triangles[1:], glass.corner_normals[1:])
     warnings = render(scene, quick(lamp_rays=1000)).warnings
     assert [w for w in warnings if w.startswith("'Glass' is not a closed mesh (3 edges have one face or more than two")]
+
+
+def test_open_edges_of_a_moved_mesh_and_of_a_changed_one():
+    """open_edges keeps its answers by which vertices coincide and the
+    triangles: a moved sphere (split at its seam, so vertices coincide) is
+    still closed, and the same sphere with a triangle taken out is not."""
+    sphere = shapes.uv_sphere(1.0, (0.0, 0.0, 0.0), 16, 8)
+    turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    for vertices in (sphere.vertices, sphere.vertices @ turn.T + (3.0, -2.0, 0.5), sphere.vertices * 2.0):
+        assert open_edge_count(sphere.triangles, vertices) == 0
+    opened = sphere.triangles[1:]
+    assert open_edge_count(opened, sphere.vertices) == 3
+    assert open_edge_count(opened, sphere.vertices @ turn.T) == 3
+    assert open_edge_count(sphere.triangles, sphere.vertices) == 0
