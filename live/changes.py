@@ -64,4 +64,3 @@ def settings_key(scene) -> tuple:
     values = tuple(getattr(props, p.identifier) for p in props.bl_rna.properties if p.identifier != "rna_type")
     return tuple(v[:] if hasattr(v, "__len__") and not isinstance(v, str) else v for v in values) + (
         scene.world.name if scene.world is not None else None,)
-

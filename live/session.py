@@ -7,7 +7,10 @@ quiet.
 
 Blender's handlers only take note; `tick`, a timer on the main thread,
 reads the scene, starts the job and writes its images. A run of Render,
-Bake or Compare pauses Live, and Live takes up the scene again after it."""
+Bake or Compare pauses Live, and Live takes up the scene again after it.
+In the background Blender runs no timers, so none is registered there (a
+caller may run `tick` itself): bpy 4.5's module hangs at exit after a file
+is loaded while a Python timer is registered."""
 
 from __future__ import annotations
 
@@ -77,7 +80,7 @@ def start(scene) -> Live:
     _end()
     SESSION = Live(scene.name, settings=settings_key(scene))
     SESSION.changed()
-    if not bpy.app.timers.is_registered(tick):
+    if not bpy.app.background and not bpy.app.timers.is_registered(tick):
         bpy.app.timers.register(tick, first_interval=0.0)
     return SESSION
 
@@ -90,11 +93,16 @@ def _end() -> None:
         SESSION = None
 
 
-def stop() -> None:
-    """Live off: its job stopped, what it added taken out."""
+def _end_timer() -> None:
+    """The session ended and its timer taken off."""
     _end()
     if bpy.app.timers.is_registered(tick):
         bpy.app.timers.unregister(tick)
+
+
+def stop() -> None:
+    """Live off: its job stopped, what it added taken out."""
+    _end_timer()
     remove_live()
 
 
@@ -230,8 +238,6 @@ def register() -> None:
 
 
 def unregister() -> None:
-    _end()
-    if bpy.app.timers.is_registered(tick):
-        bpy.app.timers.unregister(tick)
+    _end_timer()
     for name, handler in _HANDLERS:
         getattr(bpy.app.handlers, name).remove(handler)
