@@ -49,7 +49,7 @@ class CAUSTIC_PT_render(_CausticPanel, bpy.types.Panel):
 
 def draw_bake(layout, props) -> None:
     """Live, Bake and what they say: the sidebar's and the viewport header's."""
-    layout.prop(props, "use_live", icon='PLAY' if not props.use_live else 'PAUSE', toggle=True)
+    layout.operator("caustic.toggle_live", icon='PAUSE' if props.use_live else 'PLAY', depress=props.use_live)
     session = live.SESSION
     if props.use_live and session is not None and session.message:
         layout.label(text=session.message, icon='ERROR')
