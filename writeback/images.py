@@ -57,10 +57,16 @@ def write_image(name: str, rgba: np.ndarray, pack: bool = True):
     image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1], dtype=np.float32).ravel())
     image.update()
     if pack:
-        image.file_format = 'OPEN_EXR'
-        image.pack()
-        image[SERIAL] = _in_memory[image.name] = uuid.uuid4().hex
+        pack_image(image)
     return image
+
+
+def pack_image(image) -> None:
+    """Pack the pixels `image` holds as a float EXR, for undo and saving
+    (write_image)."""
+    image.file_format = 'OPEN_EXR'
+    image.pack()
+    image[SERIAL] = _in_memory[image.name] = uuid.uuid4().hex
 
 
 def write_passes(prefix: str, passes: dict[str, np.ndarray]) -> None:

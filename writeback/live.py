@@ -14,7 +14,7 @@ from mathutils import Matrix
 from ..export import SceneRead
 from .bake import IMAGE_PREFIX, bakeable, wire_bakes
 from .bake_group import _group_image, baked_nodes, unwire
-from .images import OWNER, write_image
+from .images import pack_image, write_image
 
 LIVE = "caustic_live"
 ADDED, REPLACED = "added", "replaced"
@@ -88,11 +88,10 @@ def _live_nodes(material) -> list:
 
 
 def _pack(image) -> None:
-    """Pack `image` if it holds pixels only in memory."""
-    if image is not None and image.packed_file is None and image.has_data:
-        pixels = np.empty(len(image.pixels), dtype=np.float32)
-        image.pixels.foreach_get(pixels)
-        write_image(image[OWNER], pixels.reshape(image.size[1], image.size[0], 4)[::-1], pack=True)
+    """Pack `image` if it holds pixels that are only in memory (a preview
+    written since the last pack)."""
+    if image is not None and image.is_dirty:
+        pack_image(image)
 
 
 def pack_live() -> None:

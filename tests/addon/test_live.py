@@ -368,3 +368,23 @@ def test_live_waits_while_a_render_runs(live, addon):
         running.running = False
     pump(live)
     assert len(session.updates) == shown + 2
+
+
+def test_saving_keeps_the_preview_on_show(live, tmp_path):
+    """A file saved while a preview is shown (refined images are packed,
+    a preview is only in memory) holds the preview's pixels."""
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=20_000)
+    live_on(live, parts)
+    parts["ball"].location.x = 0.6
+    deadline = time.monotonic() + 60
+    while not (live.SESSION.updates[-1].kind == "preview" and live.SESSION.schedule.job is None):
+        assert time.monotonic() < deadline
+        bpy.context.view_layer.update()
+        live.tick()
+        time.sleep(0.01)
+    shown = pixels(image_of(parts["floor"].active_material)[1]).copy()
+    path = str(tmp_path / "preview.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    live.stop()
+    bpy.ops.wm.open_mainfile(filepath=path, load_ui=False)
+    assert np.array_equal(pixels(image_of(bpy.data.materials["Floor"])[1]), shown)
