@@ -6,6 +6,7 @@ visibility and holdout, as Cycles reads them)."""
 from __future__ import annotations
 
 from contextlib import contextmanager, nullcontext
+from dataclasses import dataclass
 from typing import Optional
 
 import bpy
@@ -132,19 +133,32 @@ def object_visibility(instance, view_layer) -> Visibility:
                       transmission=seen("visible_transmission"), shadow=seen("visible_shadow"), holdout=holdout)
 
 
-def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surfaces: dict,
-                 warnings: list[str], meshes: Optional[dict] = None) -> list[tuple[Object, Optional[str]]]:
-    """[(engine Object in world space, name of its material or None)]: one
-    for each material the mesh's triangles use, named `name` if there is
-    one and "name [material]" if there are several, which are then parts of
-    one body; none if the mesh has no faces. `surfaces` holds each
-    material's reading, so that a material shared by several objects is
-    read, and warned about, once. A glass or mirror with no faces, glass
-    scaled to 0 along an axis, and an object scaled to nothing are left out
-    with a warning that names them; faces an object's scale flattens to no
-    area are dropped. `meshes` keeps each object's mesh in object space
-    by `name` between reads, for a caller that drops those that changed
-    (Live): a mesh found there, of the same object, is not read again."""
+@dataclass
+class MeshSource:
+    """An evaluated mesh object as read once, to be placed once or many
+    times (`place`): its mesh in object space, its triangles' materials and
+    UV maps, and its parts, one per material (_material_parts: (material
+    name or None, triangle rows, slot numbers)), whose readings are in the
+    `surfaces` it was read with."""
+
+    name: str
+    original: bpy.types.Object
+    local: Mesh
+    material_index: np.ndarray
+    uv_maps: dict[str, np.ndarray]
+    parts: list[tuple[Optional[str], np.ndarray, list[int]]]
+    textured: bool
+    visible_diffuse: bool
+
+
+def read_source(ob, name: str, surfaces: dict, warnings: list[str],
+                meshes: Optional[dict] = None) -> Optional[MeshSource]:
+    """The MeshSource of evaluated mesh object `ob`, named `name` in
+    warnings; None, with a warning, if it has no faces. `surfaces` holds
+    each material's reading, so that a material shared by several objects
+    is read, and warned about, once. `meshes` keeps each object's mesh in
+    object space by `name` between reads, for a caller that drops those that
+    changed (Live): a mesh found there, of the same object, is not read again."""
     uid = ob.original.session_uid
     kept = meshes.get(name) if meshes is not None else None
     with evaluated_mesh(ob) if kept is None or kept[0] != uid else nullcontext() as mesh:
@@ -153,21 +167,61 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
             meshes[name] = (uid, local, material_index, uv_maps)
         if local is None:
             _warn_faceless(ob, name, surfaces, warnings)
-            return []
-        world = local.transformed(matrix)
-        if np.linalg.det(matrix[:3, :3]) == 0.0:
-            # Mesh.transformed drops them too; the triangles' materials and UVs must follow
-            kept = np.flatnonzero(with_area(world.vertices, local.triangles))
-            if len(kept) == 0:
-                warnings.append(f"'{name}' is scaled to 0, so none of its faces has any area: it was left out")
-                return []
-            local, material_index = local.subset(kept), material_index[kept]
-            uv_maps = {layer: corners[kept] for layer, corners in uv_maps.items()}
-            world = local.transformed(matrix)
+            return None
         parts = _material_parts(ob, material_index, name, warnings)
-    if flattened(matrix, local.vertices):
-        if any(isinstance(engine_material(_surface(m, surfaces, warnings), ob.original.caustic), Dielectric)
-               for m, _, _ in parts):
+    named = []
+    for material, rows, slots in parts:
+        _surface(material, surfaces, warnings)
+        named.append((material.original.name if material is not None else None, rows, slots))
+    return MeshSource(name, ob.original, local, material_index, uv_maps, named,
+                      any(surfaces[key].texture is not None for key, _, _ in named), ob.visible_diffuse)
+
+
+def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surfaces: dict,
+                 warnings: list[str], meshes: Optional[dict] = None) -> list[tuple[Object, Optional[str]]]:
+    """The engine objects of evaluated mesh object `ob` in world space,
+    under `matrix (4,4)` (read_source, then place)."""
+    source = read_source(ob, name, surfaces, warnings, meshes)
+    return [] if source is None else place(source, name, matrix[None], visibility, surfaces, warnings)
+
+
+def place(source: MeshSource, name: str, matrices: np.ndarray, visibility: Visibility, surfaces: dict,
+          warnings: list[str]) -> list[tuple[Object, Optional[str]]]:
+    """[(engine Object in world space, name of its material or None)] of
+    `source` under `matrices (k,4,4)`: one for each material its triangles
+    use, named `name` if there is one and "name [material]" if there are
+    several, which are then parts of one body. k > 1 (an instancer's
+    instances of an untextured mesh) gives each part's mesh once under each
+    matrix, as one object (Mesh.instanced; Object.copies).
+
+    A glass or mirror scaled to 0 along an axis, and an object scaled to
+    nothing, are left out with a warning that names them; faces an
+    object's scale flattens to no area are dropped, and so are instances
+    scaled to 0 along an axis."""
+    local, material_index, uv_maps, parts = source.local, source.material_index, source.uv_maps, source.parts
+    if len(matrices) > 1:
+        singular = np.linalg.det(matrices[:, :3, :3]) == 0.0
+        if np.any(singular):
+            warnings.append(f"'{name}': {int(singular.sum()):,} of its {len(matrices):,} instances are scaled to 0 "
+                            "along an axis: they were left out")
+            matrices = matrices[~singular]
+        if len(matrices) == 0:
+            return []
+    matrix = matrices[0]
+    if len(matrices) == 1 and np.linalg.det(matrix[:3, :3]) == 0.0:
+        # Mesh.transformed drops them too; the triangles' materials and UVs must follow
+        kept = np.flatnonzero(with_area(local.transformed(matrix).vertices, local.triangles))
+        if len(kept) == 0:
+            warnings.append(f"'{name}' is scaled to 0, so none of its faces has any area: it was left out")
+            return []
+        local, material_index = local.subset(kept), material_index[kept]
+        uv_maps = {layer: corners[kept] for layer, corners in uv_maps.items()}
+        parts = [(key, np.searchsorted(kept, np.intersect1d(rows, kept)), slots) for key, rows, slots in parts]
+        parts = [part for part in parts if len(part[1])]
+    world = local.transformed(matrix) if len(matrices) == 1 else None
+    engines = {key: engine_material(surfaces[key], source.original.caustic) for key, _, _ in parts}
+    if flattened(matrix, local.vertices) and len(matrices) == 1:
+        if any(isinstance(engine, Dielectric) for engine in engines.values()):
             warnings.append(f"'{name}' is scaled to 0 along an axis: glass with no thickness bends no light, "
                             "so it was left out")
             return []
@@ -177,9 +231,7 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
         uv_maps = {layer: corners[:, ::-1] for layer, corners in uv_maps.items()}
     several = len(parts) > 1
     objects = []
-    for material, rows, slots in parts:
-        key = material.original.name if material is not None else None
-        _surface(material, surfaces, warnings)
+    for key, rows, slots in parts:
         if surfaces[key].black is not None:
             warnings.append(f"'{name}': material '{key}' (slot {', '.join(map(str, slots))}) {surfaces[key].black}; "
                             "Cycles renders its faces black, and so does the caustic render")
@@ -187,20 +239,24 @@ def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surf
             warnings.append(f"'{name}': its material '{key}' emits light; the caustic render shows it but lights "
                             "nothing with it and casts no caustics from it yet (a light in its place would)")
         part = f"{name} [{key if key is not None else 'no material'}]" if several else name
-        texture = None
+        engine = engines[key]
         if surfaces[key].texture is not None:
-            data = ob.original.data
+            data = source.original.data
             frame = ObjectFrame({layer: np.take(corners, rows, axis=0) for layer, corners in uv_maps.items()},
                                 np.linalg.pinv(matrix), np.array(data.texspace_location[:], dtype=np.float64),
                                 np.array(data.texspace_size[:], dtype=np.float64))
-            texture = bind(surfaces[key].texture, frame, f"'{part}'", warnings)
-        engine = engine_material(surfaces[key], ob.original.caustic, texture)
-        conflict = abbe_conflict(surfaces[key], ob.original.caustic, name, key)
+            engine = engine_material(surfaces[key], source.original.caustic,
+                                     bind(surfaces[key].texture, frame, f"'{part}'", warnings))
+        conflict = abbe_conflict(surfaces[key], source.original.caustic, name, key)
         if conflict is not None and isinstance(engine, Dielectric):
             warnings.append(conflict)
-        objects.append((Object(part, world.subset(rows) if several else world, engine, visibility,
-                               body=name if several else None), key))
-    if not ob.visible_diffuse and any(obj.is_caster for obj, _ in objects):
+        body = name if several else None
+        if world is not None:
+            obj = Object(part, world.subset(rows) if several else world, engine, visibility, body)
+        else:
+            obj = Object.instanced(part, local.subset(rows) if several else local, matrices, engine, visibility, body)
+        objects.append((obj, key))
+    if not source.visible_diffuse and any(obj.is_caster for obj, _ in objects):
         warnings.append(f"'{name}': its Diffuse ray visibility is off, which hides it from Cycles' diffuse "
                         "bounces and the caustics they find through it; the caustic render's light goes from the "
                         "lights, so it still casts its caustic")

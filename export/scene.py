@@ -5,19 +5,20 @@ holds no bpy data, so the engine can run on a worker thread."""
 
 from __future__ import annotations
 
+import collections
 from dataclasses import dataclass, field
 from typing import Optional
 
 import bpy
 import numpy as np
 
-from ..caustic_addon import Scene
+from ..caustic_addon import Scene, Visibility
 from .camera import camera_warnings, check_camera, check_render_size, dummy_camera, read_camera
 from .errors import InputError
 from .lamps import engine_light
 from .materials import Surface
 from .matrices import numpy_matrix
-from .meshes import mesh_objects, object_visibility
+from .meshes import MeshSource, mesh_objects, object_visibility, place, read_source
 from .render_view import adaptive_subdivision, read_as_render, renderable_objects, viewport_differences
 from .world import engine_world
 
@@ -95,11 +96,25 @@ def read_for_bake(context, depsgraph=None, meshes=None) -> SceneRead:
 def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[str]] = None,
                   meshes: Optional[dict] = None) -> SceneRead:
     """The camera, lamps and meshes of `depsgraph`; with `renderable`, only
-    the objects it names (and instances of them)."""
+    the objects it names (and instances of them). An instancer's instances
+    of one mesh are read once and placed under all their matrices at once:
+    one engine object per material, named "Object [Instancer]" (Object.copies),
+    or one per instance, "Object [Instancer #n]", where a texture is read
+    per object."""
     camera = read_camera(scene, depsgraph) if with_camera else dummy_camera()
     warnings = camera_warnings(scene) if with_camera else []
     read = SceneRead(Scene(objects=[], lights=[], camera=camera), warnings)
     surfaces: dict[Optional[str], Surface] = {}
+    sources: dict[tuple, tuple[Optional[MeshSource], Visibility]] = {}
+    batches: dict[tuple, list[np.ndarray]] = {}
+
+    def add(objects, source_name: str, instanced: bool) -> None:
+        for obj, material in objects:
+            read.scene.objects.append(obj)
+            read.sources[obj.name], read.materials[obj.name] = source_name, material
+            if instanced:
+                read.instanced.add(obj.name)
+
     for number, inst in enumerate(depsgraph.object_instances):
         ob = inst.object
         source = ob.original
@@ -112,12 +127,23 @@ def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[
             read.sources[name] = source.name
         elif ob.type in UNSUPPORTED_GEOMETRY:
             warnings.append(f"'{name}': {ob.type.lower()} objects are not supported; convert it to a mesh")
-        elif ob.type == 'MESH' and source.caustic.role != 'IGNORE':
+        elif ob.type == 'MESH' and source.caustic.role != 'IGNORE' and not inst.is_instance:
             visibility = object_visibility(inst, depsgraph.view_layer)
-            kept = None if inst.is_instance else meshes
-            for obj, material in mesh_objects(ob, name, matrix, visibility, surfaces, warnings, kept):
-                read.scene.objects.append(obj)
-                read.sources[obj.name], read.materials[obj.name] = source.name, material
-                if inst.is_instance:
-                    read.instanced.add(obj.name)
+            add(mesh_objects(ob, name, matrix, visibility, surfaces, warnings, meshes), source.name, False)
+        elif ob.type == 'MESH' and source.caustic.role != 'IGNORE':
+            key = (inst.parent.original.name, source.name, ob.data.as_pointer())
+            if key not in sources:
+                batch = f"{source.name} [{inst.parent.original.name}]"
+                sources[key] = (read_source(ob, batch, surfaces, warnings),
+                                object_visibility(inst, depsgraph.view_layer))
+            mesh, visibility = sources[key]
+            if mesh is not None and mesh.textured:
+                add(place(mesh, name, matrix[None], visibility, surfaces, warnings), source.name, True)
+            elif mesh is not None:
+                batches.setdefault(key, []).append(matrix)
+    names = collections.Counter(mesh.name for mesh, _ in sources.values() if mesh is not None)
+    for number, (key, matrices) in enumerate(batches.items()):
+        mesh, visibility = sources[key]
+        name = mesh.name if names[mesh.name] == 1 else f"{mesh.name} #{number + 1}"
+        add(place(mesh, name, np.stack(matrices), visibility, surfaces, warnings), mesh.original.name, True)
     return read

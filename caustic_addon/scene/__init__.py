@@ -6,9 +6,9 @@ from .camera import Camera
 from .geometry import Mesh
 from .lights import AreaLight, Light, PointLight, SpotLight, SunLight, World
 from .materials import Dielectric, Diffuse, Material, Reflector, Specular
-from .scene import Object, Scene, Visibility
+from .scene import Instances, Object, Scene, Visibility
 from .settings import RenderSettings
 
-__all__ = ["AreaLight", "Camera", "Dielectric", "Diffuse", "Light", "Material", "Mesh", "Object", "PointLight",
-           "Reflector", "RenderSettings", "Scene", "Specular", "SpotLight", "SunLight", "Visibility", "World", "paper",
-           "shapes", "textures"]
+__all__ = ["AreaLight", "Camera", "Dielectric", "Diffuse", "Instances", "Light", "Material", "Mesh", "Object",
+           "PointLight", "Reflector", "RenderSettings", "Scene", "Specular", "SpotLight", "SunLight", "Visibility", "World",
+           "paper", "shapes", "textures"]

@@ -71,6 +71,36 @@ class Mesh:
             uvs = None if uvs is None else uvs[keep]
         return Mesh(verts, tris, normals, uvs)
 
+    def instanced(self, transforms: np.ndarray) -> "Mesh":
+        """This mesh once under each of `transforms (k,4,4)`, affine and
+        invertible, as one mesh whose copy i is `transformed(transforms[i])`:
+        its vertices and triangles follow copy i-1's. All copies at once, so
+        that an instancer's thousands of instances cost no Python loop."""
+        m = np.asarray(transforms, dtype=np.float64).reshape(-1, 4, 4)
+        k, nv, nt = len(m), len(self.vertices), len(self.triangles)
+        linear = m[:, :3, :3]
+        verts = self.vertices @ linear.transpose(0, 2, 1) + m[:, None, :3, 3]
+        flip = np.flatnonzero(np.linalg.det(linear) < 0.0)
+        tris = np.empty((k, nt, 3), dtype=np.int64)
+        tris[:] = self.triangles
+        tris[flip] = tris[flip, :, ::-1]
+        tris += (np.arange(k, dtype=np.int64) * nv)[:, None, None]
+        normals = uvs = None
+        if self.corner_normals is not None:
+            columns = [linear[:, :, axis] for axis in range(3)]
+            cofactor = np.stack([np.cross(columns[1], columns[2]), np.cross(columns[2], columns[0]),
+                                 np.cross(columns[0], columns[1])], axis=2)
+            cofactor[flip] *= -1.0
+            normals = (self.corner_normals.reshape(-1, 3) @ cofactor.transpose(0, 2, 1)).reshape(k, nt, 3, 3)
+            normals[flip] = normals[flip, :, ::-1]
+            normals /= np.maximum(np.sqrt(np.einsum("...i,...i->...", normals, normals))[..., None], 1e-300)
+        if self.corner_uvs is not None:
+            uvs = np.empty((k, nt, 3, 2), dtype=np.float64)
+            uvs[:] = self.corner_uvs
+            uvs[flip] = uvs[flip, :, ::-1]
+        return Mesh(verts.reshape(-1, 3), tris.reshape(-1, 3), None if normals is None else normals.reshape(-1, 3, 3),
+                    None if uvs is None else uvs.reshape(-1, 3, 2))
+
 
 def cofactor_matrix(m: np.ndarray) -> np.ndarray:
     """(3,3) cofactor matrix of `m (3,3)`: its columns are the cross

@@ -34,17 +34,46 @@ class Visibility:
 
 
 @dataclass
+class Instances:
+    """One mesh under many affine, invertible transforms: `mesh` in object
+    space, `transforms (k,4,4)` object to world. Embree keeps one BVH of the
+    mesh for all of them (tracing.embree.Instances), and the first copy
+    speaks for all where a body is analysed (holes, winding)."""
+
+    mesh: Mesh
+    transforms: np.ndarray
+
+    def __post_init__(self):
+        self.transforms = np.ascontiguousarray(self.transforms, dtype=np.float64).reshape(-1, 4, 4)
+
+
+@dataclass
 class Object:
     """A mesh with one material. `body` names the closed surface the mesh is
     part of when one surface has several materials: objects with the same
     body are one mesh for inside and outside (whether it is closed, which way
-    it faces, which glass a ray is in); None, the object is its own body."""
+    it faces, which glass a ray is in); None, the object is its own body.
+    `instances`, where given, is what the mesh was made of: an instancer's
+    instances of one mesh (Object.instanced)."""
 
     name: str
     mesh: Mesh
     material: Material
     visibility: Visibility = field(default_factory=Visibility)
     body: Optional[str] = None
+    instances: Optional[Instances] = None
+
+    @classmethod
+    def instanced(cls, name: str, local: Mesh, transforms: np.ndarray, material: Material,
+                  visibility: Visibility = Visibility(), body: Optional[str] = None) -> "Object":
+        """The object whose mesh is `local` (object space) under each of
+        `transforms (k,4,4)` (Mesh.instanced)."""
+        return cls(name, local.instanced(transforms), material, visibility, body, Instances(local, transforms))
+
+    @property
+    def copies(self) -> int:
+        """How many equal copies of one mesh its mesh is made of."""
+        return 1 if self.instances is None else len(self.instances.transforms)
 
     @property
     def body_name(self) -> str:

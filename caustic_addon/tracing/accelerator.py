@@ -15,7 +15,7 @@ from dataclasses import fields
 
 import numpy as np
 
-from ..scene import Object
+from ..scene import Mesh, Object
 from ..util.jit import inline, kernel, named_kernel
 from ..util.parallel import threads_here
 from ..util.vectors import dot1, float_rows, length, normalize, normalize1, row, set_row, sum1
@@ -70,7 +70,7 @@ class _View:
 # give it (util.jit.named_kernel): `surface_of` is its `surface`.
 GEOMETRY_TYPES = {"body": "i8[::1]", "surface_of": "i8[::1]", "closed": "b1[::1]", "corners": "f8[:, :, ::1]",
                   "face_normal": "f8[:, ::1]", "corner_normal": "f8[:, :, ::1]", "min_barycentric": "f8[:, ::1]",
-                  "prim_offset": "i8[::1]", "epsilon": "f8"}
+                  "prim_offset": "i8[::1]", "copy_size": "i8[::1]", "epsilon": "f8"}
 # The numba type of what a cast takes: the Embree scene's handle, the rays,
 # their lengths (none: unbounded), the objects its geometry ids stand for.
 CAST_TYPES = {"scene": "u8", "origins": "f8[:, ::1]", "dirs": "f8[:, ::1]", "dists": "f8[::1]",
@@ -153,7 +153,11 @@ class Accelerator:
         self.corner_normal = _table(corner_normals, (0, 3, 3))
         self.owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
         self.prim_offset = np.asarray(offsets, dtype=np.int64)
-        self._geometries = [embree.Geometry(obj.mesh.vertices, obj.mesh.triangles) for obj in objects]
+        self.copy_size = np.array([len(_first_copy(obj).triangles) for obj in objects], dtype=np.int64)
+        self._geometries = [embree.Geometry(obj.mesh.vertices, obj.mesh.triangles) if obj.instances is None else
+                            embree.Instances(embree.Geometry(obj.instances.mesh.vertices, obj.instances.mesh.triangles),
+                                             obj.instances.transforms, quality)
+                            for obj in objects]
         self._all = self.view_of(np.arange(len(objects)))
         self._views = self._ray_views()
         for body in np.unique(self.body[self.closed]):
@@ -187,7 +191,7 @@ class Accelerator:
         """(closed, +1 or -1) of the body made of objects `members (k,)`:
         whether its surface has no holes, and whether its winding faces out
         (+1) or in (-1); a warning names it when it is open or inside out."""
-        meshes = [self.objects[i].mesh for i in members]
+        meshes = [_first_copy(self.objects[i]) for i in members]
         starts = np.cumsum([0] + [len(m.vertices) for m in meshes])
         triangles = np.concatenate([m.triangles + start for m, start in zip(meshes, starts)])
         vertices = np.concatenate([m.vertices for m in meshes])
@@ -220,7 +224,8 @@ class Accelerator:
         _THICKNESS_PROBES face centres, evenly spread over the body's glass,
         half an epsilon inside, along the inward normal; on a larger mesh a
         thin wall of only a few faces can go unprobed."""
-        prim = np.flatnonzero(np.isin(self.owner, np.flatnonzero(self.closed & (self.body == body))))
+        glass = np.flatnonzero(self.closed & (self.body == body))
+        prim = np.concatenate([np.arange(self.prim_offset[i], self.prim_offset[i + 1]) for i in glass])
         prim = prim[np.unique(np.linspace(0, len(prim) - 1, min(len(prim), _THICKNESS_PROBES)).astype(np.int64))]
         prim = prim[np.linalg.norm(self.face_normal[prim], axis=1) > 0.0]
         inward = -self.face_normal[prim]
@@ -368,7 +373,7 @@ class Accelerator:
 
         def part(a: int, b: int) -> None:
             _cast(scene=view.scene.handle, origins=origins[a:b], dirs=dirs[a:b], dists=dists[a:b],
-                  members=view.objects, prim_offset=self.prim_offset, corners=self.corners,
+                  members=view.objects, prim_offset=self.prim_offset, copy_size=self.copy_size, corners=self.corners,
                   min_barycentric=self.min_barycentric,
                   **{f"out_{field}": getattr(hits, field)[a:b] for field in HIT_TYPES})
 
@@ -401,6 +406,14 @@ class Accelerator:
         out = np.empty_like(points)
         _offsets(points, normals, dirs, self.epsilon, out)
         return out
+
+
+def _first_copy(obj: Object) -> Mesh:
+    """`obj`'s mesh, or the first of the copies it is made of (scene.Instances)."""
+    if obj.instances is None:
+        return obj.mesh
+    local = obj.instances.mesh
+    return Mesh(obj.mesh.vertices[:len(local.vertices)], obj.mesh.triangles[:len(local.triangles)])
 
 
 def _table(parts: list[np.ndarray], empty: tuple[int, ...]) -> np.ndarray:
@@ -494,25 +507,25 @@ def surface_point1(corners, min_barycentric, prim, u, v):
 
 
 @named_kernel("void", HIT_TYPES, GEOMETRY_TYPES, CAST_TYPES)
-def _cast(scene, origins, dirs, dists, members, prim_offset, corners, min_barycentric,
+def _cast(scene, origins, dirs, dists, members, prim_offset, copy_size, corners, min_barycentric,
           out_t, out_obj, out_prim, out_u, out_v, out_points):
     """Closest hits of rays `origins, dirs (k,3)` in Embree scene `scene`,
     within `dists (k,)` (empty: unbounded): geomID indexes `members`
-    (object indices), primID the object's own triangles (global: plus
-    `prim_offset`), the point is surface_point1; a miss has t = inf, MISS
-    and the ray's origin."""
+    (object indices), primID the triangles of the object's copy (global:
+    plus `prim_offset` and the copy times `copy_size`), the point is
+    surface_point1; a miss has t = inf, MISS and the ray's origin."""
     floats, words, address = ray_record()
     bounded = len(dists) > 0
     for i in range(len(origins)):
         far = dists[i] if bounded else np.inf
-        geom, prim, t, u, v = intersect1(scene, floats, words, address, row(origins, i), row(dirs, i), far)
+        geom, prim, copy, t, u, v = intersect1(scene, floats, words, address, row(origins, i), row(dirs, i), far)
         out_u[i], out_v[i] = u, v
         if geom < 0:
             out_t[i], out_obj[i], out_prim[i] = np.inf, MISS, MISS
             set_row(out_points, i, row(origins, i))
             continue
         obj = members[geom]
-        face = prim + prim_offset[obj]
+        face = prim + prim_offset[obj] + copy * copy_size[obj]
         out_t[i], out_obj[i], out_prim[i] = t, obj, face
         set_row(out_points, i, surface_point1(corners, min_barycentric, face, u, v))
 

@@ -46,9 +46,9 @@ from numba import types
 from ..util.jit import inline
 
 # Enum values of Embree 4's rtcore_common.h, rtcore_buffer.h, rtcore_geometry.h, rtcore_scene.h.
-_GEOMETRY_TYPE_TRIANGLE = 0
-_BUFFER_TYPE_INDEX, _BUFFER_TYPE_VERTEX = 0, 1
-_FORMAT_UINT3, _FORMAT_FLOAT3 = 0x5003, 0x9003
+_GEOMETRY_TYPE_TRIANGLE, _GEOMETRY_TYPE_INSTANCE_ARRAY = 0, 122
+_BUFFER_TYPE_INDEX, _BUFFER_TYPE_VERTEX, _BUFFER_TYPE_TRANSFORM = 0, 1, 23
+_FORMAT_UINT3, _FORMAT_FLOAT3, _FORMAT_FLOAT4X4_COLUMN_MAJOR = 0x5003, 0x9003, 0x9244
 _SCENE_FLAG_ROBUST = 1 << 2
 BUILD_QUALITY = {"low": 0, "medium": 1, "high": 2}  # RTC_BUILD_QUALITY_*
 _ERRORS = {1: "unknown error", 2: "invalid argument", 3: "invalid operation", 4: "out of memory",
@@ -56,7 +56,7 @@ _ERRORS = {1: "unknown error", 2: "invalid argument", 3: "invalid operation", 4:
 
 # RTCRayHit in 4-byte words: the ray's fields, then the hit's from word 12.
 _ORG, _TNEAR, _DIR, _TIME, _TFAR, _MASK, _ID, _FLAGS = 0, 3, 4, 7, 8, 9, 10, 11
-_U, _V, _PRIM, _GEOM, _INST = 15, 16, 17, 18, 19
+_U, _V, _PRIM, _GEOM, _INST, _INST_PRIM = 15, 16, 17, 18, 19, 20
 _WORDS = 24  # RTCRayHit with instPrimID, padded to 16 bytes
 _ALIGN_WORDS = 16  # 64 bytes
 # RTCRay8: each of the ray's 12 fields 8 wide, in the same order; then the
@@ -102,6 +102,7 @@ def _load() -> ctypes.CDLL:
         "rtcNewGeometry": (pointer, [pointer, ctypes.c_int]),
         "rtcSetSharedGeometryBuffer": (None, [pointer, ctypes.c_int, uint, ctypes.c_int, pointer, size, size, size]),
         "rtcCommitGeometry": (None, [pointer]),
+        "rtcSetGeometryInstancedScene": (None, [pointer, pointer]),
         "rtcAttachGeometry": (uint, [pointer, pointer]),
         "rtcReleaseGeometry": (None, [pointer]),
     }
@@ -150,28 +151,52 @@ class Geometry:
         self.triangles = np.ascontiguousarray(triangles, dtype=np.uint32).reshape(-1, 3)
 
 
-class Scene:
-    """An Embree scene of `geometries`, committed: a ray's geomID is its
-    geometry's place in the list. `quality` is a key of BUILD_QUALITY.
-    `handle` is what the kernels take; it is freed with the Scene."""
+class Instances:
+    """One mesh under many transforms, as Embree reads them in place: the
+    mesh's own committed scene, and `transforms (k,4,4)` object to world,
+    kept as column-major float32. Embree builds the mesh's BVH once and a
+    BVH over the k boxes (an instance array, Embree 4.3); a hit reports the
+    copy it met (intersect1)."""
 
-    def __init__(self, geometries: list[Geometry], quality: str = "medium"):
+    def __init__(self, geometry: Geometry, transforms: np.ndarray, quality: str = "medium"):
+        self.prototype = Scene([geometry], quality)
+        self.transforms = np.ascontiguousarray(np.asarray(transforms).transpose(0, 2, 1), dtype=np.float32)
+
+    @property
+    def triangle_count(self) -> int:
+        return len(self.prototype.geometries[0].triangles) * len(self.transforms)
+
+
+class Scene:
+    """An Embree scene of `geometries` (a Geometry or Instances each),
+    committed: a ray's geomID is its geometry's place in the list.
+    `quality` is a key of BUILD_QUALITY. `handle` is what the kernels take;
+    it is freed with the Scene."""
+
+    def __init__(self, geometries: list[Geometry | Instances], quality: str = "medium"):
         self.geometries = geometries  # Embree reads their buffers while the scene lives
         self.handle = _lib.rtcNewScene(device())
         weakref.finalize(self, _lib.rtcReleaseScene, self.handle)
         _lib.rtcSetSceneFlags(self.handle, _SCENE_FLAG_ROBUST)
         _lib.rtcSetSceneBuildQuality(self.handle, BUILD_QUALITY[quality])
         for geometry in geometries:
-            made = _lib.rtcNewGeometry(device(), _GEOMETRY_TYPE_TRIANGLE)
-            _lib.rtcSetSharedGeometryBuffer(made, _BUFFER_TYPE_VERTEX, 0, _FORMAT_FLOAT3,
-                                            geometry.vertices.ctypes.data, 0, 16, len(geometry.vertices))
-            _lib.rtcSetSharedGeometryBuffer(made, _BUFFER_TYPE_INDEX, 0, _FORMAT_UINT3,
-                                            geometry.triangles.ctypes.data, 0, 12, len(geometry.triangles))
+            if isinstance(geometry, Instances):
+                made = _lib.rtcNewGeometry(device(), _GEOMETRY_TYPE_INSTANCE_ARRAY)
+                _lib.rtcSetGeometryInstancedScene(made, geometry.prototype.handle)
+                _lib.rtcSetSharedGeometryBuffer(made, _BUFFER_TYPE_TRANSFORM, 0, _FORMAT_FLOAT4X4_COLUMN_MAJOR,
+                                                geometry.transforms.ctypes.data, 0, 64, len(geometry.transforms))
+            else:
+                made = _lib.rtcNewGeometry(device(), _GEOMETRY_TYPE_TRIANGLE)
+                _lib.rtcSetSharedGeometryBuffer(made, _BUFFER_TYPE_VERTEX, 0, _FORMAT_FLOAT3,
+                                                geometry.vertices.ctypes.data, 0, 16, len(geometry.vertices))
+                _lib.rtcSetSharedGeometryBuffer(made, _BUFFER_TYPE_INDEX, 0, _FORMAT_UINT3,
+                                                geometry.triangles.ctypes.data, 0, 12, len(geometry.triangles))
             _lib.rtcCommitGeometry(made)
             _lib.rtcAttachGeometry(self.handle, made)
             _lib.rtcReleaseGeometry(made)
         _lib.rtcCommitScene(self.handle)
-        _check(f"build the BVH of {sum(len(g.triangles) for g in geometries):,} triangles")
+        count = sum(g.triangle_count if isinstance(g, Instances) else len(g.triangles) for g in geometries)
+        _check(f"build the BVH of {count:,} triangles")
 
 
 @inline
@@ -197,12 +222,20 @@ def _set_ray(floats, words, origin, d, tfar):
 def intersect1(scene, floats, words, address, origin, d, tfar):
     """Embree's closest hit of the ray from `origin` along `d` within `tfar`
     in scene `scene` (a Scene's handle), through the record `ray_record`
-    gave: (geomID, primID, t, u, v), geomID -1 on a miss."""
+    gave: (geomID, primID, copy, t, u, v), geomID -1 on a miss. On an
+    Instances, geomID is its place in the scene, primID the mesh's own
+    triangle and `copy` the transform's row; elsewhere `copy` is 0."""
     _set_ray(floats, words, origin, d, tfar)
-    words[_GEOM], words[_PRIM], words[_INST] = INVALID_ID, INVALID_ID, INVALID_ID
+    words[_GEOM], words[_PRIM], words[_INST], words[_INST_PRIM] = INVALID_ID, INVALID_ID, INVALID_ID, 0
     _intersect1(scene, address, 0)
-    geom = -1 if words[_GEOM] == INVALID_ID else np.int64(words[_GEOM])
-    return geom, np.int64(words[_PRIM]), np.float64(floats[_TFAR]), np.float64(floats[_U]), np.float64(floats[_V])
+    if words[_GEOM] == INVALID_ID:
+        geom, copy = -1, 0
+    elif words[_INST] == INVALID_ID:
+        geom, copy = np.int64(words[_GEOM]), 0
+    else:
+        geom, copy = np.int64(words[_INST]), np.int64(words[_INST_PRIM])
+    return (geom, np.int64(words[_PRIM]), copy, np.float64(floats[_TFAR]), np.float64(floats[_U]),
+            np.float64(floats[_V]))
 
 
 @inline

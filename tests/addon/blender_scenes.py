@@ -91,6 +91,34 @@ def add_camera(location, target=(0.0, 0.0, 0.0), lens=35.0, name="Camera"):
     return camera
 
 
+def scatter(count, spacing, mesh_node='GeometryNodeMeshIcoSphere', material=None, name="Scatter", size=0.2):
+    """A plane whose Geometry Nodes put an instance of one `mesh_node` mesh
+    (radius or half size `size`, `material` set on it) on each point of a
+    count x count grid `spacing` apart: the grid's centre at the plane's origin."""
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
+    holder = bpy.context.object
+    holder.name = name
+    tree = bpy.data.node_groups.new(name, 'GeometryNodeTree')
+    tree.interface.new_socket("Geometry", in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    nodes, links = tree.nodes, tree.links
+    points = nodes.new('GeometryNodeMeshGrid')
+    points.inputs['Size X'].default_value = points.inputs['Size Y'].default_value = spacing * (count - 1)
+    points.inputs['Vertices X'].default_value = points.inputs['Vertices Y'].default_value = count
+    shape = nodes.new(mesh_node)
+    extent = next(s for s in shape.inputs if s.name in ("Radius", "Size"))
+    extent.default_value = size if extent.type == 'VALUE' else (2 * size,) * 3
+    coloured = nodes.new('GeometryNodeSetMaterial')
+    coloured.inputs['Material'].default_value = material or glass_material()
+    placed = nodes.new('GeometryNodeInstanceOnPoints')
+    output = nodes.new('NodeGroupOutput')
+    links.new(shape.outputs['Mesh'], coloured.inputs['Geometry'])
+    links.new(points.outputs['Mesh'], placed.inputs['Points'])
+    links.new(coloured.outputs['Geometry'], placed.inputs['Instance'])
+    links.new(placed.outputs['Instances'], output.inputs['Geometry'])
+    holder.modifiers.new(name, 'NODES').node_group = tree
+    return holder
+
+
 def set_resolution(width, height):
     render = bpy.context.scene.render
     render.resolution_x, render.resolution_y, render.resolution_percentage = width, height, 100

@@ -532,3 +532,71 @@ def test_ray_visibility_and_holdouts_are_read_as_cycles_reads_them(addon):
     assert ("'Shy': its Diffuse ray visibility is off, which hides it from Cycles' diffuse bounces and the caustics "
             "they find through it; the caustic render's light goes from the lights, so it still casts its caustic"
             ) in result.warnings
+
+
+def test_an_instancers_instances_of_one_mesh_are_one_object_with_a_copy_at_each_point(addon):
+    lamp_scene()
+    holder = scenes.scatter(3, 0.5)
+    holder.location, holder.rotation_euler = (1.0, 0.0, 0.5), (0.0, 0.0, math.pi / 2)
+    result = read(addon)
+    balls = engine_object(result, "Scatter [Scatter]")
+    assert balls.copies == 9 and balls.name in result.instanced and balls.is_transparent
+    centres = balls.mesh.vertices.reshape(9, -1, 3).mean(axis=1)
+    grid = np.stack(np.meshgrid([-0.5, 0.0, 0.5], [-0.5, 0.0, 0.5]), axis=-1).reshape(-1, 2)
+    rotated = grid @ np.array([[0.0, 1.0], [-1.0, 0.0]])  # a quarter turn about z
+    expected = np.column_stack([rotated + [1.0, 0.0], np.full(9, 0.5)])
+    assert np.allclose(np.sort(centres.view('f8,f8,f8'), axis=0).view(float).reshape(9, 3),
+                       np.sort(expected.view('f8,f8,f8'), axis=0).view(float).reshape(9, 3), atol=1e-6)
+    assert np.allclose(balls.instances.transforms[:, :3, 3], centres, atol=1e-6)
+
+
+def test_instances_scaled_to_0_are_left_out_by_name(addon):
+    lamp_scene()
+    holder = scenes.scatter(2, 0.5)
+    tree = holder.modifiers[0].node_group
+    placed = tree.nodes['Instance on Points']
+    index = tree.nodes.new('GeometryNodeInputIndex')
+    flat = tree.nodes.new('ShaderNodeMath')
+    flat.operation = 'GREATER_THAN'
+    flat.inputs[1].default_value = 0.5  # the first point's instance gets scale 0
+    tree.links.new(index.outputs[0], flat.inputs[0])
+    tree.links.new(flat.outputs[0], placed.inputs['Scale'])
+    result = read(addon)
+    assert engine_object(result, "Scatter [Scatter]").copies == 3
+    assert "'Scatter [Scatter]': 1 of its 4 instances are scaled to 0 along an axis: they were left out" \
+        in result.warnings
+
+
+def test_textured_instances_are_read_one_by_one_and_the_others_together(addon):
+    lamp_scene()
+    scenes.scatter(2, 0.5, name="Gems")
+    cubes = scenes.scatter(2, 0.5, 'GeometryNodeMeshCube', name="Cubes")
+    cubes.location.z = 1.0
+    textured = scenes.diffuse_material("Printed")
+    nodes = textured.node_tree.nodes
+    image = nodes.new('ShaderNodeTexImage')
+    image.image = bpy.data.images.new("Print", 4, 4)
+    textured.node_tree.links.new(image.outputs['Color'], nodes['Diffuse BSDF'].inputs['Color'])
+    cubes.modifiers[0].node_group.nodes['Set Material'].inputs['Material'].default_value = textured
+    result = read(addon)
+    assert engine_object(result, "Gems [Gems]").copies == 4
+    printed = [o for o in result.scene.objects if o.name.startswith("Cubes [Cubes #")]
+    assert len(printed) == 4 and all(o.copies == 1 and o.name in result.instanced for o in printed)
+
+
+def test_two_meshes_one_instancer_places_are_two_objects(addon):
+    lamp_scene()
+    holder = scenes.scatter(2, 0.5)
+    tree = holder.modifiers[0].node_group
+    nodes, links = tree.nodes, tree.links
+    cube, placed, joined = (nodes.new(kind) for kind in ('GeometryNodeMeshCube', 'GeometryNodeInstanceOnPoints',
+                                                         'GeometryNodeJoinGeometry'))
+    links.new(nodes['Grid'].outputs['Mesh'], placed.inputs['Points'])
+    links.new(cube.outputs['Mesh'], placed.inputs['Instance'])
+    links.new(nodes['Instance on Points'].outputs['Instances'], joined.inputs[0])
+    links.new(placed.outputs['Instances'], joined.inputs[0])
+    links.new(joined.outputs[0], nodes['Group Output'].inputs['Geometry'])
+    result = read(addon)
+    names = sorted(o.name for o in result.scene.objects if o.name.startswith("Scatter"))
+    assert names == ["Scatter [Scatter] #1", "Scatter [Scatter] #2"]
+    assert sorted(len(engine_object(result, name).mesh.triangles) // 4 for name in names) == [12, 20]

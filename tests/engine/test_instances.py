@@ -1,0 +1,87 @@
+"""An instancer's instances of one mesh as one object (scene.Instances):
+the copies' geometry against each copy transformed on its own, Embree's
+instance arrays against the same triangles built flat, and a render of
+instanced glass against the same glass as separate objects."""
+
+import numpy as np
+
+from caustic_addon import Dielectric, Diffuse, Mesh, Object, PointLight, Scene, render, shapes
+from caustic_addon.tracing.accelerator import Accelerator
+from scenes import quick, top_camera
+
+
+def transforms(count: int, seed: int = 3) -> np.ndarray:
+    """(count,4,4) random invertible affine matrices, every other one mirroring."""
+    rng = np.random.default_rng(seed)
+    out = np.tile(np.eye(4), (count, 1, 1))
+    out[:, :3, :] = rng.normal(size=(count, 3, 4))
+    det = np.linalg.det(out[:, :3, :3])
+    out[:, :3, 0] *= (np.sign(det) * np.where(np.arange(count) % 2, -1.0, 1.0))[:, None]
+    return out
+
+
+def test_each_copy_is_the_mesh_transformed_on_its_own():
+    rng = np.random.default_rng(1)
+    local = Mesh(rng.normal(size=(6, 3)), np.array([[0, 1, 2], [2, 3, 4], [4, 5, 0]]), rng.normal(size=(3, 3, 3)),
+                 rng.random((3, 3, 2)))
+    matrices = transforms(5)
+    copies = local.instanced(matrices)
+    assert np.any(np.linalg.det(matrices[:, :3, :3]) < 0)
+    for i, matrix in enumerate(matrices):
+        alone, rows = local.transformed(matrix), slice(3 * i, 3 * i + 3)
+        np.testing.assert_allclose(copies.corners[rows], alone.corners, atol=1e-12)
+        np.testing.assert_allclose(copies.corner_normals[rows], alone.corner_normals, atol=1e-12)
+        np.testing.assert_array_equal(copies.corner_uvs[rows], alone.corner_uvs)
+
+
+def grid(count: int, spacing: float, z: float) -> np.ndarray:
+    """(count^2,4,4) translations to a count x count grid at height `z`."""
+    xs = (np.arange(count) - (count - 1) / 2) * spacing
+    out = np.tile(np.eye(4), (count * count, 1, 1))
+    out[:, 0, 3], out[:, 1, 3] = np.repeat(xs, count), np.tile(xs, count)
+    out[:, 2, 3] = z
+    return out
+
+
+def test_a_ray_meets_the_copy_and_triangle_the_flat_mesh_puts_there():
+    """Rays at 8 x 8 balls: the instance array's hits (object, global
+    triangle, t, barycentrics) are those of the same triangles given to
+    Embree flat, to float32's precision."""
+    ball, matrices = shapes.uv_sphere(0.2, segments=16, rings=8), grid(8, 0.5, 1.0)
+    instanced = Object.instanced("Balls", ball, matrices, Dielectric(1.5))
+    flat = Object("Balls", instanced.mesh, Dielectric(1.5))
+    floor = Object("Floor", shapes.plane(6.0), Diffuse(0.8))
+    rng = np.random.default_rng(5)
+    origins = np.column_stack([rng.uniform(-2.0, 2.0, (20_000, 2)), np.full(20_000, 3.0)])
+    dirs = rng.normal(size=(20_000, 3)) * [0.2, 0.2, 0.0] + [0.0, 0.0, -1.0]
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    hits = [Accelerator([floor, obj], 6.0, threads=1).intersect(origins, dirs) for obj in (instanced, flat)]
+    on_balls = hits[1].obj == 1
+    assert on_balls.mean() > 0.2
+    np.testing.assert_array_equal(hits[0].obj, hits[1].obj)
+    same = hits[0].prim == hits[1].prim
+    assert same[on_balls].mean() > 0.999  # rays within float32 of an edge may take either face
+    np.testing.assert_allclose(hits[0].t[same], hits[1].t[same], rtol=1e-5)
+    np.testing.assert_allclose(hits[0].points[same], hits[1].points[same], atol=1e-5)
+
+
+def test_an_open_instanced_mesh_is_named_once():
+    bowl = shapes.uv_sphere(0.2, segments=16, rings=8)
+    bowl = bowl.subset(np.arange(len(bowl.triangles) // 2))
+    accel = Accelerator([Object.instanced("Bowls", bowl, grid(3, 0.5, 1.0), Dielectric(1.5))], 6.0, threads=1)
+    assert len([w for w in accel.warnings if "'Bowls' is not a closed mesh" in w]) == 1
+
+
+def test_instanced_glass_renders_as_the_same_glass_in_separate_objects():
+    """Four ball lenses as one instanced object and as four objects: the
+    same caustics: the beams aim at one caster or at four, and agree to 0.5%."""
+    ball, matrices = shapes.uv_sphere(0.4, segments=64, rings=32), grid(2, 1.2, 1.0)
+    floor = Object("Floor", shapes.plane(8.0), Diffuse(0.8))
+    lamp = [PointLight((0.0, 0.0, 4.0), 2000.0)]
+    camera = top_camera(1.6, 64)
+    together = Scene([floor, Object.instanced("Balls", ball, matrices, Dielectric(1.5))], lamp, camera)
+    balls = [Object(f"Ball {i}", ball.transformed(matrix), Dielectric(1.5)) for i, matrix in enumerate(matrices)]
+    apart = Scene([floor] + balls, lamp, camera)
+    images = [render(scene, quick(lamp_rays=400_000, density="beam")).image for scene in (together, apart)]
+    assert np.sqrt(np.mean((images[0] - images[1]) ** 2) / np.mean(images[1] ** 2)) < 0.005
+    assert images[0].max() > 3.0 * np.median(images[0])  # the caustics are there
