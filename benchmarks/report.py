@@ -251,6 +251,13 @@ def live(d: dict) -> Table:
             "main thread, the refine", "preview's error", "memory growth"], rows
 
 
+def instances(d: dict) -> Table:
+    rows = [[f"{f['instances']:,}", f"{f['triangles']:,}", seconds(f["render_s"]), seconds(f["read_s"]),
+             seconds(f["engine_s"]), f"{f['peak_growth_mb']:,.0f} MB"] for f in d["runs"].values()]
+    return [f"ico-spheres ({d['resolution'][0]}x{d['resolution'][1]})", "triangles", "Render Caustics",
+            "scene read", "engine", "peak memory growth"], rows
+
+
 def allocator(d: dict) -> Table:
     names = {"default": "glibc's default", "engine": "the engine's setting"}
     rows = [[blender, names.get(setting, setting), seconds(f["seconds_per_frame"]), seconds(f["cpu_seconds_per_frame"]),
@@ -380,7 +387,8 @@ def generic(d: dict) -> Table:
 FORMATTERS: dict[str, Callable[[dict], Table]] = {
     "accuracy": accuracy, "cycles_accuracy": cycles_accuracy, "mitsuba_folds": mitsuba_folds,
     "speed": speed, "passes": passes, "bvh_build": bvh_build, "beams_at_scale": beams_at_scale, "memory": memory,
-    "first_render": first_render, "animation": animation, "live": live, "farm": farm, "allocator": allocator,
+    "first_render": first_render, "animation": animation, "live": live, "instances": instances, "farm": farm,
+    "allocator": allocator,
     "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass, "through_glass": through_glass,
     "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "world_paths": world_paths,
     "flicker": flicker, "gallery": gallery,
@@ -402,6 +410,7 @@ SECTIONS = [
         ("first_render", "The first render after installing"),
         ("animation", "Animated caustics in Blender"),
         ("live", "Live caustics while the glass is dragged"),
+        ("instances", "Scattered instances"),
         ("farm", "The render farm's overhead per chunk"),
         ("allocator", "The engine's malloc setting"),
     ]),

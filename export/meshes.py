@@ -12,7 +12,7 @@ from typing import Optional
 import bpy
 import numpy as np
 
-from ..caustic_addon import Dielectric, Mesh, Object, Reflector, Visibility
+from ..caustic_addon import Dielectric, Diffuse, Mesh, Object, Reflector, Visibility
 from ..caustic_addon.scene.geometry import with_area
 from .materials import abbe_conflict, engine_material, read_surface
 from .textures import ObjectFrame, bind
@@ -139,7 +139,9 @@ class MeshSource:
     times (`place`): its mesh in object space, its triangles' materials and
     UV maps, and its parts, one per material (_material_parts: (material
     name or None, triangle rows, slot numbers)), whose readings are in the
-    `surfaces` it was read with."""
+    `surfaces` it was read with. `one_by_one`: its copies are objects of
+    their own, as a texture reads object coordinates per object and a
+    receiver's map is laid out per object."""
 
     name: str
     original: bpy.types.Object
@@ -147,7 +149,7 @@ class MeshSource:
     material_index: np.ndarray
     uv_maps: dict[str, np.ndarray]
     parts: list[tuple[Optional[str], np.ndarray, list[int]]]
-    textured: bool
+    one_by_one: bool
     visible_diffuse: bool
 
 
@@ -173,8 +175,10 @@ def read_source(ob, name: str, surfaces: dict, warnings: list[str],
     for material, rows, slots in parts:
         _surface(material, surfaces, warnings)
         named.append((material.original.name if material is not None else None, rows, slots))
-    return MeshSource(name, ob.original, local, material_index, uv_maps, named,
-                      any(surfaces[key].texture is not None for key, _, _ in named), ob.visible_diffuse)
+    engines = [engine_material(surfaces[key], ob.original.caustic) for key, _, _ in named]
+    one_by_one = (any(surfaces[key].texture is not None for key, _, _ in named)
+                  or any(isinstance(engine, Diffuse) and engine.receiver for engine in engines))
+    return MeshSource(name, ob.original, local, material_index, uv_maps, named, one_by_one, ob.visible_diffuse)
 
 
 def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surfaces: dict,
@@ -191,7 +195,7 @@ def place(source: MeshSource, name: str, matrices: np.ndarray, visibility: Visib
     `source` under `matrices (k,4,4)`: one for each material its triangles
     use, named `name` if there is one and "name [material]" if there are
     several, which are then parts of one body. k > 1 (an instancer's
-    instances of an untextured mesh) gives each part's mesh once under each
+    instances of a mesh not `one_by_one`) gives each part's mesh once under each
     matrix, as one object (Mesh.instanced; Object.copies).
 
     A glass or mirror scaled to 0 along an axis, and an object scaled to
@@ -254,7 +258,10 @@ def place(source: MeshSource, name: str, matrices: np.ndarray, visibility: Visib
         if world is not None:
             obj = Object(part, world.subset(rows) if several else world, engine, visibility, body)
         else:
-            obj = Object.instanced(part, local.subset(rows) if several else local, matrices, engine, visibility, body)
+            mesh = local.subset(rows) if several else local
+            # no part receives (MeshSource.one_by_one): no map is laid out on a UV map
+            obj = Object.instanced(part, Mesh(mesh.vertices, mesh.triangles, mesh.corner_normals), matrices, engine,
+                                   visibility, body)
         objects.append((obj, key))
     if not source.visible_diffuse and any(obj.is_caster for obj, _ in objects):
         warnings.append(f"'{name}': its Diffuse ray visibility is off, which hides it from Cycles' diffuse "

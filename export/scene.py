@@ -99,8 +99,8 @@ def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[
     the objects it names (and instances of them). An instancer's instances
     of one mesh are read once and placed under all their matrices at once:
     one engine object per material, named "Object [Instancer]" (Object.copies),
-    or one per instance, "Object [Instancer #n]", where a texture is read
-    per object."""
+    or one per instance, "Object [Instancer #n]", where it is textured or a
+    receiver (meshes.MeshSource.one_by_one)."""
     camera = read_camera(scene, depsgraph) if with_camera else dummy_camera()
     warnings = camera_warnings(scene) if with_camera else []
     read = SceneRead(Scene(objects=[], lights=[], camera=camera), warnings)
@@ -137,7 +137,7 @@ def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[
                 sources[key] = (read_source(ob, batch, surfaces, warnings),
                                 object_visibility(inst, depsgraph.view_layer))
             mesh, visibility = sources[key]
-            if mesh is not None and mesh.textured:
+            if mesh is not None and mesh.one_by_one:
                 add(place(mesh, name, matrix[None], visibility, surfaces, warnings), source.name, True)
             elif mesh is not None:
                 batches.setdefault(key, []).append(matrix)

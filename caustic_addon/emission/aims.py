@@ -17,7 +17,7 @@ from typing import Optional
 import numpy as np
 
 from ..sampling.warps import cone_directions, cone_of_disc, orthonormal_basis
-from ..scene import AreaLight, Light, Scene, SpotLight, SunLight
+from ..scene import AreaLight, Light, Mesh, Scene, SpotLight, SunLight
 from ..util.jit import kernel
 from ..util.rows import contiguous
 from ..util.vectors import row, set_row
@@ -45,16 +45,23 @@ class Sphere:
         center = 0.5 * (points.min(axis=0) + points.max(axis=0))
         return Sphere(center, float(np.linalg.norm(points - center, axis=1).max()))
 
+    @staticmethod
+    def around_meshes(meshes: list[Mesh]) -> "Sphere":
+        """Sphere.around all the vertices of `meshes`, with no copy of them."""
+        center = 0.5 * (np.min([m.bounds[0] for m in meshes], axis=0) + np.max([m.bounds[1] for m in meshes], axis=0))
+        farthest = max(float(np.add.reduce(np.square(m.vertices - center), axis=1).max()) for m in meshes)
+        return Sphere(center, float(np.sqrt(farthest)))
+
 
 def casters_and_bounds(scene: Scene) -> tuple[list[Sphere], Sphere]:
     """The casters' (transparent and reflecting objects') bounding spheres,
     one around the casters of each body, which lamps aim at, and the sphere
     around the whole scene."""
     lo, hi = scene.bounds()
-    bodies: dict[str, list[np.ndarray]] = {}
+    bodies: dict[str, list[Mesh]] = {}
     for caster in scene.casters:
-        bodies.setdefault(caster.body_name, []).append(caster.mesh.vertices)
-    return ([Sphere.around(np.concatenate(vertices)) for vertices in bodies.values()],
+        bodies.setdefault(caster.body_name, []).append(caster.mesh)
+    return ([Sphere.around_meshes(meshes) for meshes in bodies.values()],
             Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo))))
 
 

@@ -44,8 +44,11 @@ def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
 
     for obj in scene.objects:
         add((obj.name, obj.body, type(obj.material).__name__))
-        for array in (obj.mesh.vertices, obj.mesh.triangles, obj.mesh.corner_normals, obj.mesh.corner_uvs):
+        mesh = obj.mesh if obj.instances is None else obj.instances.mesh  # the copies follow from it
+        for array in (mesh.vertices, mesh.triangles, mesh.corner_normals, mesh.corner_uvs):
             add(array)
+        if obj.instances is not None:
+            add(obj.instances.transforms)
         for name, value in vars(obj.material).items():
             if name in _SHADING_ONLY:
                 continue

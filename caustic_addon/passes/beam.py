@@ -593,7 +593,7 @@ def photon_lamps(lights: list[Light], scene: Scene) -> list[Light]:
     pass beats both the beam grid's paths landing as photons past the rough
     surface and beams spread about shared microfacet normals, in time and
     in error; a smooth caster those lamps also light casts photons too."""
-    rough = [Sphere.around(o.mesh.vertices) for o in scene.casters if not o.material.smooth]
+    rough = [Sphere.around_meshes([o.mesh]) for o in scene.casters if not o.material.smooth]
     return [light for light in lights if rough and visible_targets(light, rough)]
 
 

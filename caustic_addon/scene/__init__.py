@@ -10,5 +10,5 @@ from .scene import Instances, Object, Scene, Visibility
 from .settings import RenderSettings
 
 __all__ = ["AreaLight", "Camera", "Dielectric", "Diffuse", "Instances", "Light", "Material", "Mesh", "Object",
-           "PointLight", "Reflector", "RenderSettings", "Scene", "Specular", "SpotLight", "SunLight", "Visibility", "World",
-           "paper", "shapes", "textures"]
+           "PointLight", "Reflector", "RenderSettings", "Scene", "Specular", "SpotLight", "SunLight", "Visibility",
+           "World", "paper", "shapes", "textures"]

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Optional
 
 import numpy as np
+
+from ..util.jit import inline, kernel
 
 
 @dataclass
@@ -32,6 +35,14 @@ class Mesh:
             self.corner_normals = np.ascontiguousarray(self.corner_normals, dtype=np.float64).reshape(-1, 3, 3)
         if self.corner_uvs is not None:
             self.corner_uvs = np.ascontiguousarray(self.corner_uvs, dtype=np.float64).reshape(-1, 3, 2)
+
+    @cached_property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lo (3,), hi (3,)) of the vertices, NaN where a vertex has a NaN;
+        +inf and -inf for a mesh with no vertices."""
+        if len(self.vertices) == 0:
+            return np.full(3, np.inf), np.full(3, -np.inf)
+        return self.vertices.min(axis=0), self.vertices.max(axis=0)
 
     @property
     def corners(self) -> np.ndarray:
@@ -71,35 +82,80 @@ class Mesh:
             uvs = None if uvs is None else uvs[keep]
         return Mesh(verts, tris, normals, uvs)
 
-    def instanced(self, transforms: np.ndarray) -> "Mesh":
+    def instanced(self, transforms: np.ndarray, with_normals: bool = True) -> "Mesh":
         """This mesh once under each of `transforms (k,4,4)`, affine and
         invertible, as one mesh whose copy i is `transformed(transforms[i])`:
-        its vertices and triangles follow copy i-1's. All copies at once, so
-        that an instancer's thousands of instances cost no Python loop."""
-        m = np.asarray(transforms, dtype=np.float64).reshape(-1, 4, 4)
+        its vertices and triangles follow copy i-1's; its corner normals only
+        `with_normals`. All copies in one kernel, so that an instancer's
+        thousands of instances cost no Python loop."""
+        m = np.ascontiguousarray(transforms, dtype=np.float64).reshape(-1, 4, 4)
         k, nv, nt = len(m), len(self.vertices), len(self.triangles)
-        linear = m[:, :3, :3]
-        verts = self.vertices @ linear.transpose(0, 2, 1) + m[:, None, :3, 3]
-        flip = np.flatnonzero(np.linalg.det(linear) < 0.0)
-        tris = np.empty((k, nt, 3), dtype=np.int64)
-        tris[:] = self.triangles
-        tris[flip] = tris[flip, :, ::-1]
-        tris += (np.arange(k, dtype=np.int64) * nv)[:, None, None]
-        normals = uvs = None
-        if self.corner_normals is not None:
-            columns = [linear[:, :, axis] for axis in range(3)]
-            cofactor = np.stack([np.cross(columns[1], columns[2]), np.cross(columns[2], columns[0]),
-                                 np.cross(columns[0], columns[1])], axis=2)
-            cofactor[flip] *= -1.0
-            normals = (self.corner_normals.reshape(-1, 3) @ cofactor.transpose(0, 2, 1)).reshape(k, nt, 3, 3)
-            normals[flip] = normals[flip, :, ::-1]
-            normals /= np.maximum(np.sqrt(np.einsum("...i,...i->...", normals, normals))[..., None], 1e-300)
+        verts, tris = np.empty((k * nv, 3)), np.empty((k * nt, 3), dtype=np.int64)
+        _copy_points(self.vertices, self.triangles, m, verts, tris)
+        normals = None
+        if with_normals and self.corner_normals is not None:
+            normals = np.empty((k * nt, 3, 3))
+            copy_normals(self.corner_normals, m, normals)
+        uvs = None
         if self.corner_uvs is not None:
-            uvs = np.empty((k, nt, 3, 2), dtype=np.float64)
+            flip = np.linalg.det(m[:, :3, :3]) < 0.0
+            uvs = np.empty((k, nt, 3, 2))
             uvs[:] = self.corner_uvs
             uvs[flip] = uvs[flip, :, ::-1]
-        return Mesh(verts.reshape(-1, 3), tris.reshape(-1, 3), None if normals is None else normals.reshape(-1, 3, 3),
-                    None if uvs is None else uvs.reshape(-1, 3, 2))
+            uvs = uvs.reshape(-1, 3, 2)
+        return Mesh(verts, tris, normals, uvs)
+
+
+@inline
+def _mirrors(m) -> bool:
+    """Whether the affine matrix `m (4,4)` mirrors: its 3x3 part's determinant is negative."""
+    return (m[0, 0] * (m[1, 1] * m[2, 2] - m[1, 2] * m[2, 1]) - m[0, 1] * (m[1, 0] * m[2, 2] - m[1, 2] * m[2, 0])
+            + m[0, 2] * (m[1, 0] * m[2, 1] - m[1, 1] * m[2, 0])) < 0.0
+
+
+@kernel("void(f8[:, ::1], i8[:, ::1], f8[:, :, ::1], f8[:, ::1], i8[:, ::1])")
+def _copy_points(vertices, triangles, transforms, out_vertices, out_triangles):
+    """Mesh.instanced's vertices and triangles: copy i of the vertices under
+    transforms[i], its triangles turned around where the transform mirrors."""
+    nv, nt = len(vertices), len(triangles)
+    for i in range(len(transforms)):
+        m = transforms[i]
+        for v in range(nv):
+            for row in range(3):
+                out_vertices[i * nv + v, row] = (m[row, 0] * vertices[v, 0] + m[row, 1] * vertices[v, 1]
+                                                 + m[row, 2] * vertices[v, 2] + m[row, 3])
+        mirrored = _mirrors(m)
+        for t in range(nt):
+            for corner in range(3):
+                out_triangles[i * nt + t, corner] = triangles[t, 2 - corner if mirrored else corner] + i * nv
+
+
+@kernel("void(f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1])")
+def copy_normals(corner_normals, transforms, out):
+    """Mesh.instanced's corner normals: `corner_normals (nt,3,3)` of copy i
+    by transforms[i]'s cofactor matrix, signed by its determinant, as
+    Mesh.transformed, in its triangles' corner order, into `out (k*nt,3,3)`."""
+    nt = len(corner_normals)
+    cofactor = np.empty((3, 3))
+    for i in range(len(transforms)):
+        m = transforms[i]
+        mirrored = _mirrors(m)
+        sign = -1.0 if mirrored else 1.0
+        # cofactor[r, c] = (-1)^(r+c) times the minor of m[r, c]
+        for r in range(3):
+            for c in range(3):
+                r1, r2, c1, c2 = (r + 1) % 3, (r + 2) % 3, (c + 1) % 3, (c + 2) % 3
+                cofactor[r, c] = m[r1, c1] * m[r2, c2] - m[r1, c2] * m[r2, c1]
+        for t in range(nt):
+            for corner in range(3):
+                source = 2 - corner if mirrored else corner
+                x, y, z = corner_normals[t, source, 0], corner_normals[t, source, 1], corner_normals[t, source, 2]
+                n = out[i * nt + t, corner]
+                for row in range(3):
+                    n[row] = sign * (cofactor[row, 0] * x + cofactor[row, 1] * y + cofactor[row, 2] * z)
+                size = max(np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), 1e-300)
+                for row in range(3):
+                    n[row] /= size
 
 
 def cofactor_matrix(m: np.ndarray) -> np.ndarray:

@@ -38,7 +38,9 @@ class Instances:
     """One mesh under many affine, invertible transforms: `mesh` in object
     space, `transforms (k,4,4)` object to world. Embree keeps one BVH of the
     mesh for all of them (tracing.embree.Instances), and the first copy
-    speaks for all where a body is analysed (holes, winding)."""
+    speaks for all where a body is analysed (holes, winding). The object's
+    own mesh, the copies in world space, holds no corner normals: the
+    accelerator makes them from `mesh`'s (geometry.copy_normals)."""
 
     mesh: Mesh
     transforms: np.ndarray
@@ -68,7 +70,8 @@ class Object:
                   visibility: Visibility = Visibility(), body: Optional[str] = None) -> "Object":
         """The object whose mesh is `local` (object space) under each of
         `transforms (k,4,4)` (Mesh.instanced)."""
-        return cls(name, local.instanced(transforms), material, visibility, body, Instances(local, transforms))
+        return cls(name, local.instanced(transforms, with_normals=False), material, visibility, body,
+                   Instances(local, transforms))
 
     @property
     def copies(self) -> int:
@@ -124,8 +127,8 @@ class Scene:
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo (3,), hi (3,)) of all geometry."""
-        pts = np.concatenate([o.mesh.vertices for o in self.objects]) if self.objects else np.zeros((1, 3))
-        return pts.min(axis=0), pts.max(axis=0)
+        bounds = [o.mesh.bounds for o in self.objects if len(o.mesh.vertices)] or [(np.zeros(3), np.zeros(3))]
+        return np.min([lo for lo, _ in bounds], axis=0), np.max([hi for _, hi in bounds], axis=0)
 
     def extent(self) -> float:
         """Diagonal of the geometry's bounding box: the length the epsilons scale with."""

@@ -57,7 +57,10 @@ def validate_scene(scene: Scene) -> list[str]:
 
     warnings += _check_scale(scene)
     for obj in scene.objects:
-        mesh = obj.mesh
+        # an instanced object's copies are as sound as the mesh they copy, under finite transforms
+        mesh = obj.mesh if obj.instances is None else obj.instances.mesh
+        if obj.instances is not None:
+            _finite(obj.name, "its instances' transforms", obj.instances.transforms)
         if mesh.triangles.min() < 0 or mesh.triangles.max() >= len(mesh.vertices):
             raise SceneError(f"{obj.name}: a triangle refers to a vertex that does not exist")
         if mesh.corner_uvs is not None:
@@ -112,16 +115,14 @@ def _check_scale(scene: Scene) -> list[str]:
     for obj in scene.objects:
         if len(obj.mesh.triangles) == 0:
             raise SceneError(f"{obj.name}: the mesh has no triangles")
-        bad = ~np.isfinite(obj.mesh.vertices).all(axis=1)
-        if bad.any():
-            vertex = int(bad.argmax())
+        if not np.isfinite(obj.mesh.bounds).all():
+            vertex = int((~np.isfinite(obj.mesh.vertices).all(axis=1)).argmax())
             raise SceneError(f"{obj.name}: its vertex {vertex} is not a finite point "
                              f"{_point(obj.mesh.vertices[vertex])}")
     warnings = _check_far(scene) if len(scene.objects) > 1 else []
     for obj in scene.objects:
-        far = np.abs(obj.mesh.vertices).max(axis=1)
-        if far.max() > _MAX_COORDINATE:
-            vertex = int(far.argmax())
+        if np.abs(obj.mesh.bounds).max() > _MAX_COORDINATE:
+            vertex = int(np.abs(obj.mesh.vertices).max(axis=1).argmax())
             raise SceneError(f"{obj.name}: its vertex {vertex} lies at {_point(obj.mesh.vertices[vertex])}, past "
                              f"the {_MAX_COORDINATE:.0e} m from the origin that the tracing's float32 arithmetic "
                              "holds: move it nearer")
@@ -132,8 +133,8 @@ def _check_far(scene: Scene) -> list[str]:
     """_check_scale's objects far from, or large against, the rest of the
     scene: every other object and the camera, which the user looks from
     (so of two objects far apart, the one far from the camera is named)."""
-    lows = np.array([obj.mesh.vertices.min(axis=0) for obj in scene.objects])
-    highs = np.array([obj.mesh.vertices.max(axis=0) for obj in scene.objects])
+    lows = np.array([obj.mesh.bounds[0] for obj in scene.objects])
+    highs = np.array([obj.mesh.bounds[1] for obj in scene.objects])
     # the bounds of every object but each one: the bounds of those before it and of those after it, and the camera
     eye = np.asarray(scene.camera.matrix, dtype=np.float64)[None, :3, 3]
     rest_low = np.minimum(np.minimum.accumulate(np.concatenate([eye, lows[:-1]])),

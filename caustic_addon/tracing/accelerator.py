@@ -16,6 +16,7 @@ from dataclasses import fields
 import numpy as np
 
 from ..scene import Mesh, Object
+from ..scene.geometry import copy_normals
 from ..util.jit import inline, kernel, named_kernel
 from ..util.parallel import threads_here
 from ..util.vectors import dot1, float_rows, length, normalize, normalize1, row, set_row, sum1
@@ -23,7 +24,7 @@ from . import embree
 from .contact import Contacts
 from .embree import PACKET, intersect1, occluded8, packet_blocked, packet_record, ray_record, set_packet_ray
 from .hits import HIT_TYPES, MISS, Hits
-from .topology import open_edges, signed_volume, triangle_normals
+from .topology import open_edges, signed_volume
 
 _MIN_SPLIT = 8192
 # Origins move this fraction of the scene's diagonal off a surface: well above
@@ -115,10 +116,24 @@ class Accelerator:
         self.body = np.empty(len(objects), dtype=np.int64)
         self.surface = np.arange(len(objects), dtype=np.int64)
         self.closed = np.zeros(len(objects), dtype=bool)
-        sign = np.ones(len(objects))
-        faces = [triangle_normals(obj.mesh.corners) for obj in objects]  # (normals, areas) of each
+        offsets = np.cumsum([0] + [len(obj.mesh.triangles) for obj in objects], dtype=np.int64)
+        self.prim_offset = offsets
+        self.corners = np.empty((offsets[-1], 3, 3))
+        self.face_normal = np.empty((offsets[-1], 3))
+        self.corner_normal = np.empty((offsets[-1], 3, 3))
+        area = np.empty(offsets[-1])
+        for index, obj in enumerate(objects):
+            rows = slice(offsets[index], offsets[index + 1])
+            mesh = obj.mesh
+            _triangle_tables(mesh.vertices, mesh.triangles,
+                             np.zeros((0, 3, 3)) if mesh.corner_normals is None else mesh.corner_normals,
+                             self.corners[rows], self.face_normal[rows], self.corner_normal[rows], area[rows])
+            if obj.instances is not None and obj.instances.mesh.corner_normals is not None:
+                copy_normals(obj.instances.mesh.corner_normals, obj.instances.transforms, self.corner_normal[rows])
+        self.owner = np.repeat(np.arange(len(objects), dtype=np.int64), np.diff(offsets))
+        has_area = [bool(np.any(area[offsets[i]:offsets[i + 1]] > 0)) for i in range(len(objects))]
         for name, members in bodies.items():
-            if any(objects[i].is_caster for i in members) and not any(np.any(faces[i][1] > 0) for i in members):
+            if any(objects[i].is_caster for i in members) and not any(has_area[i] for i in members):
                 self.warnings.append(f"'{name}' has no area (each of its faces is a line or a point): it casts "
                                      "no caustics and shows nothing")
         for members in bodies.values():
@@ -127,32 +142,14 @@ class Accelerator:
                 self.surface[index] = next(j for j in members[:k + 1]
                                            if _same_material(objects[j].material, objects[index].material))
             glass = [i for i in members if objects[i].is_transparent]
-            if glass and any(np.any(faces[i][1] > 0) for i in members):
-                self.closed[glass], sign[glass] = self._body_orientation(members)
-        all_corners, face_normals, corner_normals, areas, owners, offsets = [], [], [], [], [], [0]
-        for index, obj in enumerate(objects):
-            mesh = obj.mesh
-            corners = mesh.corners
-            normals, area = faces[index]
-            normals *= sign[index]
-            if mesh.corner_normals is None:
-                shading = np.repeat(normals[:, None, :], 3, axis=1)
-            else:
-                shading = mesh.corner_normals * sign[index]
-            all_corners.append(corners)
-            face_normals.append(normals)
-            areas.append(area)
-            corner_normals.append(shading)
-            owners.append(np.full(len(normals), index, dtype=np.int64))
-            offsets.append(offsets[-1] + len(normals))
-
-        self.corners = _table(all_corners, (0, 3, 3))
-        self.min_barycentric = np.ascontiguousarray(
-            self._min_barycentric(self.corners, np.concatenate(areas) if areas else np.zeros(0)))
-        self.face_normal = _table(face_normals, (0, 3))
-        self.corner_normal = _table(corner_normals, (0, 3, 3))
-        self.owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
-        self.prim_offset = np.asarray(offsets, dtype=np.int64)
+            if glass and any(has_area[i] for i in members):
+                closed, sign = self._body_orientation(members)
+                self.closed[glass] = closed
+                for i in glass if sign < 0 else ():
+                    self.face_normal[offsets[i]:offsets[i + 1]] *= -1.0
+                    self.corner_normal[offsets[i]:offsets[i + 1]] *= -1.0
+        self.min_barycentric = np.empty((offsets[-1], 3))
+        _min_barycentrics(self.corners, area, self.epsilon, self.min_barycentric)
         self.copy_size = np.array([len(_first_copy(obj).triangles) for obj in objects], dtype=np.int64)
         self._geometries = [embree.Geometry(obj.mesh.vertices, obj.mesh.triangles) if obj.instances is None else
                             embree.Instances(embree.Geometry(obj.instances.mesh.vertices, obj.instances.mesh.triangles),
@@ -208,15 +205,6 @@ class Accelerator:
             self.warnings.append(f"'{name}' has inverted normals; they were flipped for tracing")
             return True, -1.0
         return True, 1.0
-
-    def _min_barycentric(self, corners: np.ndarray, area: np.ndarray) -> np.ndarray:
-        """(N,3) epsilon / altitude onto each corner's opposite edge, where
-        altitude = 2 area / edge length; at most 0.3 (tiny triangles).
-        `area (N,)` of each triangle."""
-        opposite = np.stack([length(corners[:, (k + 1) % 3] - corners[:, (k + 2) % 3]) for k in range(3)], axis=1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            fraction = self.epsilon * opposite / (2.0 * area[:, None])
-        return np.where(np.isfinite(fraction), np.minimum(fraction, 0.3), 0.3)
 
     def _warn_if_thin(self, body: int) -> None:
         """Warn when closed body `body` has a wall thinner than epsilon: a ray
@@ -408,17 +396,50 @@ class Accelerator:
         return out
 
 
+@kernel("void(f8[:, ::1], i8[:, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, ::1], f8[:, :, ::1], f8[::1])")
+def _triangle_tables(vertices, triangles, corner_normals, out_corners, out_face_normal, out_corner_normal, out_area):
+    """Per triangle of a mesh: its corners, unit normal by the right-hand
+    rule on its winding (0 where it has no area), shading normals at the
+    corners (`corner_normals (nt,3,3)`, or none (0,3,3): the face's), and
+    area."""
+    flat = len(corner_normals) == 0
+    for t in range(len(triangles)):
+        for c in range(3):
+            for axis in range(3):
+                out_corners[t, c, axis] = vertices[triangles[t, c], axis]
+        e1 = (out_corners[t, 1, 0] - out_corners[t, 0, 0], out_corners[t, 1, 1] - out_corners[t, 0, 1],
+              out_corners[t, 1, 2] - out_corners[t, 0, 2])
+        e2 = (out_corners[t, 2, 0] - out_corners[t, 0, 0], out_corners[t, 2, 1] - out_corners[t, 0, 1],
+              out_corners[t, 2, 2] - out_corners[t, 0, 2])
+        n = (e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0])
+        double_area = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+        divisor = double_area if double_area > 0.0 else 1.0
+        out_area[t] = 0.5 * double_area
+        for axis in range(3):
+            out_face_normal[t, axis] = n[axis] / divisor
+            for c in range(3):
+                out_corner_normal[t, c, axis] = out_face_normal[t, axis] if flat else corner_normals[t, c, axis]
+
+
+@kernel("void(f8[:, :, ::1], f8[::1], f8, f8[:, ::1])")
+def _min_barycentrics(corners, area, epsilon, out):
+    """(N,3) epsilon / altitude onto each corner's opposite edge, where
+    altitude = 2 area / edge length; at most 0.3 (tiny triangles)."""
+    for t in range(len(corners)):
+        for k in range(3):
+            a, b = (k + 1) % 3, (k + 2) % 3
+            edge = np.sqrt((corners[t, a, 0] - corners[t, b, 0]) ** 2 + (corners[t, a, 1] - corners[t, b, 1]) ** 2
+                           + (corners[t, a, 2] - corners[t, b, 2]) ** 2)
+            fraction = epsilon * edge / (2.0 * area[t]) if area[t] > 0.0 else np.inf
+            out[t, k] = min(fraction, 0.3) if np.isfinite(fraction) else 0.3
+
+
 def _first_copy(obj: Object) -> Mesh:
     """`obj`'s mesh, or the first of the copies it is made of (scene.Instances)."""
     if obj.instances is None:
         return obj.mesh
     local = obj.instances.mesh
     return Mesh(obj.mesh.vertices[:len(local.vertices)], obj.mesh.triangles[:len(local.triangles)])
-
-
-def _table(parts: list[np.ndarray], empty: tuple[int, ...]) -> np.ndarray:
-    """The per-triangle arrays `parts` of each object end to end, C-contiguous float64."""
-    return np.ascontiguousarray(np.concatenate(parts), dtype=np.float64) if parts else np.zeros(empty)
 
 
 @inline

@@ -589,10 +589,12 @@ def test_two_meshes_one_instancer_places_are_two_objects(addon):
     holder = scenes.scatter(2, 0.5)
     tree = holder.modifiers[0].node_group
     nodes, links = tree.nodes, tree.links
-    cube, placed, joined = (nodes.new(kind) for kind in ('GeometryNodeMeshCube', 'GeometryNodeInstanceOnPoints',
-                                                         'GeometryNodeJoinGeometry'))
+    cube, chrome, placed, joined = (nodes.new(kind) for kind in (
+        'GeometryNodeMeshCube', 'GeometryNodeSetMaterial', 'GeometryNodeInstanceOnPoints', 'GeometryNodeJoinGeometry'))
+    chrome.inputs['Material'].default_value = scenes.glossy_material()
     links.new(nodes['Grid'].outputs['Mesh'], placed.inputs['Points'])
-    links.new(cube.outputs['Mesh'], placed.inputs['Instance'])
+    links.new(cube.outputs['Mesh'], chrome.inputs['Geometry'])
+    links.new(chrome.outputs['Geometry'], placed.inputs['Instance'])
     links.new(nodes['Instance on Points'].outputs['Instances'], joined.inputs[0])
     links.new(placed.outputs['Instances'], joined.inputs[0])
     links.new(joined.outputs[0], nodes['Group Output'].inputs['Geometry'])
@@ -600,3 +602,11 @@ def test_two_meshes_one_instancer_places_are_two_objects(addon):
     names = sorted(o.name for o in result.scene.objects if o.name.startswith("Scatter"))
     assert names == ["Scatter [Scatter] #1", "Scatter [Scatter] #2"]
     assert sorted(len(engine_object(result, name).mesh.triangles) // 4 for name in names) == [12, 20]
+
+
+def test_instanced_receivers_are_one_object_each_for_maps_of_their_own(addon):
+    lamp_scene()
+    scenes.scatter(2, 0.5, 'GeometryNodeMeshCube', material=scenes.diffuse_material("Pebble"), name="Pebbles")
+    result = read(addon)
+    pebbles = [o for o in result.scene.objects if o.name.startswith("Pebbles [Pebbles #")]
+    assert len(pebbles) == 4 and all(o.is_receiver and o.copies == 1 for o in pebbles)

@@ -32,6 +32,10 @@ def test_each_copy_is_the_mesh_transformed_on_its_own():
         np.testing.assert_allclose(copies.corners[rows], alone.corners, atol=1e-12)
         np.testing.assert_allclose(copies.corner_normals[rows], alone.corner_normals, atol=1e-12)
         np.testing.assert_array_equal(copies.corner_uvs[rows], alone.corner_uvs)
+    # the accelerator makes the copies' shading normals, which the object's mesh does not hold
+    accel = Accelerator([Object.instanced("Copies", local, matrices, Diffuse(0.8))], 10.0, threads=1)
+    assert accel.objects[0].mesh.corner_normals is None
+    np.testing.assert_array_equal(accel.corner_normal, copies.corner_normals)
 
 
 def grid(count: int, spacing: float, z: float) -> np.ndarray:
