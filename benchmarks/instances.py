@@ -1,7 +1,7 @@
-"""Scattered instances: a grid of glass ico-spheres (80 triangles each)
-that Geometry Nodes instance over a floor, 1,000 to 100,000 of them, under
-a point lamp, rendered with Render Caustics at 320x240 and the scene's
-defaults, each count in a process of its own.
+"""A grid of glass ico-spheres (80 triangles each) that Geometry Nodes
+instance over a floor, 1,000 to 100,000 of them, under a point lamp,
+rendered with Render Caustics at 320x240 and the scene's defaults, each
+count in a process of its own.
 
     .venv/bin/python benchmarks/instances.py [--counts 1000 10000 100000]
 
