@@ -117,7 +117,8 @@ def _begin_update(live: Live, kind: str) -> None:
         return
     live.read, live.read_from = read, set(read.sources.values())
     live.read_seconds = time.perf_counter() - clock
-    job = LiveJob(read.scene, preview_settings(settings) if kind == PREVIEW else settings, live.cache,
+    preview = preview_settings(settings, live.schedule.refined_previews)
+    job = LiveJob(read.scene, preview if kind == PREVIEW else settings, live.cache,
                   changed_at=live.changed_at if kind == PREVIEW else None)
     if kind == PREVIEW:
         live.changed_at = None

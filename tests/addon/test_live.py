@@ -257,7 +257,7 @@ def test_schedule_previews_while_changing_then_refines_once(addon):
     from caustics_source.jobs.live import LiveSchedule, PREVIEW, REFINE, REFINE_AFTER
 
     class Job:
-        result, error, cancelled = object(), None, False
+        result, error, cancelled, seconds = object(), None, False, 0.05
 
         def cancel(self):
             self.cancelled = True
@@ -285,6 +285,35 @@ def test_schedule_previews_while_changing_then_refines_once(addon):
     assert refine.cancelled
     refine.result = None
     assert not schedule.ended() and schedule.due() == PREVIEW
+
+
+@pytest.mark.parametrize("seconds, refined", [((0.02, 0.05, 0.09), (False, True, True, True)),
+                                              ((0.02, 0.12, 0.05), (False, True, False, False)),
+                                              ((0.05, 0.02), (False, False, True))])
+def test_previews_refine_their_beams_while_they_fit_their_budget(addon, seconds, refined):
+    """A preview under a third of PREVIEW_BUDGET_S (0.1 s) makes the next
+    ones refine once; a refined one past the budget stops that; between
+    the two, previews keep what they do."""
+    from caustics_source.caustic_addon import RenderSettings
+    from caustics_source.jobs.live import PREVIEW, LiveSchedule, preview_settings
+
+    class Job:
+        result, error = object(), None
+
+    schedule = LiveSchedule()
+    seen = [schedule.refined_previews]
+    for took in seconds:
+        job = Job()
+        job.seconds = took
+        schedule.changed()
+        schedule.started(PREVIEW, job)
+        assert schedule.ended()
+        seen.append(schedule.refined_previews)
+    assert tuple(seen) == refined
+    settings = RenderSettings(beam_refinement=3)
+    assert preview_settings(settings, True).beam_refinement == 1
+    assert preview_settings(settings, False).beam_refinement == 0
+    assert preview_settings(RenderSettings(beam_refinement=0), True).beam_refinement == 0
 
 
 def test_undo_redo_save_and_load_leave_one_caustic_that_follows(live, tmp_path):
