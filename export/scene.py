@@ -93,14 +93,21 @@ def read_for_bake(context, depsgraph=None, meshes=None) -> SceneRead:
     return read
 
 
+def _name(source: str, parent: Optional[str], number: int) -> str:
+    """The engine name of the depsgraph's object instance `number` of object
+    `source`, placed by instancer `parent` (None: the object itself)."""
+    return source if parent is None else f"{source} [{parent} #{number}]"
+
+
 def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[str]] = None,
                   meshes: Optional[dict] = None) -> SceneRead:
     """The camera, lamps and meshes of `depsgraph`; with `renderable`, only
     the objects it names (and instances of them). An instancer's instances
     of one mesh are read once and placed under all their matrices at once:
-    one engine object per material, named "Object [Instancer]" (Object.copies),
-    or one per instance, "Object [Instancer #n]", where it is textured or a
-    receiver (meshes.MeshSource.one_by_one)."""
+    one engine object per material, named "Object [Instancer]" (Object.copies;
+    "... #n" where one instancer places several meshes), or one per
+    instance, "Object [Instancer #n]", where it is textured or a receiver
+    (meshes.MeshSource.one_by_one)."""
     camera = read_camera(scene, depsgraph) if with_camera else dummy_camera()
     warnings = camera_warnings(scene) if with_camera else []
     read = SceneRead(Scene(objects=[], lights=[], camera=camera), warnings)
@@ -118,32 +125,39 @@ def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[
     for number, inst in enumerate(depsgraph.object_instances):
         ob = inst.object
         source = ob.original
-        if renderable is not None and (inst.parent.original if inst.is_instance else source).name not in renderable:
+        parent = inst.parent.original.name if inst.is_instance else None
+        if renderable is not None and (parent or source.name) not in renderable:
             continue
-        name = f"{source.name} [{inst.parent.original.name} #{number}]" if inst.is_instance else source.name
-        matrix = numpy_matrix(inst.matrix_world)
         if ob.type == 'LIGHT':
-            read.scene.lights.append(engine_light(ob, matrix, name, warnings))
+            name = _name(source.name, parent, number)
+            read.scene.lights.append(engine_light(ob, numpy_matrix(inst.matrix_world), name, warnings))
             read.sources[name] = source.name
         elif ob.type in UNSUPPORTED_GEOMETRY:
-            warnings.append(f"'{name}': {ob.type.lower()} objects are not supported; convert it to a mesh")
-        elif ob.type == 'MESH' and source.caustic.role != 'IGNORE' and not inst.is_instance:
+            warnings.append(f"'{_name(source.name, parent, number)}': {ob.type.lower()} objects are not supported; "
+                            "convert it to a mesh")
+        elif ob.type != 'MESH' or source.caustic.role == 'IGNORE':
+            continue
+        elif parent is None:
             visibility = object_visibility(inst, depsgraph.view_layer)
-            add(mesh_objects(ob, name, matrix, visibility, surfaces, warnings, meshes), source.name, False)
-        elif ob.type == 'MESH' and source.caustic.role != 'IGNORE':
-            key = (inst.parent.original.name, source.name, ob.data.as_pointer())
+            add(mesh_objects(ob, source.name, numpy_matrix(inst.matrix_world), visibility, surfaces, warnings, meshes),
+                source.name, False)
+        else:
+            key = (parent, source.name, ob.data.as_pointer())
             if key not in sources:
-                batch = f"{source.name} [{inst.parent.original.name}]"
-                sources[key] = (read_source(ob, batch, surfaces, warnings),
+                sources[key] = (read_source(ob, f"{source.name} [{parent}]", surfaces, warnings),
                                 object_visibility(inst, depsgraph.view_layer))
             mesh, visibility = sources[key]
             if mesh is not None and mesh.one_by_one:
-                add(place(mesh, name, matrix[None], visibility, surfaces, warnings), source.name, True)
+                add(place(mesh, _name(source.name, parent, number), numpy_matrix(inst.matrix_world)[None], visibility,
+                          surfaces, warnings),
+                    source.name, True)
             elif mesh is not None:
-                batches.setdefault(key, []).append(matrix)
-    names = collections.Counter(mesh.name for mesh, _ in sources.values() if mesh is not None)
-    for number, (key, matrices) in enumerate(batches.items()):
+                batches.setdefault(key, []).append(numpy_matrix(inst.matrix_world))
+    shared = collections.Counter(sources[key][0].name for key in batches)
+    numbered: collections.Counter = collections.Counter()
+    for key, matrices in batches.items():
         mesh, visibility = sources[key]
-        name = mesh.name if names[mesh.name] == 1 else f"{mesh.name} #{number + 1}"
+        numbered[mesh.name] += 1
+        name = mesh.name if shared[mesh.name] == 1 else f"{mesh.name} #{numbered[mesh.name]}"
         add(place(mesh, name, np.stack(matrices), visibility, surfaces, warnings), mesh.original.name, True)
     return read
