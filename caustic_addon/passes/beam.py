@@ -37,6 +37,8 @@ normals of their own and land as photons.
 When a material disperses, every wavelength band traces its own grid with
 its own IOR and carries the band's RGB weight (spectrum.py): beams of
 different bands land apart, which is the colour of a dispersive caustic.
+The bands' grids of a lamp are traced in one batch, as the grids of one
+size are: a batch's cost is mostly its work per bounce.
 """
 
 from __future__ import annotations
@@ -204,19 +206,18 @@ def _throughputs(weight, floor, out):
 
 
 def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap], origins: np.ndarray,
-                dirs: np.ndarray, weight: np.ndarray, vertex: np.ndarray, max_depth: int, start_medium: int = MISS,
-                band: int = 0, seed: int = 0, differentials: Optional[tuple[np.ndarray, np.ndarray]] = None
-                ) -> Landings:
+                dirs: np.ndarray, weight: np.ndarray, vertex: np.ndarray, bands: np.ndarray, max_depth: int,
+                start_medium: int = MISS, seed: int = 0,
+                differentials: Optional[tuple[np.ndarray, np.ndarray]] = None) -> Landings:
     """Follow every branch of the vertex paths `vertex (n,)`, starting
     inside object `start_medium` (MISS: in air), until it lands on a
     receiver (after at least one specular event), leaves, or fades below
-    MIN_BRANCH_WEIGHT. Dielectrics refract with their IOR in wavelength band
-    `band`; rough surfaces scatter by random numbers of `seed`. The paths
+    MIN_BRANCH_WEIGHT. Dielectrics refract with their IOR in each path's
+    wavelength band `bands (n,)`; rough surfaces scatter by random numbers of `seed`. The paths
     carry `differentials` (d_origins, d_dirs (n,2,3)) through their bounces
     where given (their landings' d_xy)."""
     tracer = BeamTracer(accel, materials, maps, seed)
-    paths = Paths.start(origins, dirs, weight, vertex, start_medium, relative_floor(weight),
-                        np.full(len(vertex), band, dtype=np.int64), family=True)
+    paths = Paths.start(origins, dirs, weight, vertex, start_medium, relative_floor(weight), bands, family=True)
     if differentials is not None:
         paths = replace(paths, d_origins=differentials[0].astype(np.float32),
                         d_dirs=differentials[1].astype(np.float32))
@@ -225,15 +226,16 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
 
 
 def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: Accelerator, materials: Materials,
-               maps: dict[int, IlluminationMap], max_depth: int, start_medium: int = MISS,
-               levels: int = 0, band: int = 0, seed: int = 0) -> JobResult:
+               maps: dict[int, IlluminationMap], max_depth: int, start_medium: int, levels: int,
+               bands: np.ndarray, seed: int) -> JobResult:
     """Trace grid rows [first_row, end_row) of `sources`, grids of one size
-    traced as one batch (the points of a lamp with a size, say), in
-    wavelength band `band`, whose paths start inside object `start_medium`,
+    traced as one batch (the points of a lamp with a size, say, and each
+    point's grid once per wavelength band), `sources[k]` in wavelength band
+    `bands[k]`, whose paths start inside object `start_medium`,
     splitting cells where their paths diverge (`levels` times at most), and
     turn the landed paths into beams (coherent triangles) and fallback
-    photons. The band's lamp rays are its grid points (its last row is the
-    next band's first, and counts there) and those refinement added."""
+    photons. The lamp rays are the grid points (the last row is the next
+    row band's first, and counts there) and those refinement added."""
     grid = sources[0].grid
     scale = 1 << levels
     width = (grid - 1) * scale + 1
@@ -247,16 +249,14 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
         rays = [source.rays_at(np.stack([local[which == k] // width, local[which == k] % width], axis=1) / scale)
                 for k, source in enumerate(sources)]
         origins, dirs, weight = (np.concatenate(parts) for parts in zip(*rays))
-        weight *= materials.band_weights[band]
         order = np.argsort(which, kind="stable")
-        if not spreading:
-            return trace_paths(accel, materials, maps, origins, dirs, weight, vertex[order], max_depth,
-                               start_medium, band, seed)
-        differentials = tuple(np.concatenate(parts) for parts in zip(*(
+        band = bands[which[order]]
+        weight *= materials.band_weights[band]
+        differentials = None if not spreading else tuple(np.concatenate(parts) for parts in zip(*(
             source.differentials(d) for source, (_, d, _) in zip(sources, rays))))
-        landed = trace_paths(accel, materials, maps, origins, dirs, weight, vertex[order], max_depth, start_medium,
-                             band, seed, differentials)
-        if landed.d_xy is not None:
+        landed = trace_paths(accel, materials, maps, origins, dirs, weight, vertex[order], band, max_depth,
+                             start_medium, seed, differentials)
+        if spreading and landed.d_xy is not None:
             # per unit along the cell's axes, to each of its corners
             landed.d_xy = np.einsum("nkj,njc->nkc", np.take(cell_corners, landed.vertex // keys, axis=0),
                                     landed.d_xy)
@@ -600,7 +600,8 @@ def photon_lamps(lights: list[Light], scene: Scene) -> list[Light]:
 def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel: Accelerator, materials: Materials,
               maps: dict, monitor: Monitor, share: float) -> LampPassStats:
     """Trace the grids of the `lights` in bands of rows into beams on
-    `maps`, once per wavelength band, with the lamp rays shared among them;
+    `maps`, once per wavelength band, with the lamp rays shared among them
+    (the bands' grids in one batch);
     a lamp with a size is points of it (lamp_points.py). Neighbouring bands
     of rows share a row, so every grid triangle is in one."""
     count = materials.band_count
@@ -623,6 +624,8 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
         stacks.setdefault((source.grid, lamp_medium(accel, source.light)), []).append(source)
     jobs = []
     for (grid, medium), stack in stacks.items():
+        bands = np.repeat(np.arange(count), len(stack))
+        stack = stack * count
         # GRID_BANDS bands of rows, of at most chunk_size / BAND_SHARE points
         # each: a band's cost is mostly work per bounce and refinement level,
         # whatever its paths, so fewer bands are faster (the pool's beam pass
@@ -631,8 +634,8 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
         # size are traced together
         rows = max(1, min(settings.chunk_size // (BAND_SHARE * grid * len(stack)), -(-(grid - 1) // GRID_BANDS)))
         jobs += [partial(band_beams, stack, first, min(first + rows + 1, grid), accel, materials, maps,
-                         settings.max_depth, medium, settings.beam_refinement, band, settings.seed)
-                 for band in range(count) for first in range(0, grid - 1, rows)]
+                         settings.max_depth, medium, settings.beam_refinement, bands, settings.seed)
+                 for first in range(0, grid - 1, rows)]
     # bands of rows spread over the grids, both ends first, in any first part
     # of the jobs: the maps lay their layers out from the first beams they get
     # (BeamMap)
