@@ -75,14 +75,15 @@ def _material_parts(ob_eval, material_index: np.ndarray, name: str, warnings: li
         return [(None, np.arange(len(material_index)), [])]
     slot_of = np.clip(material_index, 0, len(slots) - 1)
     parts: dict = {}
-    for slot in np.unique(slot_of).tolist():
+    for slot in np.flatnonzero(np.bincount(slot_of, minlength=len(slots))).tolist():
         material = slots[slot]
         if material is None:
             warnings.append(f"'{name}': material slot {slot + 1} is empty; {EMPTY_SLOT}")
         key = None if material is None else material.original.name
-        _, rows, numbers = parts.get(key, (None, np.zeros(0, dtype=np.int64), []))
-        parts[key] = (material, np.union1d(rows, np.flatnonzero(slot_of == slot)), numbers + [slot + 1])
-    return list(parts.values())
+        _, numbers = parts.get(key, (None, []))
+        parts[key] = (material, numbers + [slot])
+    return [(material, np.arange(len(slot_of)) if len(parts) == 1 else np.flatnonzero(np.isin(slot_of, numbers)),
+             [n + 1 for n in numbers]) for material, numbers in parts.values()]
 
 
 def flattened(matrix: np.ndarray, vertices: np.ndarray) -> bool:
@@ -90,9 +91,11 @@ def flattened(matrix: np.ndarray, vertices: np.ndarray) -> bool:
     space `vertices (n,3)` to 0 along an axis it has depth along (a plane
     scaled to 0 across itself is not flattened)."""
     _, scales, axes = np.linalg.svd(matrix[:3, :3])
-    extent = float(np.ptp(vertices, axis=0).max(initial=0.0)) if len(vertices) else 0.0
     null = axes[scales <= 1e-12 * max(float(scales.max()), 1e-300)]
-    return bool(len(null)) and float(np.ptp(vertices @ null.T, axis=0).max()) > 1e-9 * extent
+    if not len(null) or not len(vertices):
+        return False
+    extent = float(np.ptp(vertices, axis=0).max())
+    return float(np.ptp(vertices @ null.T, axis=0).max()) > 1e-9 * extent
 
 
 def _surface(material, surfaces: dict, warnings: list[str]):

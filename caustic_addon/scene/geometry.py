@@ -63,30 +63,21 @@ class Mesh:
         scale, and defined when M is singular: a mesh scaled to 0 along an
         axis keeps the normals of the faces across that axis); the
         triangles such a matrix flattens to no area are dropped."""
-        m = np.asarray(matrix, dtype=np.float64)
-        verts = self.vertices @ m[:3, :3].T + m[:3, 3]
-        det = float(np.linalg.det(m[:3, :3]))
-        tris, normals, uvs = self.triangles, self.corner_normals, self.corner_uvs
-        if det < 0.0:
-            tris = tris[:, ::-1]
-            normals = None if normals is None else normals[:, ::-1]
-            uvs = None if uvs is None else uvs[:, ::-1]
-        if normals is not None:
-            normals = normals @ cofactor_matrix(m[:3, :3]).T * (-1.0 if det < 0.0 else 1.0)
-            length = np.linalg.norm(normals, axis=-1, keepdims=True)
-            normals = normals / np.maximum(length, 1e-300)
-        if det == 0.0:
-            keep = with_area(verts, tris)
-            tris = tris[keep]
-            normals = None if normals is None else normals[keep]
-            uvs = None if uvs is None else uvs[keep]
-        return Mesh(verts, tris, normals, uvs)
+        m = np.asarray(matrix, dtype=np.float64).reshape(1, 4, 4)
+        moved = self.instanced(m)
+        if np.linalg.det(m[0, :3, :3]) != 0.0:
+            return moved
+        keep = with_area(moved.vertices, moved.triangles)
+        return Mesh(moved.vertices, moved.triangles[keep],
+                    None if moved.corner_normals is None else moved.corner_normals[keep],
+                    None if moved.corner_uvs is None else moved.corner_uvs[keep])
 
     def instanced(self, transforms: np.ndarray, with_normals: bool = True) -> "Mesh":
-        """This mesh once under each of `transforms (k,4,4)`, affine and
-        invertible, as one mesh whose copy i is `transformed(transforms[i])`:
-        its vertices and triangles follow copy i-1's; its corner normals only
-        `with_normals`. All copies in one kernel, so that an instancer's
+        """This mesh once under each of `transforms (k,4,4)`, affine, as one
+        mesh whose copy i follows copy i-1: copy i's vertices under
+        transforms[i], its triangles turned around where it mirrors, and,
+        only `with_normals`, its corner normals by the cofactor matrix
+        (`transformed`, which also drops what a singular one flattens). All copies in one kernel, so that an instancer's
         thousands of instances cost no Python loop."""
         m = np.ascontiguousarray(transforms, dtype=np.float64).reshape(-1, 4, 4)
         k, nv, nt = len(m), len(self.vertices), len(self.triangles)
@@ -156,14 +147,6 @@ def copy_normals(corner_normals, transforms, out):
                 size = max(np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), 1e-300)
                 for row in range(3):
                     n[row] /= size
-
-
-def cofactor_matrix(m: np.ndarray) -> np.ndarray:
-    """(3,3) cofactor matrix of `m (3,3)`: its columns are the cross
-    products of m's columns in turn, m1 x m2, m2 x m0, m0 x m1; it equals
-    det(m) m^-T where m is invertible."""
-    c = m.T
-    return np.stack([np.cross(c[1], c[2]), np.cross(c[2], c[0]), np.cross(c[0], c[1])], axis=1)
 
 
 def with_area(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
