@@ -130,7 +130,10 @@ def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[
             continue
         if ob.type == 'LIGHT':
             name = _name(source.name, parent, number)
-            read.scene.lights.append(engine_light(ob, numpy_matrix(inst.matrix_world), name, warnings))
+            lamp = engine_light(ob, numpy_matrix(inst.matrix_world), name, warnings)
+            seen = object_visibility(inst, depsgraph.view_layer)
+            lamp.visibility = Visibility(camera=seen.camera, glossy=seen.glossy, transmission=seen.transmission)
+            read.scene.lights.append(lamp)
             read.sources[name] = source.name
         elif ob.type in UNSUPPORTED_GEOMETRY:
             warnings.append(f"'{_name(source.name, parent, number)}': {ob.type.lower()} objects are not supported; "

@@ -42,6 +42,10 @@ Colours are linear RGB, a number (grey) or [r, g, b]. Positions are metres.
                direction (area) [[0, 1, 0], or [1, 0, 0] facing along y]
   spread       degrees of the cone it emits into, 0..180 (area) [180.0]
   color        colour >= 0 [1.0]
+  visible_camera, visible_glossy, visible_transmission
+               whether the camera, reflections and refractions see the lamp
+               itself (point, spot and area with a size, sun with an
+               angle), as Blender's Ray Visibility [false, true, true]
 
 [photons]      the paper's photon pass
   lamp_rays    rays traced from the lamp, integer >= 0; the paper used
@@ -98,15 +102,15 @@ from __future__ import annotations
 import json
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable, Optional
 
 import numpy as np
 
 from ..optics.media import absorption_from_color
-from ..scene import (AreaLight, Camera, Dielectric, Diffuse, Light, Mesh, Object, PointLight, Reflector, RenderSettings, Scene,
-                     SpotLight, SunLight, World, shapes)
+from ..scene import (AreaLight, Camera, Dielectric, Diffuse, Light, Mesh, Object, PointLight, Reflector,
+                     RenderSettings, Scene, SpotLight, SunLight, Visibility, World, shapes)
 from ..scene.color import RGB
 from ..scene.settings import MAX_BEAM_REFINEMENT
 
@@ -248,6 +252,9 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "up": vector(nonzero=True, default=None),
         "spread": number("in 0..180", lambda x: 0 <= x <= 180, 180.0),
         "color": triple(">= 0", _non_negative, np.ones(3)),
+        "visible_camera": boolean(False),
+        "visible_glossy": boolean(True),
+        "visible_transmission": boolean(True),
     },
     "photons": {
         "lamp_rays": integer(0, RenderSettings.lamp_rays),
@@ -292,11 +299,14 @@ OBJECT_KEYS = {
 }
 
 # The keys each lamp type takes.
+LAMP_VISIBILITY_KEYS = ("visible_camera", "visible_glossy", "visible_transmission")
 LAMP_KEYS = {
-    "point": ("type", "position", "power", "radius", "soft_falloff", "color"),
-    "spot": ("type", "position", "direction", "power", "radius", "soft_falloff", "spot_size", "blend", "color"),
-    "sun": ("type", "direction", "strength", "angle", "color"),
-    "area": ("type", "position", "direction", "power", "shape", "size", "size_y", "up", "spread", "color"),
+    "point": ("type", "position", "power", "radius", "soft_falloff", "color", *LAMP_VISIBILITY_KEYS),
+    "spot": ("type", "position", "direction", "power", "radius", "soft_falloff", "spot_size", "blend", "color",
+             *LAMP_VISIBILITY_KEYS),
+    "sun": ("type", "direction", "strength", "angle", "color", *LAMP_VISIBILITY_KEYS),
+    "area": ("type", "position", "direction", "power", "shape", "size", "size_y", "up", "spread", "color",
+             *LAMP_VISIBILITY_KEYS),
 }
 
 
@@ -419,6 +429,12 @@ def _value(field: Field, raw: dict, table: str, key: str, name: str) -> Any:
 
 
 def _lamp(lamp: dict, name: str) -> Light:
+    seen = Visibility(camera=lamp["visible_camera"], glossy=lamp["visible_glossy"],
+                      transmission=lamp["visible_transmission"])
+    return replace(_lamp_of_type(lamp, name), visibility=seen)
+
+
+def _lamp_of_type(lamp: dict, name: str) -> Light:
     if lamp["type"] == "point":
         return PointLight(lamp["position"], lamp["power"], lamp["color"], radius=lamp["radius"],
                           soft_falloff=lamp["soft_falloff"])

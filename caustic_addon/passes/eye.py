@@ -44,6 +44,7 @@ from functools import partial
 import numpy as np
 
 from ..emission.environment import Environment
+from ..emission.radiometry import is_delta
 from ..maps.charts import PlaneChart
 from ..maps.illumination_map import IlluminationMap
 from ..sampling.hash import stream_key
@@ -59,6 +60,7 @@ from .interface import Interface
 from .camera_rays import camera_footprints, eye_rays, pixel_offsets, ray_differentials
 from .direct_light import direct_radiance, rough_specular_radiance, strata, world_light
 from .paths import Paths, relative_floor
+from .seen_lamps import lamps_met
 from .world_paths import WorldThroughCasters
 
 PASSES = ("direct", "caustic", "ambient")
@@ -103,6 +105,7 @@ class EyeTracer:
         self.holdout, self.adaptive_shadows = holdout, not edge_pass
         self.environment, self.sky_paths, self.settings = environment, sky_paths, settings
         self.dark_world = scene.world.is_black
+        self.sized_lamps = [light for light in scene.lights if not is_delta(light)]
         self.energy, self.spp = settings.energy, spp
         self.stratum = 1.0 / math.sqrt(spp)
         self.pixels = np.ascontiguousarray(pixels, dtype=np.int64)
@@ -128,8 +131,24 @@ class EyeTracer:
     def _met(self, rays: Paths, hits: Hits) -> None:
         camera = ~rays.specular
         self.first[rays.ids[camera]] = hits.obj[camera]
+        self._lamps_met(rays, hits.t)
+
+    def _lamps_met(self, rays: Paths, reach: np.ndarray) -> None:
+        """The lamps with a size that `rays` meet before `reach (n,)`, into
+        the direct pass: seen straight on and in smooth surfaces. Rays that
+        left a rough surface see none, as its lobe's lamp samples
+        (`_highlights`) hold that light."""
+        if not self.sized_lamps or not len(rays):
+            return
+        after = np.take(self.accel.owner, np.maximum(rays.surface, 0))
+        smooth = (rays.surface == MISS) | (np.take(self.materials.alpha, after) <= 0.0)
+        if not smooth.all():
+            rays, reach = rays.select(smooth), reach[smooth]
+        radiance = lamps_met(self.sized_lamps, self.energy, rays.origins, rays.dirs, reach, rays.kind)
+        self._add("direct", rays.ids, rays.weight, radiance)
 
     def escaped(self, rays: Paths) -> None:
+        self._lamps_met(rays, np.full(len(rays), np.inf))
         if not self.dark_world:
             self._add("ambient", rays.ids, rays.weight, self.environment.radiance(rays.dirs))
 

@@ -1,5 +1,10 @@
 """Blender's lamps and world, in Blender's units (emission/radiometry.py
-turns them into radiometry)."""
+turns them into radiometry).
+
+Every lamp has a `visibility`: the eye rays that see the lamp itself
+(passes/seen_lamps.py), by Blender's Ray Visibility of the light object:
+camera, glossy and transmission (LAMP_VISIBILITY, Blender's default, hides
+it from the camera)."""
 
 from __future__ import annotations
 
@@ -10,6 +15,7 @@ from typing import Literal, Optional, Union
 import numpy as np
 
 from .color import RGB, rgb
+from .visibility import LAMP_VISIBILITY, Visibility
 
 
 def _unit(vector) -> np.ndarray:
@@ -31,6 +37,7 @@ class PointLight:
     power: float
     color: RGB = field(default_factory=lambda: np.ones(3))
     name: str = "Point"
+    visibility: Visibility = LAMP_VISIBILITY
     radius: float = 0.0
     soft_falloff: bool = True
 
@@ -56,6 +63,7 @@ class SpotLight:
     blend: float = 0.15
     color: RGB = field(default_factory=lambda: np.ones(3))
     name: str = "Spot"
+    visibility: Visibility = LAMP_VISIBILITY
     radius: float = 0.0
     soft_falloff: bool = True
 
@@ -78,6 +86,7 @@ class SunLight:
     strength: float
     color: RGB = field(default_factory=lambda: np.ones(3))
     name: str = "Sun"
+    visibility: Visibility = LAMP_VISIBILITY
     angle: float = 0.0
 
     def __post_init__(self):
@@ -108,6 +117,7 @@ class AreaLight:
     spread: float = math.pi
     color: RGB = field(default_factory=lambda: np.ones(3))
     name: str = "Area"
+    visibility: Visibility = LAMP_VISIBILITY
 
     def __post_init__(self):
         self.center = np.asarray(self.center, dtype=np.float64).reshape(3)

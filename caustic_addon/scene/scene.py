@@ -12,25 +12,7 @@ from .color import RGB, rgb
 from .geometry import Mesh
 from .lights import Light, World
 from .materials import Dielectric, Diffuse, Material, Reflector
-
-
-@dataclass(frozen=True)
-class Visibility:
-    """Which rays see an object, as Blender's Object > Visibility > Ray
-    Visibility and Holdout, read the way Cycles reads them (its PATH_RAY_*
-    flags, kernel/types.h; path_state_ray_visibility, after a refraction
-    only the transmission flag counts): `camera` eye rays before any
-    specular event, `glossy` eye rays after a reflection, `transmission` eye
-    rays after a refraction, `shadow` the shadow rays toward lamps and the
-    world. Where a camera ray meets a `holdout` object its pixel is cut out,
-    colour and alpha 0; every other ray sees the object as usual. The pass
-    from the lamps sees every object, as light does in Cycles."""
-
-    camera: bool = True
-    glossy: bool = True
-    transmission: bool = True
-    shadow: bool = True
-    holdout: bool = False
+from .visibility import Visibility
 
 
 @dataclass

@@ -404,6 +404,15 @@ def test_lamps_with_a_size():
         config.parse(SMALL.replace("power = 0.8", "power = 0.8\nangle = 1"))
 
 
+def test_a_lamps_ray_visibility():
+    """Blender's defaults: hidden from the camera, seen in reflections and through glass."""
+    default = config.parse(SMALL).lamp.visibility
+    assert (default.camera, default.glossy, default.transmission) == (False, True, True)
+    seen = config.parse(SMALL.replace("power = 0.8", "power = 0.8\nvisible_camera = true\n"
+                                      "visible_transmission = false")).lamp.visibility
+    assert (seen.camera, seen.glossy, seen.transmission) == (True, True, False)
+
+
 # --- OBJ -----------------------------------------------------------------------------------------------------
 
 SQUARE = "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 3\n"

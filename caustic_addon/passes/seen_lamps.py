@@ -1,0 +1,148 @@
+"""The lamps that eye rays meet: a lamp with a size seen straight on, and
+its glint in smooth glass, water and mirrors. Cycles lets rays meet the
+lamps themselves (`kernel/light/{area,point,distant}.h`, *_intersect):
+
+- an area lamp is its rectangle or ellipse, seen from its front only, of
+  radiance colour P / (pi A) times its spread weight at the angle the ray
+  makes with its normal (radiometry.spread_factor1);
+- a point or spot lamp of radius r is, with Soft Falloff, the disc of
+  radius r about its centre that faces the ray's origin, and without it
+  the sphere of radius r, both of radiance colour P / (4 pi^2 r^2), a
+  spot's times its cone mask for the ray's direction reversed;
+- a sun of angle 2h is its disc of directions, seen by rays that leave the
+  scene, of radiance colour S / (pi sin^2 h).
+
+Lamps hide nothing: a ray sees every lamp in front of what it meets. Each
+lamp is seen by the kinds of ray its Ray Visibility allows (Camera,
+Glossy, Transmission; in Blender a lamp is not seen by the camera until
+its Camera box is ticked). Lamps of size 0 are never met."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..emission import radiometry
+from ..emission.radiometry import spot_attenuation1, spread_factor1
+from ..scene import AreaLight, Light, SpotLight, SunLight
+from ..tracing.accelerator import CAMERA, REFLECTED, REFRACTED
+from ..util.jit import kernel
+from ..util.rows import contiguous
+from ..util.vectors import dot1, row
+
+
+def seen_by(light: Light, kind: np.ndarray) -> np.ndarray:
+    """(n,) bool: whether rays of `kind (n,)` (CAMERA, REFLECTED,
+    REFRACTED) see `light`, by its ray visibility."""
+    flags = np.zeros(max(CAMERA, REFLECTED, REFRACTED) + 1, dtype=bool)
+    flags[[CAMERA, REFLECTED, REFRACTED]] = (light.visibility.camera, light.visibility.glossy,
+                                             light.visibility.transmission)
+    return flags[kind]
+
+
+def lamps_met(lights: list[Light], energy: float, origins: np.ndarray, dirs: np.ndarray, reach: np.ndarray,
+              kind: np.ndarray) -> np.ndarray:
+    """(n,3) radiance W/(m^2 sr) of the lamps with a size that rays from
+    `origins (n,3)` along unit `dirs (n,3)` of `kind (n,)` meet before
+    `reach (n,)` (inf where they leave the scene)."""
+    out = np.zeros((len(dirs), 3))
+    origins, dirs, reach = contiguous(origins, np.float64), contiguous(dirs, np.float64), contiguous(reach, np.float64)
+    for light in lights:
+        if radiometry.is_delta(light):
+            continue
+        rows = np.flatnonzero(seen_by(light, kind))
+        if not len(rows):
+            continue
+        if isinstance(light, SunLight):
+            _sun_met(out, dirs, reach, rows, contiguous(-light.direction, np.float64), math.cos(0.5 * light.angle),
+                     radiometry.sun_radiance(light, energy))
+        elif isinstance(light, AreaLight):
+            _area_met(out, origins, dirs, reach, rows, *(contiguous(v, np.float64) for v in (
+                light.center, light.axis_x, light.axis_y, light.direction)), light.shape == "ELLIPSE",
+                float(light.spread), radiometry.lamp_radiance(light, energy))
+        else:
+            spot = isinstance(light, SpotLight)
+            _point_met(out, origins, dirs, reach, rows, contiguous(light.position, np.float64), float(light.radius),
+                       bool(light.soft_falloff), radiometry.lamp_radiance(light, energy), spot,
+                       contiguous(light.direction if spot else np.zeros(3), np.float64),
+                       math.cos(0.5 * light.spot_size) if spot else 1.0, float(light.blend) if spot else 0.0)
+    return out
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8, f8[::1])")
+def _sun_met(out, dirs, reach, rows, toward, cos_half, radiance):
+    """The sun's disc, `toward (3,)` unit, half-angle acos(cos_half), in the
+    directions of the rows that leave the scene."""
+    for i in rows:
+        if reach[i] == math.inf and dot1(row(dirs, i), (toward[0], toward[1], toward[2])) >= cos_half:
+            for c in range(3):
+                out[i, c] += radiance[c]
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8[::1], f8[::1], f8[::1], b1, f8,"
+        " f8[::1])")
+def _area_met(out, origins, dirs, reach, rows, center, axis_x, axis_y, normal, ellipse, spread, radiance):
+    """The area lamp: the plane of its axes, met in front of its emitting
+    side; the point's coordinates (x, y) along the half-axes, by their
+    Gram matrix, inside the unit square or, for an `ellipse`, disc."""
+    plane = (axis_x[1] * axis_y[2] - axis_x[2] * axis_y[1], axis_x[2] * axis_y[0] - axis_x[0] * axis_y[2],
+             axis_x[0] * axis_y[1] - axis_x[1] * axis_y[0])
+    ax, ay = (axis_x[0], axis_x[1], axis_x[2]), (axis_y[0], axis_y[1], axis_y[2])
+    xx, xy, yy = dot1(ax, ax), dot1(ax, ay), dot1(ay, ay)
+    det = xx * yy - xy * xy
+    if det <= 0.0:
+        return
+    n = (normal[0], normal[1], normal[2])
+    for i in rows:
+        d = row(dirs, i)
+        cos_a = -dot1(d, n)
+        across = dot1(d, plane)
+        if cos_a <= 0.0 or across == 0.0:
+            continue
+        to_center = (center[0] - origins[i, 0], center[1] - origins[i, 1], center[2] - origins[i, 2])
+        t = dot1(to_center, plane) / across
+        if not 0.0 < t < reach[i]:
+            continue
+        q = (t * d[0] - to_center[0], t * d[1] - to_center[1], t * d[2] - to_center[2])
+        qx, qy = dot1(q, ax), dot1(q, ay)
+        x, y = (yy * qx - xy * qy) / det, (xx * qy - xy * qx) / det
+        inside = x * x + y * y <= 1.0 if ellipse else abs(x) <= 1.0 and abs(y) <= 1.0
+        if inside:
+            weight = spread_factor1(spread, cos_a)
+            for c in range(3):
+                out[i, c] += radiance[c] * weight
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8, b1, f8[::1], b1, f8[::1], f8, f8)")
+def _point_met(out, origins, dirs, reach, rows, position, radius, facing_disc, radiance, masked, axis, cos_half,
+               blend):
+    """A point or spot lamp of `radius`: the disc about `position` that
+    faces the ray's origin (`facing_disc`: Soft Falloff) or the sphere, met
+    in front of the origin; a spot's cone mask along the ray, reversed."""
+    for i in rows:
+        d = row(dirs, i)
+        to_center = (position[0] - origins[i, 0], position[1] - origins[i, 1], position[2] - origins[i, 2])
+        dist2 = dot1(to_center, to_center)
+        along = dot1(to_center, d)
+        if facing_disc:
+            # the plane through the centre square to the centre's direction
+            if along <= 0.0:
+                continue
+            t = dist2 / along
+            miss2 = t * t - dist2
+        else:
+            miss2 = dist2 - along * along
+            if miss2 > radius * radius:
+                continue
+            t = along - math.sqrt(radius * radius - miss2)
+            if dist2 <= radius * radius:
+                t = along + math.sqrt(radius * radius - miss2)
+            miss2 = 0.0
+        if miss2 > radius * radius or not 0.0 < t < reach[i]:
+            continue
+        weight = 1.0
+        if masked:
+            weight = spot_attenuation1(-dot1(d, (axis[0], axis[1], axis[2])), cos_half, blend)
+        for c in range(3):
+            out[i, c] += radiance[c] * weight
