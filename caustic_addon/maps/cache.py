@@ -27,6 +27,8 @@ from ..scene import RenderSettings, Scene
 _EYE_ONLY = {"spp", "edge_samples", "lamp_samples", "world_samples", "threads", "chunk_size"}
 # Material fields only the eye pass reads: a receiver's map holds irradiance.
 _SHADING_ONLY = {"albedo", "specular", "emission", "texture"}
+# Lamp fields only the eye pass reads: which eye rays see the lamp itself.
+_SEEN_ONLY = {"visibility"}
 
 
 def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
@@ -57,6 +59,8 @@ def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
     for light in [*scene.lights, scene.world]:
         add(type(light).__name__)
         for name, value in vars(light).items():
+            if name in _SEEN_ONLY:
+                continue
             add(name)
             add(value if isinstance(value, np.ndarray) else np.asarray(value))
     disperses = any(math.isfinite(getattr(o.material, "abbe", math.inf)) for o in scene.objects)

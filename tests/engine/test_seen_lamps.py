@@ -10,6 +10,7 @@ import pytest
 
 from caustic_addon import (AreaLight, Camera, Dielectric, Diffuse, Object, PointLight, Reflector, RenderSettings,
                            Scene, SunLight, Visibility, World, render, shapes)
+from caustic_addon.maps.cache import lamp_pass_key
 from caustic_addon.optics.specular import fresnel_dielectric
 
 POWER = 100.0
@@ -99,3 +100,13 @@ def test_a_suns_disc_is_seen_in_a_mirror_by_the_rays_that_leave_the_scene():
     camera = Camera.look_at((0.0, -4.0, 4.0), (0.0, 0.0, 0.0), pixx=15, pixy=15, fov=math.radians(2.0))
     expected = 0.9 * 3.0 / (math.pi * math.sin(math.radians(5.0)) ** 2)
     assert centre_pixel([mirror], sun, camera) == pytest.approx(np.full(3, expected), rel=1e-6)
+
+
+def test_a_lamps_visibility_leaves_the_maps_as_they_are():
+    """Which eye rays see a lamp changes no map: two reads of one scene,
+    each with its own Visibility, keep the maps of the first."""
+    def scene(visibility):
+        lamp = PointLight((0, 0, 2), POWER, radius=0.1, visibility=visibility)
+        return Scene([far_floor()], [lamp], facing_camera(), world=World(0.0))
+    settings = RenderSettings()
+    assert lamp_pass_key(scene(Visibility(camera=True)), settings) == lamp_pass_key(scene(Visibility()), settings)
