@@ -8,6 +8,9 @@ quiet.
 Blender's handlers only take note; `tick`, a timer on the main thread,
 reads the scene, starts the job and writes its images. A run of Render,
 Bake or Compare pauses Live, and Live takes up the scene again after it.
+Live follows the window's scene: it rests while the window shows a scene
+without Live, updates once on coming back, and hands over to a scene
+whose own Live is on.
 In the background Blender runs no timers, so none is registered there (a
 caller may run `tick` itself): bpy 4.5's module hangs at exit after a file
 is loaded while a Python timer is registered."""
@@ -30,8 +33,10 @@ from ..operators.engine_run import EngineOperator
 from ..writeback.live import LiveImages, pack_live, remove_live
 from .changes import forget_meshes, moves_caustic, settings_key
 
-# Seconds between the timer's calls while Live is on.
+# Seconds between the timer's calls while Live is on, and while the window
+# shows another scene, one without Live.
 INTERVAL = 0.01
+AWAY_INTERVAL = 0.25
 
 
 @dataclass
@@ -48,7 +53,8 @@ class Update:
 
 @dataclass
 class Live:
-    """Live's state for one scene; `updates` keeps the last figures, `message` why nothing shows."""
+    """Live's state for one scene; `updates` keeps the last figures, `message`
+    why nothing shows; `away` while the window shows another scene."""
 
     scene: str
     schedule: LiveSchedule = field(default_factory=LiveSchedule)
@@ -62,6 +68,7 @@ class Live:
     read_seconds: float = 0.0
     message: str = ""
     updates: list = field(default_factory=list)
+    away: bool = False
 
     def changed(self) -> None:
         if self.changed_at is None:
@@ -155,9 +162,20 @@ def tick() -> Optional[float]:
     if scene is None or not scene.caustic.use_live:
         stop()
         return None
-    if bpy.context.scene != scene:
-        _end()
-        return None
+    shown = bpy.context.scene
+    if shown != scene:
+        if shown is not None and shown.caustic.use_live:
+            start(shown)
+            return INTERVAL
+        # the scene's objects may change meanwhile, in other scenes that hold them
+        if live.schedule.job is not None:
+            live.schedule.cancel()
+        live.away = True
+        return AWAY_INTERVAL
+    if live.away:
+        live.away = False
+        live.meshes.clear()
+        live.changed()
     key = settings_key(scene)
     if key != live.settings:
         live.settings = key

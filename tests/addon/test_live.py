@@ -417,3 +417,51 @@ def test_saving_keeps_the_preview_on_show(live, tmp_path):
     live.stop()
     bpy.ops.wm.open_mainfile(filepath=path, load_ui=False)
     assert np.array_equal(pixels(image_of(bpy.data.materials["Floor"])[1]), shown)
+
+
+def test_switching_scenes_leaves_each_scene_its_own_caustic(live):
+    """Live follows the window's scene: switched away, it rests and leaves
+    the caustic shown; switched back, it takes up what changed meanwhile
+    (the ball, moved in another scene that holds it). A full copy of the
+    scene with Live on gets its own image and node group, and nothing is
+    left without a user."""
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=20_000)
+    first = bpy.context.scene
+    live_on(live, parts)
+    window = bpy.context.window
+    other = bpy.data.scenes.new("Other")
+    other.collection.objects.link(parts["ball"])
+    window.scene = other
+    pump(live)
+    assert live.SESSION.away and live.SESSION.schedule.job is None
+    parts["ball"].location.x = 0.6
+    bpy.context.view_layer.update()
+    pump(live)
+    window.scene = first
+    bpy.context.view_layer.update()
+    pump(live)
+    floor = parts["floor"].active_material
+    assert live.SESSION.scene == first.name
+    assert np.linalg.norm(brightest_point(floor)[:2] - focus_on_floor(parts["lamp"], parts["ball"])[:2]) < 0.05
+    assert len(bpy.data.node_groups) == 1 and len(bpy.data.images) == 1
+
+    assert bpy.ops.scene.new(type='FULL_COPY') == {'FINISHED'}
+    copy = bpy.context.scene
+    assert copy != first and copy.caustic.use_live
+    copy_ball = next(ob for ob in copy.objects if ob.name.startswith("Ball"))
+    copy_ball.location.x = -0.6
+    copy_floor_object = next(ob for ob in copy.objects if ob.name.startswith("Floor"))
+    if copy_floor_object.active_material == floor:  # the copy shares materials where Blender's preferences say so
+        copy_floor_object.active_material = floor.copy()
+    bpy.context.view_layer.update()
+    pump(live)
+    assert live.SESSION.scene == copy.name
+    copy_floor = copy_floor_object.active_material
+    copy_lamp = next(ob for ob in copy.objects if ob.name.startswith("Lamp"))
+    assert np.linalg.norm(brightest_point(copy_floor)[:2] - focus_on_floor(copy_lamp, copy_ball)[:2]) < 0.05
+    window.scene = first
+    bpy.context.view_layer.update()
+    pump(live)
+    assert np.linalg.norm(brightest_point(floor)[:2] - focus_on_floor(parts["lamp"], parts["ball"])[:2]) < 0.05
+    assert len(bpy.data.node_groups) == 2 and len(bpy.data.images) == 2
+    assert all(block.users > 0 for block in (*bpy.data.node_groups, *bpy.data.images))
