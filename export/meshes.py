@@ -197,9 +197,11 @@ def place(source: MeshSource, name: str, matrices: np.ndarray, visibility: Visib
     """[(engine Object in world space, name of its material or None)] of
     `source` under `matrices (k,4,4)`: one for each material its triangles
     use, named `name` if there is one and "name [material]" if there are
-    several, which are then parts of one body. k > 1 (an instancer's
-    instances of a mesh not `one_by_one`) gives each part's mesh once under each
-    matrix, as one object (Mesh.instanced; Object.copies).
+    several, which are then parts of one body. Each part's mesh is placed
+    once under each matrix, as one object (Mesh.instanced; Object.copies),
+    but for a single object that is `one_by_one` or flattened, placed in
+    world space: an instanced object that only moves keeps its mesh's BVH
+    between renders (tracing/prototypes.py).
 
     A glass or mirror scaled to 0 along an axis, and an object scaled to
     nothing, are left out with a warning that names them; faces an
@@ -225,7 +227,8 @@ def place(source: MeshSource, name: str, matrices: np.ndarray, visibility: Visib
         uv_maps = {layer: corners[kept] for layer, corners in uv_maps.items()}
         parts = [(key, np.searchsorted(kept, np.intersect1d(rows, kept)), slots) for key, rows, slots in parts]
         parts = [part for part in parts if len(part[1])]
-    world = local.transformed(matrix) if len(matrices) == 1 else None
+    instanced = len(matrices) > 1 or not (source.one_by_one or np.linalg.det(matrix[:3, :3]) == 0.0)
+    world = None if instanced else local.transformed(matrix)
     engines = {key: engine_material(surfaces[key], source.original.caustic) for key, _, _ in parts}
     if flattened(matrix, local.vertices) and len(matrices) == 1:
         if any(isinstance(engine, Dielectric) for engine in engines.values()):

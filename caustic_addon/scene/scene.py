@@ -37,8 +37,10 @@ class Object:
     part of when one surface has several materials: objects with the same
     body are one mesh for inside and outside (whether it is closed, which way
     it faces, which glass a ray is in); None, the object is its own body.
-    `instances`, where given, is what the mesh was made of: an instancer's
-    instances of one mesh (Object.instanced)."""
+    `instances`, where given, is what the mesh was made of: a mesh in object
+    space under its object's transform, or an instancer's instances of one
+    mesh (Object.instanced); the accelerator keeps that mesh's BVH between
+    renders."""
 
     name: str
     mesh: Mesh
@@ -51,8 +53,9 @@ class Object:
     def instanced(cls, name: str, local: Mesh, transforms: np.ndarray, material: Material,
                   visibility: Visibility = Visibility(), body: Optional[str] = None) -> "Object":
         """The object whose mesh is `local` (object space) under each of
-        `transforms (k,4,4)` (Mesh.instanced)."""
-        return cls(name, local.instanced(transforms, with_normals=False), material, visibility, body,
+        `transforms (k,4,4)` (Mesh.instanced); the copies of k > 1 keep no
+        corner normals, which the accelerator makes from `local`'s."""
+        return cls(name, local.instanced(transforms, with_normals=len(transforms) == 1), material, visibility, body,
                    Instances(local, transforms))
 
     @property

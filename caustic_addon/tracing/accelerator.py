@@ -24,6 +24,7 @@ from . import embree
 from .contact import Contacts
 from .embree import PACKET, intersect1, occluded8, packet_blocked, packet_record, ray_record, set_packet_ray
 from .hits import HIT_TYPES, MISS, Hits
+from .prototypes import PROTOTYPES, Prototype
 from .topology import open_edges, signed_volume
 
 _MIN_SPLIT = 8192
@@ -71,7 +72,7 @@ class _View:
 # give it (util.jit.named_kernel): `surface_of` is its `surface`.
 GEOMETRY_TYPES = {"body": "i8[::1]", "surface_of": "i8[::1]", "closed": "b1[::1]", "corners": "f8[:, :, ::1]",
                   "face_normal": "f8[:, ::1]", "corner_normal": "f8[:, :, ::1]", "min_barycentric": "f8[:, ::1]",
-                  "prim_offset": "i8[::1]", "copy_size": "i8[::1]", "epsilon": "f8"}
+                  "prim_offset": "i8[::1]", "copy_size": "i8[::1]", "mirrored": "b1[::1]", "epsilon": "f8"}
 # The numba type of what a cast takes: the Embree scene's handle, the rays,
 # their lengths (none: unbounded), the objects its geometry ids stand for.
 CAST_TYPES = {"scene": "u8", "origins": "f8[:, ::1]", "dirs": "f8[:, ::1]", "dists": "f8[::1]",
@@ -94,6 +95,9 @@ class Accelerator:
       min_barycentric (N,3) the barycentric coordinate, per corner, of a point
                      epsilon from the opposite edge (at most 0.3)
       owner          (N,) index of the object the triangle belongs to
+      mirrored       (N,) bool: the triangle is in a copy whose transform
+                     mirrors (scene.Instances), wound the other way round
+                     than the mesh Embree instances
 
     Each kind of ray (CAMERA, REFLECTED, REFRACTED, SHADOW) sees the objects
     whose scene.Visibility lets it; a kind that does not see them all gets an
@@ -110,6 +114,9 @@ class Accelerator:
         self._count_lock = threading.Lock()
         self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
 
+        # the instanced objects' meshes, kept between renders
+        self._prototypes: dict[int, Prototype] = {i: PROTOTYPES.of(obj.instances.mesh, quality)
+                                                  for i, obj in enumerate(objects) if obj.instances is not None}
         bodies: dict[str, list[int]] = {}
         for index, obj in enumerate(objects):
             bodies.setdefault(obj.body_name, []).append(index)
@@ -128,8 +135,9 @@ class Accelerator:
             _triangle_tables(mesh.vertices, mesh.triangles,
                              np.zeros((0, 3, 3)) if mesh.corner_normals is None else mesh.corner_normals,
                              self.corners[rows], self.face_normal[rows], self.corner_normal[rows], area[rows])
-            if obj.instances is not None and obj.instances.mesh.corner_normals is not None:
-                copy_normals(obj.instances.mesh.corner_normals, obj.instances.transforms, self.corner_normal[rows])
+            local = obj.instances.mesh if obj.instances is not None else None
+            if mesh.corner_normals is None and local is not None and local.corner_normals is not None:
+                copy_normals(local.corner_normals, obj.instances.transforms, self.corner_normal[rows])
         self.owner = np.repeat(np.arange(len(objects), dtype=np.int64), np.diff(offsets))
         has_area = [bool(np.any(area[offsets[i]:offsets[i + 1]] > 0)) for i in range(len(objects))]
         for name, members in bodies.items():
@@ -151,10 +159,14 @@ class Accelerator:
         self.min_barycentric = np.empty((offsets[-1], 3))
         _min_barycentrics(self.corners, area, self.epsilon, self.min_barycentric)
         self.copy_size = np.array([len(_first_copy(obj).triangles) for obj in objects], dtype=np.int64)
+        self.mirrored = np.zeros(offsets[-1], dtype=bool)
+        for index, obj in enumerate(objects):
+            if obj.instances is not None:
+                self.mirrored[offsets[index]:offsets[index + 1]] = np.repeat(
+                    np.linalg.det(obj.instances.transforms[:, :3, :3]) < 0.0, self.copy_size[index])
         self._geometries = [embree.Geometry(obj.mesh.vertices, obj.mesh.triangles) if obj.instances is None else
-                            embree.Instances(embree.Geometry(obj.instances.mesh.vertices, obj.instances.mesh.triangles),
-                                             obj.instances.transforms, quality)
-                            for obj in objects]
+                            embree.Instances(self._prototypes[i].scene, obj.instances.transforms)
+                            for i, obj in enumerate(objects)]
         self._all = self.view_of(np.arange(len(objects)))
         self._views = self._ray_views()
         for body in np.unique(self.body[self.closed]):
@@ -187,13 +199,18 @@ class Accelerator:
     def _body_orientation(self, members: np.ndarray) -> tuple[bool, float]:
         """(closed, +1 or -1) of the body made of objects `members (k,)`:
         whether its surface has no holes, and whether its winding faces out
-        (+1) or in (-1); a warning names it when it is open or inside out."""
+        (+1) or in (-1); a warning names it when it is open or inside out.
+        A body of one instanced object reads them off its mesh's prototype."""
         meshes = [_first_copy(self.objects[i]) for i in members]
-        starts = np.cumsum([0] + [len(m.vertices) for m in meshes])
-        triangles = np.concatenate([m.triangles + start for m, start in zip(meshes, starts)])
         vertices = np.concatenate([m.vertices for m in meshes])
         name = self.objects[members[0]].body_name
-        holes = open_edges(triangles, vertices)
+        if len(members) == 1 and members[0] in self._prototypes:
+            holes, inward = self._prototypes[members[0]].holes, self._prototypes[members[0]].inward
+        else:
+            starts = np.cumsum([0] + [len(m.vertices) for m in meshes])
+            triangles = np.concatenate([m.triangles + start for m, start in zip(meshes, starts)])
+            holes = open_edges(triangles, vertices)
+            inward = not len(holes) and signed_volume(np.take(vertices, triangles, axis=0)) < 0.0
         if len(holes):
             where = ", ".join(f"{float(c):.3g}" for c in vertices[holes[0]].mean(axis=0))
             self.warnings.append(
@@ -201,7 +218,7 @@ class Accelerator:
                 f"Non-Manifold shows; the first near ({where})): inside and outside are guessed per hit "
                 "from its normals, so light may leak through its holes")
             return False, 1.0
-        if signed_volume(np.take(vertices, triangles, axis=0)) < 0.0:
+        if inward:
             self.warnings.append(f"'{name}' has inverted normals; they were flipped for tracing")
             return True, -1.0
         return True, 1.0
@@ -361,8 +378,8 @@ class Accelerator:
 
         def part(a: int, b: int) -> None:
             _cast(scene=view.scene.handle, origins=origins[a:b], dirs=dirs[a:b], dists=dists[a:b],
-                  members=view.objects, prim_offset=self.prim_offset, copy_size=self.copy_size, corners=self.corners,
-                  min_barycentric=self.min_barycentric,
+                  members=view.objects, prim_offset=self.prim_offset, copy_size=self.copy_size,
+                  mirrored=self.mirrored, corners=self.corners, min_barycentric=self.min_barycentric,
                   **{f"out_{field}": getattr(hits, field)[a:b] for field in HIT_TYPES})
 
         self._split(len(origins), part)
@@ -528,26 +545,30 @@ def surface_point1(corners, min_barycentric, prim, u, v):
 
 
 @named_kernel("void", HIT_TYPES, GEOMETRY_TYPES, CAST_TYPES)
-def _cast(scene, origins, dirs, dists, members, prim_offset, copy_size, corners, min_barycentric,
+def _cast(scene, origins, dirs, dists, members, prim_offset, copy_size, mirrored, corners, min_barycentric,
           out_t, out_obj, out_prim, out_u, out_v, out_points):
     """Closest hits of rays `origins, dirs (k,3)` in Embree scene `scene`,
     within `dists (k,)` (empty: unbounded): geomID indexes `members`
     (object indices), primID the triangles of the object's copy (global:
     plus `prim_offset` and the copy times `copy_size`), the point is
-    surface_point1; a miss has t = inf, MISS and the ray's origin."""
+    surface_point1; a miss has t = inf, MISS and the ray's origin. A
+    `mirrored` copy's triangles run the other way round than the mesh
+    Embree holds (Mesh.instanced): its barycentrics (u, v) of corners 1
+    and 2 are (u, 1 - u - v) of the copy's."""
     floats, words, address = ray_record()
     bounded = len(dists) > 0
     for i in range(len(origins)):
         far = dists[i] if bounded else np.inf
         geom, prim, copy, t, u, v = intersect1(scene, floats, words, address, row(origins, i), row(dirs, i), far)
-        out_u[i], out_v[i] = u, v
         if geom < 0:
-            out_t[i], out_obj[i], out_prim[i] = np.inf, MISS, MISS
+            out_t[i], out_obj[i], out_prim[i], out_u[i], out_v[i] = np.inf, MISS, MISS, u, v
             set_row(out_points, i, row(origins, i))
             continue
         obj = members[geom]
         face = prim + prim_offset[obj] + copy * copy_size[obj]
-        out_t[i], out_obj[i], out_prim[i] = t, obj, face
+        if mirrored[face]:
+            v = 1.0 - u - v
+        out_t[i], out_obj[i], out_prim[i], out_u[i], out_v[i] = t, obj, face, u, v
         set_row(out_points, i, surface_point1(corners, min_barycentric, face, u, v))
 
 

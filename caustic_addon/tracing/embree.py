@@ -153,13 +153,13 @@ class Geometry:
 
 class Instances:
     """One mesh under many transforms, as Embree reads them in place: the
-    mesh's own committed scene, and `transforms (k,4,4)` object to world,
-    kept as column-major float32. Embree builds the mesh's BVH once and a
-    BVH over the k boxes (an instance array, Embree 4.3); a hit reports the
-    copy it met (intersect1)."""
+    mesh's own committed scene `prototype` (a Scene of one Geometry), and
+    `transforms (k,4,4)` object to world, kept as column-major float32.
+    Embree builds the mesh's BVH once and a BVH over the k boxes (an
+    instance array, Embree 4.3); a hit reports the copy it met (intersect1)."""
 
-    def __init__(self, geometry: Geometry, transforms: np.ndarray, quality: str = "medium"):
-        self.prototype = Scene([geometry], quality)
+    def __init__(self, prototype: "Scene", transforms: np.ndarray):
+        self.prototype = prototype
         self.transforms = np.ascontiguousarray(np.asarray(transforms).transpose(0, 2, 1), dtype=np.float32)
 
     @property

@@ -1,12 +1,14 @@
 """An instancer's instances of one mesh as one object (scene.Instances):
 the copies' geometry against each copy transformed on its own, Embree's
-instance arrays against the same triangles built flat, and a render of
-instanced glass against the same glass as separate objects."""
+instance arrays against the same triangles built flat, a render of
+instanced glass against the same glass as separate objects, and a mesh's
+BVH kept between renders while only its transform changes."""
 
 import numpy as np
 
 from caustic_addon import Dielectric, Diffuse, Mesh, Object, PointLight, Scene, render, shapes
 from caustic_addon.tracing.accelerator import Accelerator
+from caustic_addon.tracing.prototypes import PROTOTYPES, Prototypes
 from scenes import quick, top_camera
 
 
@@ -48,10 +50,11 @@ def grid(count: int, spacing: float, z: float) -> np.ndarray:
 
 
 def test_a_ray_meets_the_copy_and_triangle_the_flat_mesh_puts_there():
-    """Rays at 8 x 8 balls: the instance array's hits (object, global
-    triangle, t, barycentrics) are those of the same triangles given to
-    Embree flat, to float32's precision."""
+    """Rays at 8 x 8 balls, every other one mirrored: the instance array's
+    hits (object, global triangle, t, barycentrics) are those of the same
+    triangles given to Embree flat, to float32's precision."""
     ball, matrices = shapes.uv_sphere(0.2, segments=16, rings=8), grid(8, 0.5, 1.0)
+    matrices[::2, :3, 0] *= -1.0
     instanced = Object.instanced("Balls", ball, matrices, Dielectric(1.5))
     flat = Object("Balls", instanced.mesh, Dielectric(1.5))
     floor = Object("Floor", shapes.plane(6.0), Diffuse(0.8))
@@ -67,6 +70,9 @@ def test_a_ray_meets_the_copy_and_triangle_the_flat_mesh_puts_there():
     assert same[on_balls].mean() > 0.999  # rays within float32 of an edge may take either face
     np.testing.assert_allclose(hits[0].t[same], hits[1].t[same], rtol=1e-5)
     np.testing.assert_allclose(hits[0].points[same], hits[1].points[same], atol=1e-5)
+    met = same & (hits[1].obj >= 0)
+    np.testing.assert_allclose(hits[0].u[met], hits[1].u[met], atol=1e-4)
+    np.testing.assert_allclose(hits[0].v[met], hits[1].v[met], atol=1e-4)
 
 
 def test_an_open_instanced_mesh_is_named_once():
@@ -89,3 +95,40 @@ def test_instanced_glass_renders_as_the_same_glass_in_separate_objects():
     images = [render(scene, quick(lamp_rays=400_000, density="beam")).image for scene in (together, apart)]
     assert np.sqrt(np.mean((images[0] - images[1]) ** 2) / np.mean(images[1] ** 2)) < 0.005
     assert images[0].max() > 3.0 * np.median(images[0])  # the caustics are there
+
+
+def moved(x: float, mirror: bool = False) -> np.ndarray:
+    """(1,4,4) a translation by x along the x axis, mirrored in y if `mirror`."""
+    out = np.eye(4)[None].copy()
+    out[0, 0, 3], out[0, 1, 1] = x, -1.0 if mirror else 1.0
+    return out
+
+
+def test_a_mesh_that_only_moves_keeps_its_bvh_and_renders_as_if_built_anew():
+    """The ball lens placed over one kept prototype at three places, one of
+    them mirrored: one BVH built, the body found closed and facing out each
+    time, and each render within float32's rounding of the ball built flat
+    there."""
+    PROTOTYPES.clear()
+    built = PROTOTYPES.built
+    ball = shapes.uv_sphere(1.0, (0.0, 0.0, 1.5), 64, 32)
+    floor = Object("Floor", shapes.plane(8.0), Diffuse(0.8))
+    lamp = [PointLight((0.3, 0.0, 6.0), 1000.0)]
+    for x, mirror in ((0.0, False), (0.4, False), (0.4, True)):
+        instanced = Object.instanced("Ball", ball, moved(x, mirror), Dielectric(1.5))
+        flat = Object("Ball", ball.transformed(moved(x, mirror)[0]), Dielectric(1.5))
+        images = [render(Scene([floor, obj], lamp, top_camera(2.0, 48)), quick(lamp_rays=40_000, density="beam"))
+                  for obj in (instanced, flat)]
+        assert not images[0].warnings
+        error = np.sqrt(np.mean((images[0].image - images[1].image) ** 2) / np.mean(images[1].image ** 2))
+        assert error < 1e-3, (x, mirror, error)
+    assert PROTOTYPES.built == built + 1
+
+
+def test_the_kept_prototypes_stay_within_their_triangles():
+    kept = Prototypes(capacity_triangles=1_200)
+    small, large = shapes.uv_sphere(1.0, segments=16, rings=8), shapes.uv_sphere(1.0, segments=32, rings=16)
+    first = kept.of(small, "medium")
+    assert kept.of(small, "medium") is first and kept.of(small, "high") is not first
+    kept.of(large, "medium")
+    assert kept.of(small, "medium") is not first and kept.built == 4
