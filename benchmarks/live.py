@@ -13,6 +13,10 @@ timer runs, and the depsgraph updates again. Recorded per scene:
 - updates a second: previews shown over the drag's length;
 - the main thread's milliseconds per update: the scene read and the
   images' write;
+- the engine's milliseconds per preview for the BVH and the bodies'
+  analysis (a caster that only moved keeps both: tracing/prototypes.py);
+- the refine's delay: seconds from the last change to the full-quality
+  images;
 - the preview's error: relative L2 of the last preview's map against the
   refined map at the same position, the refined map averaged down to the
   preview's cells;
@@ -175,6 +179,7 @@ def drag(session_module, caster, positions: int) -> dict:
     for k in range(positions):
         angle = 2 * math.pi * k / positions
         caster.location = (ARC_M * math.sin(angle), ARC_M * (1 - math.cos(angle)) / 2, 0.0)
+        last_change = time.perf_counter()
         due = start + (k + 1) * STEP_S
         while True:
             step(session_module)
@@ -191,6 +196,7 @@ def drag(session_module, caster, positions: int) -> dict:
     while session.schedule.shown != "refine":
         step(session_module)
         time.sleep(0.005)
+    refined_after = time.perf_counter() - last_change
     refine = [u for u in session.updates if u.kind == "refine"][-1]
     latency = np.array([u.latency for u in previews])
     result = dict(
@@ -198,7 +204,8 @@ def drag(session_module, caster, positions: int) -> dict:
         drag_s=dragged, previews=len(previews), updates_per_s=len(previews) / dragged,
         latency_median_s=float(np.median(latency)), latency_p95_s=float(np.percentile(latency, 95)),
         main_thread_ms_median=float(np.median([u.main_thread for u in previews]) * 1000),
-        refine_main_thread_ms=refine.main_thread * 1000,
+        bvh_ms_median=float(np.median([u.stages["bvh"] for u in previews]) * 1000),
+        refine_main_thread_ms=refine.main_thread * 1000, refined_after_s=refined_after,
         preview_error=preview_error(preview, floor_map(receiver)),
         resident_growth_mb=max(resident) - resident[0], resident_last_mb=resident[-1] - resident[0])
     assert bpy.ops.caustic.toggle_live() == {'FINISHED'}

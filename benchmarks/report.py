@@ -242,13 +242,16 @@ def farm(d: dict) -> Table:
 def live(d: dict) -> Table:
     rows = [[f"drag the {name}", f"{f['triangles']:,}", number(f["updates_per_s"], 2), seconds(f["latency_median_s"]),
              seconds(f["latency_p95_s"]), f"{f['main_thread_ms_median']:.0f} ms", f"{f['refine_main_thread_ms']:.0f} ms",
+             f"{f['bvh_ms_median']:.0f} ms" if "bvh_ms_median" in f else NONE,
+             seconds(f["refined_after_s"]) if "refined_after_s" in f else NONE,
              percent(f["preview_error"]), f"{f['resident_growth_mb']:.0f} MB"] for name, f in d["scenes"].items()]
     for kind, f in d.get("playback", {}).items():
         rows.append([f"play {f['frames']} frames at {d['fps']} fps, the ball {kind}", NONE,
-                     number(f["shown_per_s"], 2), NONE, NONE, NONE, NONE, NONE,
+                     number(f["shown_per_s"], 2), NONE, NONE, NONE, NONE, NONE, NONE, NONE,
                      f"maps kept {f['maps_kept']} times"])
     return ["run", "triangles", "updates a second", "latency, median", "p95", "main thread, a preview",
-            "main thread, the refine", "preview's error", "memory growth"], rows
+            "main thread, the refine", "BVH and bodies, a preview", "full quality after the last change",
+            "preview's error", "memory growth"], rows
 
 
 def instances(d: dict) -> Table:
@@ -256,6 +259,17 @@ def instances(d: dict) -> Table:
              seconds(f["engine_s"]), f"{f['peak_growth_mb']:,.0f} MB"] for f in d["runs"].values()]
     return [f"ico-spheres ({d['resolution'][0]}x{d['resolution'][1]})", "triangles", "Render Caustics",
             "scene read", "engine", "peak memory growth"], rows
+
+
+def glints(d: dict) -> Table:
+    reference = d["cycles_reference"]
+    rows = [[f"the add-on, {name}", f"x{f['mean_ratio']:.3f}", percent(f["relative_l2"]), seconds(f["seconds"])]
+            for name, f in d["ours"].items()]
+    rows += [[f"Cycles, {samples} samples", f"x{f['mean_ratio']:.3f}", percent(f["relative_l2"]),
+              seconds(f["seconds"])] for samples, f in d["cycles"].items()]
+    rows.append([f"Cycles, {reference['samples']} samples (the reference; its own noise)", "x1", percent(
+        reference["relative_l2_noise"]), seconds(reference["seconds"])])
+    return ["render", "image mean against the reference", "relative L2 error", "time"], rows
 
 
 def allocator(d: dict) -> Table:
@@ -391,7 +405,7 @@ FORMATTERS: dict[str, Callable[[dict], Table]] = {
     "allocator": allocator,
     "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass, "through_glass": through_glass,
     "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "world_paths": world_paths,
-    "flicker": flicker, "gallery": gallery,
+    "flicker": flicker, "gallery": gallery, "glints": glints,
 }
 
 # (group, [(results name, title)]), in the README's order
@@ -417,6 +431,7 @@ SECTIONS = [
     ("Features", [
         ("paper", "The paper's experiments"),
         ("sized_lamps", "Lamps with a size, against Cycles"),
+        ("glints", "Glints: a lamp seen in glass, against Cycles"),
         ("rough_glass", "Rough glass, against Cycles"),
         ("through_glass", "The caustic seen through glass"),
         ("dispersion", "Dispersion and coloured glass"),

@@ -42,13 +42,15 @@ AWAY_INTERVAL = 0.25
 @dataclass
 class Update:
     """One update shown: its kind, seconds from the first change it shows
-    to its images, the main thread's seconds for it (read and write), and
-    whether its maps were kept from an earlier update."""
+    to its images, the main thread's seconds for it (read and write),
+    whether its maps were kept from an earlier update, and the engine's
+    seconds by stage (RenderResult.stats)."""
 
     kind: str
     latency: float
     main_thread: float
     maps_cached: bool
+    stages: dict
 
 
 @dataclass
@@ -145,8 +147,9 @@ def _finish_update(live: Live) -> None:
     job.drop_maps()
     now = time.perf_counter()
     latency = now - job.changed_at if job.changed_at is not None else float("nan")
+    stats = job.result.stats
     live.updates = live.updates[-(KEPT_FIGURES - 1):] + [Update(kind, latency, live.read_seconds + now - clock,
-                                                                       job.result.stats["maps_cached"])]
+                                                                       stats["maps_cached"], stats["seconds"])]
     for area in bpy.context.screen.areas if bpy.context.screen is not None else ():
         if area.type == 'VIEW_3D':
             area.tag_redraw()

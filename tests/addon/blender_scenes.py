@@ -160,6 +160,24 @@ def ring_scene(width=64, height=48, lamp_rays=200_000):
     return dict(floor=floor, ring=ring, lamp=lamp, camera=camera)
 
 
+def glass_ball_under_a_softbox(width=80, height=60):
+    """A smooth glass ball (radius 0.5) in a black world, a 0.5 m square
+    lamp of 200 W up and to the front left, seen from the front."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    add_plane(0.01, diffuse_material()).location = (0.0, 0.0, -30.0)
+    add_sphere(0.5, (0.0, 0.0, 0.5), glass_material(), segments=96, rings=48)
+    bpy.ops.object.shade_smooth()
+    light = bpy.data.lights.new("Softbox", 'AREA')
+    light.energy, light.size = 200.0, 0.5
+    lamp = bpy.data.objects.new("Softbox", light)
+    lamp.location = (-1.0, -1.0, 2.0)
+    lamp.rotation_euler = Vector((-1.0, -1.0, 1.5)).normalized().to_track_quat('Z', 'Y').to_euler()
+    bpy.context.scene.collection.objects.link(lamp)
+    add_camera((0.0, -3.0, 1.6), target=(0.0, 0.0, 0.45), lens=50.0)
+    set_resolution(width, height)
+    return lamp
+
+
 def pixels_of(name):
     """(h, w, 4) float32 pixels of image `name`, row 0 at the top."""
     image = bpy.data.images[name]

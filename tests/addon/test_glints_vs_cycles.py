@@ -7,7 +7,6 @@ import math
 import bpy
 import numpy as np
 import pytest
-from mathutils import Vector
 
 import blender_scenes as scenes
 from test_lamps_vs_cycles import CASES, ours, pole_scene, setup
@@ -32,24 +31,6 @@ def test_a_lamp_seen_by_the_camera_is_as_bright_as_in_cycles(case, tmp_path):
     assert mine.mean() == pytest.approx(theirs.mean(), rel=0.02)
 
 
-def glass_ball_under_a_softbox():
-    """A smooth glass ball (radius 0.5) in a black world, a 0.5 m square
-    lamp of 200 W up and to the front left, seen from the front."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scenes.add_plane(0.01, scenes.diffuse_material()).location = (0.0, 0.0, -30.0)
-    scenes.add_sphere(0.5, (0.0, 0.0, 0.5), scenes.glass_material(), segments=96, rings=48)
-    bpy.ops.object.shade_smooth()
-    light = bpy.data.lights.new("Softbox", 'AREA')
-    light.energy, light.size = 200.0, 0.5
-    lamp = bpy.data.objects.new("Softbox", light)
-    lamp.location = (-1.0, -1.0, 2.0)
-    lamp.rotation_euler = Vector((-1.0, -1.0, 1.5)).normalized().to_track_quat('Z', 'Y').to_euler()
-    bpy.context.scene.collection.objects.link(lamp)
-    scenes.add_camera((0.0, -3.0, 1.6), target=(0.0, 0.0, 0.45), lens=50.0)
-    scenes.set_resolution(80, 60)
-    return lamp
-
-
 @pytest.mark.parametrize("seen_by", ["glossy and transmission", "glossy", "none"])
 def test_a_glass_balls_glints_are_as_bright_as_in_cycles(seen_by, tmp_path):
     """Cycles with 8 glossy and transmission bounces, neither clamped nor
@@ -57,7 +38,7 @@ def test_a_glass_balls_glints_are_as_bright_as_in_cycles(seen_by, tmp_path):
     Transmission visibility as given. The glints are 2 or 3 pixels across,
     so both renderers take samples enough to find them (at the add-on's
     default 4 a pixel, its mean is 8% above its converged one)."""
-    lamp = glass_ball_under_a_softbox()
+    lamp = scenes.glass_ball_under_a_softbox()
     lamp.visible_glossy = "glossy" in seen_by
     lamp.visible_transmission = "transmission" in seen_by
     settings = bpy.context.scene.caustic
