@@ -35,10 +35,11 @@ def refusal(scene: Scene, settings: RenderSettings, besides: dict[str, tuple[flo
         "Blender's images of the render": (IMAGE_BYTES_PER_PIXEL * pixels, LOWER_RESOLUTION), **(besides or {})})
 
 
-def map_rgba(imap) -> np.ndarray:
-    """(h,w,4) float32 of a map's irradiance, top row first (map row 0 is the chart's lowest y): a bake's image."""
+def map_rgba(imap, threads: int = 1) -> np.ndarray:
+    """(h,w,4) float32 of a map's irradiance, top row first (map row 0 is the
+    chart's lowest y), read on up to `threads` threads: a bake's image."""
     rgba = np.ones(imap.shape + (4,), dtype=np.float32)
-    rgba[..., :3] = imap.irradiance()
+    rgba[..., :3] = imap.irradiance(threads)
     return rgba[::-1]
 
 

@@ -20,7 +20,7 @@ from .job import RenderJob, map_rgba
 
 PREVIEW, REFINE = "preview", "refine"
 # Quiet time, in seconds, before the full settings run.
-REFINE_AFTER = 0.4
+REFINE_AFTER = 0.2
 # A preview traces this fraction of the light rays, into maps of at most PREVIEW_MAP_CELLS cells a side.
 PREVIEW_RAY_SHARE = 1 / 8
 PREVIEW_MIN_RAYS = 1000
@@ -61,7 +61,7 @@ class LiveJob(RenderJob):
     def run(self) -> None:
         super().run()
         if self.result is not None:
-            self.images = {name: map_rgba(imap) for name, imap in self.result.maps.items()}
+            self.images = {name: map_rgba(imap, self.settings.threads) for name, imap in self.result.maps.items()}
 
 
 class LiveSchedule:

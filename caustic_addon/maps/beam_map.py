@@ -17,10 +17,6 @@ from .raster import Coverage, signed_areas
 from .screen_layer import ImageView, ScreenLayer
 
 
-# Cells a bake reads at a time.
-_BAKE_CELLS = 1 << 16
-
-
 @dataclass
 class _Layer:
     """A grid of irradiance `values (c,h,w)` W/m^2, each cell the exact mean
@@ -347,24 +343,16 @@ class BeamMap(IlluminationMap):
             layer.add_at(xy, beams)
         return super().irradiance_at(xy) + beams
 
-    def irradiance(self) -> np.ndarray:
-        """(h,w,3) W/m^2 in every cell: the fallback photons' estimate at its
-        centre plus the beams' exact mean over it, so that a bake keeps each
-        beam's flux in the cells it covers (a point sample of the finer
-        layers would alias the caustic's sharp lines)."""
-        h, w = self.shape
-        self.prepare()
-        out = np.empty((h, w, 3))
-        # a band of rows at a time: the look-ups' temporaries (~500 B a cell) stay bounded
-        step = max(1, _BAKE_CELLS // w)
-        for first in range(0, h, step):
-            rows, cols = np.meshgrid(np.arange(first, min(first + step, h)), np.arange(w), indexing="ij")
-            lo = self.chart.origin + self.cell * np.stack([cols.ravel(), rows.ravel()], axis=1)
-            band = IlluminationMap.irradiance_at(self, lo + 0.5 * self.cell)
-            for layer in self._layers:
-                band += layer.mean_over(lo, lo + self.cell)
-            out[first:first + len(rows)] = band.reshape(len(rows), w, 3)
-        return out
+    def _cell_irradiance(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """The fallback photons' estimate at each cell's centre plus the
+        beams' exact mean over it, so that a bake keeps each beam's flux in
+        the cells it covers (a point sample of the finer layers would alias
+        the caustic's sharp lines)."""
+        lo = self.chart.origin + self.cell * np.stack([cols, rows], axis=1)
+        band = IlluminationMap.irradiance_at(self, lo + 0.5 * self.cell)
+        for layer in self._layers:
+            band += layer.mean_over(lo, lo + self.cell)
+        return band
 
     def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         return super().mean_over(lo, hi) + sum(layer.mean_over(lo, hi) for layer in self._layers)

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import threading
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Optional
 
@@ -38,6 +39,9 @@ from .grid import as_rgb, bilinear_sample, bilinear_splat, box_sum, channel_tabl
 # its plain mean (zero far from any caustic), not a halo of flux borrowed
 # from far away.
 _MAX_WINDOW_RADIUS = 16
+# Cells `irradiance` reads at a time: the look-ups' temporaries (~500 B a
+# cell) stay bounded.
+_BAKE_CELLS = 1 << 16
 
 
 @dataclass
@@ -125,13 +129,27 @@ class IlluminationMap:
         h, w = self.shape
         return self.chart.image_frame(self.chart.origin, np.array([w * self.cell, h * self.cell]))
 
-    def irradiance(self) -> np.ndarray:
-        """(h,w,3) W/m^2 at every cell centre: the map a bake writes. Row 0
-        is the chart's lowest y, the first row of `image_frame()`."""
+    def irradiance(self, threads: int = 1) -> np.ndarray:
+        """(h,w,3) W/m^2 in every cell (`_cell_irradiance`): the map a bake
+        writes, read in bands of rows on up to `threads` threads. Row 0 is
+        the chart's lowest y, the first row of `image_frame()`."""
         h, w = self.shape
-        rows, cols = np.meshgrid(np.arange(h), np.arange(w), indexing="ij")
-        xy = np.stack([(cols.ravel() + 0.5) * self.cell, (rows.ravel() + 0.5) * self.cell], axis=1)
-        return self.irradiance_at(xy + self.chart.origin).reshape(h, w, 3)
+        self.prepare()
+        out = np.empty((h, w, 3))
+        step = max(1, _BAKE_CELLS // w)
+
+        def fill(first: int) -> None:
+            rows, cols = np.meshgrid(np.arange(first, min(first + step, h)), np.arange(w), indexing="ij")
+            out[first:first + len(rows)] = self._cell_irradiance(rows.ravel(), cols.ravel()).reshape(-1, w, 3)
+
+        with ThreadPoolExecutor(max(1, threads)) as pool:
+            list(pool.map(fill, range(0, h, step)))
+        return out
+
+    def _cell_irradiance(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """(n,3) W/m^2 of the cells `rows, cols (n,)`: at their centres."""
+        xy = np.stack([(cols + 0.5) * self.cell, (rows + 0.5) * self.cell], axis=1)
+        return self.irradiance_at(xy + self.chart.origin)
 
     def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """Mean caustic irradiance (n,3) W/m^2 over chart rectangles [lo, hi]
