@@ -13,8 +13,10 @@ seed gives its own noise.
 
 Recorded: the add-on's render at 4 (its default), 16 and 64 samples, and
 with the lamp hidden from glossy and transmission rays (the render before
-glints): the image's mean against the reference's, its relative L2 error
-over the image, and its time; Cycles at 64 to 1,024 samples, the same.
+glints; in this black world the ball is then black): the image's mean
+against the reference's, its relative L2 error over the image, and its
+time (the maps kept from the first render: the eye pass and its images);
+Cycles at 64 to 1,024 samples, the same.
 Writes benchmarks/results/glints.json.
 """
 
