@@ -70,9 +70,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--cycles-samples", type=int, default=4096)
     args = parser.parse_args()
-    addon = conftest.load_addon()
-    addon.register()
-    addon.jobs.kernels.wait()
+    addon = conftest.registered_addon()
     lamp = scenes.glass_ball_under_a_softbox(PIXX, PIXY)
     ours(4)  # the first render builds what later ones keep
     with tempfile.TemporaryDirectory() as folder:

@@ -41,9 +41,7 @@ def measure(count: int) -> dict:
     import blender_scenes as scenes
     import conftest
 
-    addon = conftest.load_addon()
-    addon.register()
-    addon.jobs.kernels.wait()
+    addon = conftest.registered_addon()
     bpy.ops.wm.read_factory_settings(use_empty=True)
     side = math.ceil(math.sqrt(count))
     spacing = GRID_M / (side - 1)

@@ -244,9 +244,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--positions", type=int, default=60)
     args = parser.parse_args()
-    addon = conftest.load_addon()
-    addon.register()
-    addon.jobs.kernels.wait()
+    addon = conftest.registered_addon()
     figures = {}
     for name, make in SCENES.items():
         figures[name] = drag(addon.live.session, build(make), args.positions)

@@ -30,13 +30,20 @@ def load_addon():
     return module
 
 
-@pytest.fixture(scope="session")
-def addon():
+def registered_addon():
+    """The add-on, registered, its kernels compiled or loaded: the warming
+    thread's compiles change the warnings filters, which
+    warnings.catch_warnings (snapshot.py) does not guard across threads,
+    and timings must not count them."""
     module = load_addon()
     module.register()
-    # the warming thread's compiles change the warnings filters, which
-    # warnings.catch_warnings (snapshot.py) does not guard across threads
     module.jobs.kernels.wait()
+    return module
+
+
+@pytest.fixture(scope="session")
+def addon():
+    module = registered_addon()
     yield module
     # Blender 4.2's bpy module crashes at exit if an operator is still registered.
     module.unregister()
