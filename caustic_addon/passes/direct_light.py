@@ -115,7 +115,8 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
     shading, facing   (n,3) shading and geometric normals, both on the eye's side
     view              (n,3) unit vectors from the points toward the eye
     diffuse           (n,3) the diffuse reflectance (under a layer, its share)
-    lobe              the points' specular layers, or None
+    lobe              the points' specular layers, or None; a lamp hidden from
+                      glossy rays lights no specular layer (as Cycles)
     pixel, first_stratum  (n,) the pixel each point is seen in, and the
                       index of its first stratum there
     """
@@ -133,7 +134,7 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
         lamp = sample_lamp(light, energy, np.take(points, rows, axis=0), uv, far)
         idx, radiance = _lambert_lit(rows, shading, facing, diffuse, lamp.dirs, lamp.irradiance, count)
         at, dirs = rows[idx], np.take(lamp.dirs, idx, axis=0)
-        if lobe is not None:
+        if lobe is not None and light.visibility.glossy:
             _add_glossy(radiance, at, dirs, np.take(lamp.irradiance, idx, axis=0), shading, view, lamp_lit, lobe.f0,
                         lobe.eta, lobe.alpha, lobe.gain, count)
         return at, dirs, np.take(lamp.dist, idx), radiance
@@ -390,7 +391,7 @@ def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: flo
             lamp = sample_lamp(light, energy, points, uv, far)
             idx, dirs, radiance = _rough_lit(facing, shading, view, contiguous(lamp.dirs, np.float64),
                                              contiguous(lamp.irradiance, np.float64), alpha, eta, mirror,
-                                             *tints, count)
+                                             *tints, count, light.visibility.glossy, light.visibility.transmission)
             if len(idx) == 0:
                 continue
             origins = accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), dirs)
@@ -400,23 +401,26 @@ def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: flo
 
 
 @kernel("Tuple((i8[::1], f8[:, ::1], f8[:, ::1]))(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], "
-        "f8[::1], f8[::1], b1[::1], f8[:, ::1], f8[:, ::1], i8)")
+        "f8[::1], f8[::1], b1[::1], f8[:, ::1], f8[:, ::1], i8, b1, b1)")
 def _rough_lit(facing, shading, view, dirs, irradiance, alpha, eta, mirror, reflection_tint, transmission_tint,
-               count):
+               count, glossy, transmission):
     """The lamp samples `dirs, irradiance (n,3)` that light the rough points
     through their GGX interface (idx (l,)), their directions (l,3) and the
     radiance (l,3) each brings toward the eye, one of `count` samples:
     E f |cos| / count (optics.microfacet.bsdf_cosine1) times the tint,
     where f |cos| > 0; a transmitted sample times radiance_scale1 too.
-    A sample counts on the eye's side of both normals, or, but at a
-    `mirror`, behind both, and where E > 0."""
+    A sample counts on the eye's side of both normals if the lamp is seen
+    by `glossy` rays, or, but at a `mirror`, behind both if by
+    `transmission` rays (its Ray Visibility, as Cycles' next-event
+    estimation honours it), and where E > 0."""
     n = len(dirs)
     idx, toward, radiance = np.empty(n, dtype=np.int64), np.empty((n, 3)), np.empty((n, 3))
     lit = 0
     for i in range(n):
         d = row(dirs, i)
         above, along = dot1(row(facing, i), d), dot1(row(shading, i), d)
-        sides = (above > 0.0 and along > 0.0) or (above < 0.0 and along < 0.0 and not mirror[i])
+        sides = ((above > 0.0 and along > 0.0 and glossy)
+                 or (above < 0.0 and along < 0.0 and not mirror[i] and transmission))
         if not (sides and max_channel1(row(irradiance, i)) > 0.0):
             continue
         f = bsdf_cosine1(row(view, i), d, row(shading, i), alpha[i], eta[i], mirror[i])

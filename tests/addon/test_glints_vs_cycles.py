@@ -53,3 +53,16 @@ def test_a_glass_balls_glints_are_as_bright_as_in_cycles(seen_by, tmp_path):
     else:
         assert mine.max() > 10.0
         assert mine.mean() == pytest.approx(theirs.mean(), rel=0.05)
+
+
+def test_a_lamp_hidden_from_glossy_and_transmission_rays_lights_no_rough_glass(tmp_path):
+    """Cycles' next-event estimation honours a lamp's Glossy and
+    Transmission visibility too: under the hidden lamp, a rough glass ball
+    (roughness 0.1) has no highlight in either renderer."""
+    lamp = scenes.glass_ball_under_a_softbox()
+    lamp.visible_glossy = lamp.visible_transmission = False
+    glass = next(n for n in bpy.data.materials["Glass"].node_tree.nodes if n.bl_idname == 'ShaderNodeBsdfGlass')
+    glass.inputs["Roughness"].default_value = 0.1
+    mine = ours()
+    theirs = scenes.cycles_render(str(tmp_path), samples=64, specular_bounces=8)[..., :3]
+    assert mine.max() == 0.0 and theirs.max() == 0.0
