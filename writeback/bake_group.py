@@ -217,9 +217,15 @@ def unwire(material) -> int:
         if source is not None:
             for target in targets:
                 tree.links.new(source, target)
-        if group.users == 0:
+        if _unused(group):
             image = _group_image(group)
             bpy.data.node_groups.remove(group)
             if image is not None and image.users == 0:
                 bpy.data.images.remove(image)
     return len(removed)
+
+
+def _unused(group) -> bool:
+    """No data-block refers to node `group`, whatever its user count says:
+    Blender 4.2's Full Copy of a scene leaves a bake's group one user too many."""
+    return not group.use_fake_user and not bpy.data.user_map(subset=[group])[group]
