@@ -135,9 +135,9 @@ def _point_met(out, origins, dirs, reach, rows, position, radius, facing_disc, r
             miss2 = dist2 - along * along
             if miss2 > radius * radius:
                 continue
-            t = along - math.sqrt(radius * radius - miss2)
-            if dist2 <= radius * radius:
-                t = along + math.sqrt(radius * radius - miss2)
+            # the near root, or the far one from inside the sphere
+            root = math.sqrt(radius * radius - miss2)
+            t = along + root if dist2 <= radius * radius else along - root
             miss2 = 0.0
         if miss2 > radius * radius or not 0.0 < t < reach[i]:
             continue

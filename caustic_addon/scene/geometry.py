@@ -77,8 +77,9 @@ class Mesh:
         mesh whose copy i follows copy i-1: copy i's vertices under
         transforms[i], its triangles turned around where it mirrors, and,
         only `with_normals`, its corner normals by the cofactor matrix
-        (`transformed`, which also drops what a singular one flattens). All copies in one kernel, so that an instancer's
-        thousands of instances cost no Python loop."""
+        (`transformed`, which also drops what a singular one flattens). All
+        copies in one kernel, so that an instancer's thousands of instances
+        cost no Python loop."""
         m = np.ascontiguousarray(transforms, dtype=np.float64).reshape(-1, 4, 4)
         k, nv, nt = len(m), len(self.vertices), len(self.triangles)
         verts, tris = np.empty((k * nv, 3)), np.empty((k * nt, 3), dtype=np.int64)

@@ -37,9 +37,9 @@ class PointLight:
     power: float
     color: RGB = field(default_factory=lambda: np.ones(3))
     name: str = "Point"
-    visibility: Visibility = LAMP_VISIBILITY
     radius: float = 0.0
     soft_falloff: bool = True
+    visibility: Visibility = LAMP_VISIBILITY
 
     def __post_init__(self):
         self.position = np.asarray(self.position, dtype=np.float64).reshape(3)
@@ -63,9 +63,9 @@ class SpotLight:
     blend: float = 0.15
     color: RGB = field(default_factory=lambda: np.ones(3))
     name: str = "Spot"
-    visibility: Visibility = LAMP_VISIBILITY
     radius: float = 0.0
     soft_falloff: bool = True
+    visibility: Visibility = LAMP_VISIBILITY
 
     def __post_init__(self):
         self.position = np.asarray(self.position, dtype=np.float64).reshape(3)
@@ -86,8 +86,8 @@ class SunLight:
     strength: float
     color: RGB = field(default_factory=lambda: np.ones(3))
     name: str = "Sun"
-    visibility: Visibility = LAMP_VISIBILITY
     angle: float = 0.0
+    visibility: Visibility = LAMP_VISIBILITY
 
     def __post_init__(self):
         self.direction = _unit(self.direction)

@@ -202,11 +202,12 @@ class Accelerator:
         (+1) or in (-1); a warning names it when it is open or inside out.
         A body of one instanced object reads them off its mesh's prototype."""
         meshes = [_first_copy(self.objects[i]) for i in members]
-        vertices = np.concatenate([m.vertices for m in meshes])
         name = self.objects[members[0]].body_name
         if len(members) == 1 and members[0] in self._prototypes:
+            vertices = meshes[0].vertices
             holes, inward = self._prototypes[members[0]].holes, self._prototypes[members[0]].inward
         else:
+            vertices = np.concatenate([m.vertices for m in meshes])
             starts = np.cumsum([0] + [len(m.vertices) for m in meshes])
             triangles = np.concatenate([m.triangles + start for m, start in zip(meshes, starts)])
             holes = open_edges(triangles, vertices)

@@ -50,7 +50,7 @@ class Prototypes:
         self.capacity = capacity_triangles
         self._kept: OrderedDict[tuple, Prototype] = OrderedDict()
         self._lock = threading.Lock()
-        self.built = self.found = 0
+        self.built = 0
 
     def of(self, mesh: Mesh, quality: str) -> Prototype:
         """The prototype of `mesh` built at BVH `quality`, kept or made now."""
@@ -59,7 +59,6 @@ class Prototypes:
             kept = self._kept.get(key)
             if kept is not None:
                 self._kept.move_to_end(key)
-                self.found += 1
                 return kept
         holes = open_edges(mesh.triangles, mesh.vertices)
         inward = not len(holes) and signed_volume(np.take(mesh.vertices, mesh.triangles, axis=0)) < 0.0
