@@ -82,7 +82,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         clock = time.perf_counter()
         key = lamp_pass_key(scene, settings) if cache is not None else None
         cached = cache.get(key) if cache is not None else None
-        view = image_view(scene.camera)
+        view = image_view(scene.camera) if settings.eye_pass else None
         if cached is not None and not all(imap.sees(view) for imap in cached[0].values()):
             cached = None
         if cached is None:
@@ -91,7 +91,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
             warnings += lamps_in_glass(scene, accel) + lamps_on_surfaces(scene, accel)
             maps = build_maps(scene, settings, warnings, view)
             run_lamps = bool(maps) and bool(scene.casters) and settings.lamp_rays > 0
-            share = _LAMP_SHARE if run_lamps else 0.0
+            share = (_LAMP_SHARE if settings.eye_pass else 1.0) if run_lamps else 0.0
             lamp_stats = LampPassStats()
             if run_lamps:
                 lamp_pass = beam_pass if settings.density == "beam" else photon_pass
@@ -110,13 +110,16 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
             imap.prepare()
         seconds["maps"] = time.perf_counter() - clock
 
-        clock = time.perf_counter()
-        buffers = eye_pass(scene, settings, accel, materials, maps, sky, monitor, share)
-        seconds["eye"] = time.perf_counter() - clock
+        cam = scene.camera
+        if settings.eye_pass:
+            clock = time.perf_counter()
+            buffers = eye_pass(scene, settings, accel, materials, maps, sky, monitor, share)
+            seconds["eye"] = time.perf_counter() - clock
+        else:
+            buffers = {name: np.zeros((cam.pixx * cam.pixy, 3), dtype=np.float32) for name in (*PASSES, HOLDOUT)}
     finally:
         accel.close()
 
-    cam = scene.camera
     passes = {}
     for name in PASSES:
         buf = buffers[name]

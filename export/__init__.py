@@ -2,6 +2,6 @@
 
 from .errors import InputError
 from .scene import SceneRead, read_for_bake, read_scene
-from .settings import render_settings
+from .settings import bake_settings, render_settings
 
-__all__ = ["InputError", "SceneRead", "read_for_bake", "read_scene", "render_settings"]
+__all__ = ["InputError", "SceneRead", "bake_settings", "read_for_bake", "read_scene", "render_settings"]

@@ -1,6 +1,7 @@
 """Scene.caustic turned into the engine's RenderSettings."""
 
 import os
+from dataclasses import replace
 
 from ..caustic_addon import RenderSettings
 from .errors import InputError
@@ -27,3 +28,8 @@ def render_settings(props, spp: int | None = None) -> RenderSettings:
         world_samples=props.world_samples,
         threads=max(1, os.cpu_count() or 1),
     )
+
+
+def bake_settings(props) -> RenderSettings:
+    """The engine settings of a bake or a Live update: the maps alone."""
+    return replace(render_settings(props), spp=1, eye_pass=False)

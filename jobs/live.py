@@ -97,6 +97,10 @@ class LiveSchedule:
             return REFINE
         return None
 
+    def settled(self) -> bool:
+        """Whether the last update shown is a refine, with nothing changed or running since."""
+        return self.job is None and not self.pending and self.shown == REFINE
+
     def started(self, kind: str, job: RenderJob) -> None:
         self.job, self.kind = job, kind
         if kind == PREVIEW:

@@ -7,7 +7,9 @@ quiet.
 
 Blender's handlers only take note; `tick`, a timer on the main thread,
 reads the scene, starts the job and writes its images. A run of Render,
-Bake or Compare pauses Live, and Live takes up the scene again after it.
+Bake or Compare pauses Live, and so does Blender's own render, whose
+thread reads the images Live writes; Live takes up the scene again after
+them.
 Live follows the window's scene: it rests while the window shows a scene
 without Live, updates once on coming back, and hands over to a scene
 whose own Live is on.
@@ -26,7 +28,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from ..caustic_addon import MapCache
-from ..export import InputError, read_for_bake, render_settings
+from ..export import InputError, bake_settings, read_for_bake
 from ..export.render_view import ENGINE as READER_ENGINE
 from ..jobs.live import PREVIEW, REFINE, LiveJob, LiveSchedule, preview_settings
 from ..operators.engine_run import EngineOperator
@@ -79,6 +81,8 @@ class Live:
 
 
 SESSION: Optional[Live] = None
+# True from a render's render_init to its render_complete or render_cancel.
+_blender_rendering = False
 # How many updates' figures a session keeps.
 KEPT_FIGURES = 256
 
@@ -115,11 +119,24 @@ def stop() -> None:
     remove_live()
 
 
+def shows_final(scene) -> bool:
+    """Whether Live's images hold `scene`'s caustic at its own settings, with no change since."""
+    live = SESSION
+    return live is not None and live.scene == scene.name and not live.away and live.schedule.settled()
+
+
+def _blender_renders() -> bool:
+    """Blender's own render runs: from the interface a job, whose thread
+    reads the receivers' images; in the background a call that the render
+    handlers bracket."""
+    return _blender_rendering or bpy.app.is_job_running('RENDER')
+
+
 def _begin_update(live: Live, kind: str) -> None:
     clock = time.perf_counter()
     try:
         read = read_for_bake(bpy.context, depsgraph=bpy.context.evaluated_depsgraph_get(), meshes=live.meshes)
-        settings = render_settings(bpy.context.scene.caustic, spp=1)
+        settings = bake_settings(bpy.context.scene.caustic)
     except InputError as exc:
         live.message, live.changed_at = str(exc), None
         live.schedule.pending = False
@@ -184,7 +201,7 @@ def tick() -> Optional[float]:
         live.settings = key
         live.meshes.clear()
         live.changed()
-    if EngineOperator.running:
+    if EngineOperator.running or _blender_renders():
         if live.schedule.job is not None:
             live.schedule.cancel()
             live.changed()
@@ -226,6 +243,19 @@ def on_frame_change(scene, depsgraph=None) -> None:
 
 
 @persistent
+def on_render_start(scene, *_) -> None:
+    global _blender_rendering
+    _blender_rendering = scene.render.engine != READER_ENGINE or _blender_rendering
+
+
+@persistent
+def on_render_end(scene, *_) -> None:
+    global _blender_rendering
+    if scene.render.engine != READER_ENGINE:
+        _blender_rendering = False
+
+
+@persistent
 def on_undo(*_) -> None:
     if SESSION is not None:
         SESSION.images.wired.clear()
@@ -251,7 +281,8 @@ def on_save(*_) -> None:
 
 _HANDLERS = (("depsgraph_update_post", on_depsgraph_update), ("frame_change_post", on_frame_change),
              ("undo_post", on_undo), ("redo_post", on_undo), ("load_pre", on_load), ("load_post", on_loaded),
-             ("save_pre", on_save))
+             ("save_pre", on_save), ("render_init", on_render_start), ("render_complete", on_render_end),
+             ("render_cancel", on_render_end))
 
 
 def register() -> None:

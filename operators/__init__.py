@@ -13,7 +13,7 @@ from .presets import CAUSTIC_OT_apply_preset
 from .render import CAUSTIC_OT_render
 from .render_with_caustics import CAUSTIC_OT_render_animation_with_caustics, CAUSTIC_OT_render_image_with_caustics
 
-from . import bake_on_render
+from . import bake_on_render, shortcuts
 from ..jobs import kernels
 from .engine_run import kernel_folder, shipped_kernels
 
@@ -36,10 +36,12 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory((
 def register() -> None:
     _register_classes()
     bake_on_render.register()
+    shortcuts.register()
     kernels.start(kernel_folder(), shipped_kernels())
 
 
 def unregister() -> None:
     kernels.wait()
+    shortcuts.unregister()
     bake_on_render.unregister()
     _unregister_classes()

@@ -7,7 +7,7 @@ import os
 
 import bpy
 
-from ..export import InputError, read_for_bake, render_settings
+from ..export import InputError, bake_settings, read_for_bake
 from ..jobs import JobRunner, RenderJob, StepError
 from ..live import session as live
 from ..writeback.bake import bake_maps, forget_selectors
@@ -22,7 +22,7 @@ class BakeFrame(EngineOperator):
     def _runner(self, context) -> JobRunner | None:
         try:
             read = read_for_bake(context)
-            job = RenderJob(read.scene, render_settings(context.scene.caustic, spp=1))
+            job = RenderJob(read.scene, bake_settings(context.scene.caustic))
         except InputError as exc:
             self.report({'ERROR'}, str(exc))
             return None

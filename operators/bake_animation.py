@@ -11,7 +11,7 @@ import os
 
 import bpy
 
-from ..export import InputError, read_for_bake, render_settings
+from ..export import InputError, bake_settings, read_for_bake
 from ..jobs import JobRunner, RenderJob, StepError, map_rgba
 from ..writeback.bake_group import follow_frames
 from ..writeback.images import working_colorspace
@@ -45,7 +45,7 @@ class BakeFrames(FrameRange, EngineOperator):
             check_saved(self.directory)
             self._folder = bpy.path.abspath(self.directory)
             self._digits = max(4, len(str(frames[-1])))
-            settings = render_settings(scene.caustic, spp=1)
+            settings = bake_settings(scene.caustic)
             check_writable([os.path.join(self._folder, "frame")])
         except (InputError, OutputError) as exc:
             self.report({'ERROR'}, str(exc))

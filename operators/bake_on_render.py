@@ -14,7 +14,8 @@ started from the UI runs them on its render thread, where the add-on must
 not touch Blender's data, so there it leaves the materials as they are:
 Render > Render Image with Caustics and Render Animation with Caustics
 bake on the main thread first and then start Blender's render through
-`start_render`, which keeps these handlers out of it. The last frame's bake
+`start_render`, which keeps these handlers out of it; with Live or Bake
+While Rendering on, F12 and Ctrl-F12 run those two (shortcuts.py). The last frame's bake
 stays in the materials after the render, as Bake Caustics leaves it."""
 
 import threading
@@ -22,7 +23,7 @@ import threading
 import bpy
 from bpy.app.handlers import persistent
 
-from ..export import InputError, read_for_bake, render_settings
+from ..export import InputError, bake_settings, read_for_bake
 from ..export.render_view import ENGINE as READER_ENGINE
 from ..jobs import RenderJob, map_rgba
 from ..writeback.images import own_image, write_image
@@ -41,9 +42,8 @@ def _wanted(scene) -> bool:
     if threading.current_thread() is not threading.main_thread():
         if not scene.caustic.use_bake_on_render:
             return False  # Live keeps the current frame's caustic in the materials
-        print("Caustics: Bake While Rendering works in command-line renders only; this render uses the "
-              "caustics baked before it (in the interface, use Render > Render Image with Caustics or "
-              "Render Animation with Caustics)")
+        print("Caustics: this render uses the caustics baked before it: from the interface, Bake While Rendering "
+              "bakes through F12, Ctrl-F12 and Render > Render Image or Animation with Caustics")
         return False
     return True
 
@@ -74,7 +74,7 @@ def _trace(scene, depsgraph):
     """(SceneRead, RenderResult) of the frame, or None after printing why not."""
     try:
         read = read_for_bake(None, depsgraph=depsgraph)
-        job = RenderJob(read.scene, render_settings(scene.caustic, spp=1))
+        job = RenderJob(read.scene, bake_settings(scene.caustic))
     except InputError as exc:
         print(f"Caustics: frame {scene.frame_current} renders without caustics: {exc}")
         return None

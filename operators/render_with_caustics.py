@@ -7,11 +7,14 @@ main thread with progress and Esc: the current frame as Bake Caustics does
 it, or the range as Bake Caustic Animation does it (an image sequence the
 materials follow). Then they start Blender's own render as F12 or Ctrl-F12
 would (its render view, its progress, its Esc). The bake stays in the
-materials afterwards, as the bake operators leave it."""
+materials afterwards, as the bake operators leave it. F12 and Ctrl-F12
+themselves come here when a scene wants caustics in its renders
+(shortcuts.py)."""
 
 import bpy
 
 from ..jobs import JobRunner
+from ..live import session as live
 from .bake import BakeFrame
 from .bake_animation import BakeFrames
 from .bake_on_render import start_render
@@ -25,20 +28,33 @@ def render_takes_a_range() -> bool:
 class RenderAfterBake:
     """Mixin for a bake operator: after a whole bake, Blender's render with
     `_render_options()`, started as F12 starts it when the operator was
-    invoked (a button, a menu), else here and now (a script)."""
+    invoked (a button, a menu), else here and now (a script). Called by F12
+    or Ctrl-F12, it passes the key on to Blender's Render unless
+    `_bakes_for(scene)`."""
+
+    from_shortcut: bpy.props.BoolProperty(options={'HIDDEN', 'SKIP_SAVE'})
 
     _invoked = False
 
+    def _passes_key_on(self, context) -> bool:
+        return self.from_shortcut and not self._bakes_for(context.scene)
+
     def invoke(self, context, event):
+        if self._passes_key_on(context):
+            return {'PASS_THROUGH'}
         self._invoked = True
         return super().invoke(context, event)
+
+    def execute(self, context):
+        return {'PASS_THROUGH'} if self._passes_key_on(context) else super().execute(context)
 
     def _done(self, context, runner: JobRunner) -> set:
         result = super()._done(context, runner)
         if 'FINISHED' not in result or runner.cancelled or runner.error is not None:
             return result
         try:
-            started = start_render(self._invoked, **self._render_options(context))
+            options = self._render_options(context) | ({"use_viewport": True} if self.from_shortcut else {})
+            started = start_render(self._invoked, **options)
         except RuntimeError as exc:
             self.report({'ERROR'}, f"The caustics are baked, but Blender's render failed: {exc}")
             return result
@@ -58,6 +74,11 @@ class CAUSTIC_OT_render_image_with_caustics(RenderAfterBake, BakeFrame, bpy.type
         name="Write Image", options={'SKIP_SAVE'},
         description="Save the rendered image to the output path, as Render Image's option does")
 
+    @staticmethod
+    def _bakes_for(scene) -> bool:
+        """Live's images already hold this frame's full caustic once it refined."""
+        return scene.caustic.use_bake_on_render or (scene.caustic.use_live and not live.shows_final(scene))
+
     def _render_options(self, context) -> dict:
         return {"write_still": self.write_still}
 
@@ -67,6 +88,10 @@ class CAUSTIC_OT_render_animation_with_caustics(RenderAfterBake, BakeFrames, bpy
     bl_label = "Render Animation with Caustics"
     bl_description = "Bake every frame's caustics, then render the animation as Ctrl-F12 does"
     bl_options = {'UNDO'}
+
+    @staticmethod
+    def _bakes_for(scene) -> bool:
+        return scene.caustic.use_bake_on_render or scene.caustic.use_live
 
     def _runner(self, context) -> JobRunner | None:
         scene = context.scene

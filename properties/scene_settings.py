@@ -77,7 +77,8 @@ class CausticSceneSettings(bpy.types.PropertyGroup):
         default=False)
     use_bake_on_render: BoolProperty(
         name="Bake While Rendering",
-        description="Bake each frame's caustics just before Blender renders it, in command-line renders",
+        description="Bake each frame's caustics just before Blender renders it: from the command line, "
+                    "and from F12 and Ctrl-F12",
         default=False)
 
     cycles_samples: IntProperty(

@@ -147,7 +147,11 @@ class BeamMap(IlluminationMap):
     24 cells across or more (dim, wide light) to a grid COARSE_CELL times
     coarser; the others to the map's own grid, each
     beam's light shared between two layers where its size is in between
-    (`layer_shares`). Each layer spans only its beams' bounding box.
+    (`layer_shares`). Each layer spans only its beams' bounding box. A map
+    read only at its own cells (a bake's image: `sub_cell` False) has no
+    fine layer: its small beams go to its own grid, where exact coverage
+    gives each cell its exact mean, which an unaligned fine layer would only
+    approximate.
 
     On a flat receiver the beams also go to a `screen` layer
     (screen_layer.py), which gives the pixels that see the receiver the
@@ -185,9 +189,10 @@ class BeamMap(IlluminationMap):
     # crowds into a few rows, and the threads share them out as they go.
     RASTER_BANDS = 4
 
-    def __init__(self, *args, threads: int = 1, screen: Optional[ScreenLayer] = None, **kwargs):
+    def __init__(self, *args, threads: int = 1, screen: Optional[ScreenLayer] = None, sub_cell: bool = True,
+                 **kwargs):
         super().__init__(*args, **kwargs)
-        self.threads, self.screen = threads, screen
+        self.threads, self.screen, self.sub_cell = threads, screen, sub_cell
         self._kept: Optional[list[tuple[np.ndarray, np.ndarray]]] = None if screen is None else []
         self._beam_parts: list[tuple[np.ndarray, np.ndarray]] = []
         self._pending_beams = 0
@@ -280,6 +285,8 @@ class BeamMap(IlluminationMap):
         span, centres = np.concatenate([s for s, _ in spans]), np.concatenate([c for _, c in spans])
         irradiance = np.concatenate([e for _, e in groups])
         fine, coarse = layer_shares(span / self.cell)
+        if not self.sub_cell:
+            fine[:] = 0.0
         if self._grids is None:
             self._grids = self._layout([corners for corners, _ in groups], centres, irradiance, fine, coarse,
                                        whole_chart)

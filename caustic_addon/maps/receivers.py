@@ -26,9 +26,10 @@ GUTTER_CELLS = 40
 
 
 def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str],
-               view: ImageView) -> dict[int, IlluminationMap]:
+               view: Optional[ImageView]) -> dict[int, IlluminationMap]:
     """Receiver object index -> its empty map, a flat receiver's beam map
-    with a screen layer for the camera `view`; a warning for each receiver
+    with a screen layer for the camera `view` (None: no eye pass reads the
+    maps, and beam maps keep nothing finer than their cells); a warning for each receiver
     that gets none, a coarser cell than the map scale asks for, or an
     automatic chart whose parts overlap."""
     estimate = MapEstimate(settings.k_nearest if settings.density in ("adaptive", "beam") else None)
@@ -53,10 +54,11 @@ def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str],
             maps[index] = IlluminationMap(obj.name, chart, cell, estimate)
             continue
         screen = None
-        if isinstance(chart, PlaneChart):
+        if isinstance(chart, PlaneChart) and view is not None:
             receiver = chart.plane_coords(obj.mesh.corners.reshape(-1, 3)).reshape(-1, 3, 2)
             screen = ScreenLayer(view, chart, np.ascontiguousarray(receiver))
-        maps[index] = BeamMap(obj.name, chart, cell, estimate, threads=settings.threads, screen=screen)
+        maps[index] = BeamMap(obj.name, chart, cell, estimate, threads=settings.threads, screen=screen,
+                              sub_cell=view is not None)
     return maps
 
 

@@ -43,6 +43,8 @@ class RenderSettings:
                   over the pixel (twice for an image: by cos and by radiance)
     bands         wavelength bands traced when a material disperses
                   (spectrum.py); one band, and no cost, when none does
+    eye_pass      False for a bake: the maps alone, read at their own cells;
+                  no eye pass, so no layer finer than a cell (beam_map.py)
     """
 
     lamp_rays: int = 40_000
@@ -62,6 +64,7 @@ class RenderSettings:
     threads: int = 2
     map_resolution_limit: int = 1024
     bands: int = 6
+    eye_pass: bool = True
 
     def validate(self) -> None:
         """Raise ValueError naming the field that is out of range."""

@@ -399,6 +399,36 @@ def test_live_waits_while_a_render_runs(live, addon):
     assert len(session.updates) == shown + 2
 
 
+def test_live_waits_while_blender_renders(live):
+    """From render_init to render_complete Live writes no image: Blender's
+    render thread reads them. Here a render handler moves the glass and
+    runs Live's timer mid-render; Live starts its update after the render."""
+    parts = scenes.ball_lens_scene(32, 24, lamp_rays=20_000)
+    scene = bpy.context.scene
+    scene.render.engine, scene.cycles.samples = 'CYCLES', 1
+    session = live_on(live, parts)
+    shown, started = len(session.updates), []
+
+    def mid_render(*_):
+        parts["ball"].location.x = 0.6
+        for _ in range(10):
+            bpy.context.view_layer.update()
+            live.tick()
+            started.append(session.schedule.job is not None)
+            time.sleep(0.02)
+
+    bpy.app.handlers.render_pre.append(mid_render)
+    try:
+        bpy.ops.render.render()
+    finally:
+        bpy.app.handlers.render_pre.remove(mid_render)
+    assert len(started) == 10 and not any(started)
+    pump(live)
+    assert len(session.updates) == shown + 2
+    focus = focus_on_floor(parts["lamp"], parts["ball"])
+    assert np.linalg.norm(brightest_point(parts["floor"].active_material)[:2] - focus[:2]) < 0.05
+
+
 def test_saving_keeps_the_preview_on_show(live, tmp_path):
     """A file saved while a preview is shown (refined images are packed,
     a preview is only in memory) holds the preview's pixels."""

@@ -99,3 +99,52 @@ def test_render_animation_with_caustics_of_a_range_of_its_own(tmp_path):
 
 def test_the_render_menu_has_both_entries(addon):
     assert addon.panels.render_menu.draw_render_menu in bpy.types.TOPBAR_MT_render._dyn_ui_initialize()
+
+
+@pytest.fixture
+def blender_keys():
+    """Blender's default key map loaded, as the interface has it; the bpy module starts without one."""
+    bpy.utils.keyconfig_set(bpy.utils.preset_find("Blender", "keyconfig"))
+    bpy.context.window_manager.keyconfigs.update()
+    return bpy.context.window_manager.keyconfigs.user.keymaps["Screen"]
+
+
+@pytest.mark.parametrize("ctrl, ours", [(False, "caustic.render_image_with_caustics"),
+                                        (True, "caustic.render_animation_with_caustics")])
+def test_f12_and_ctrl_f12_come_to_the_caustic_renders_first(addon, blender_keys, ctrl, ours):
+    hits = [item for item in blender_keys.keymap_items
+            if item.type == 'F12' and item.ctrl == ctrl and not (item.alt or item.shift)]
+    assert [item.idname for item in hits] == [ours, "render.render"]
+    assert hits[0].properties.from_shortcut and hits[1].properties.animation == ctrl
+
+
+@pytest.mark.parametrize("operator", ["render_image_with_caustics", "render_animation_with_caustics"])
+def test_the_keys_pass_on_to_blenders_render_in_a_scene_without_caustics_in_renders(tmp_path, operator):
+    sliding_ball(tmp_path)
+    call = getattr(bpy.ops.caustic, operator)
+    assert call('INVOKE_DEFAULT', from_shortcut=True) == {'PASS_THROUGH'}
+    assert not bpy.data.node_groups and not (tmp_path / "caustic_bake").exists()
+
+
+def test_f12_with_live_bakes_until_live_has_refined(addon, tmp_path):
+    """With Live on, F12 passes on to Blender's render once Live's images
+    hold the frame's full caustic, and bakes first while Live previews."""
+    from test_live import pump
+
+    sliding_ball(tmp_path)
+    scene = bpy.context.scene
+    cycles_settings(str(tmp_path / "still.exr"))
+    scene.cycles.samples = 1
+    bpy.context.view_layer.update()
+    session = addon.live.session
+    try:
+        assert bpy.ops.caustic.toggle_live() == {'FINISHED'}
+        assert not session.shows_final(scene)
+        assert bpy.ops.caustic.render_image_with_caustics('INVOKE_DEFAULT', from_shortcut=True) == {'FINISHED'}
+        pump(session)
+        assert session.shows_final(scene)
+        assert bpy.ops.caustic.render_image_with_caustics('INVOKE_DEFAULT', from_shortcut=True) == {'PASS_THROUGH'}
+        assert bpy.ops.caustic.render_animation_with_caustics('INVOKE_DEFAULT', from_shortcut=True) == {'FINISHED'}
+        assert bpy.data.images["Caustic Map Floor"].source == 'SEQUENCE'
+    finally:
+        session.stop()

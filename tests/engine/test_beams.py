@@ -1,12 +1,14 @@
 """Caustic beams: noise-free, flux-conserving, and exact against the ball-lens reference."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from caustic_addon import Camera, Dielectric, Diffuse, Object, RenderSettings, Scene, SunLight, render, shapes
 from caustic_addon.maps.beam_map import BeamMap, layer_shares
+from caustic_addon.maps.cache import MapCache
 from caustic_addon.maps.charts import PlaneChart
 from caustic_addon.maps.illumination_map import MapEstimate
 from caustic_addon.maps.raster import signed_areas
@@ -242,6 +244,63 @@ def test_a_beam_map_of_a_wavy_sheet_agrees_with_a_dense_photon_map_cell_by_cell_
     blocks_b, blocks_p = (a[:h, :w].reshape(h // 4, 4, w // 4, 4).sum(axis=(1, 3)) for a in (beams, photons))
     lit = blocks_p > 0.05 * blocks_p.max()
     assert np.sqrt(np.sum((blocks_b - blocks_p)[lit] ** 2) / np.sum(blocks_p[lit] ** 2)) < 0.04
+
+
+def clipped_area(triangle: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:
+    """Area of `triangle (3,2)` inside the box [lo, hi] (Sutherland-Hodgman)."""
+    polygon = list(triangle)
+    for axis, bound, keep_below in ((0, lo[0], False), (0, hi[0], True), (1, lo[1], False), (1, hi[1], True)):
+        inside = [(p[axis] <= bound) == keep_below for p in polygon]
+        clipped = []
+        for k, p in enumerate(polygon):
+            q = polygon[k - 1]
+            if inside[k] != inside[k - 1]:
+                clipped.append(q + (p - q) * (bound - q[axis]) / (p[axis] - q[axis]))
+            if inside[k]:
+                clipped.append(p)
+        polygon = clipped
+        if not polygon:
+            return 0.0
+    x, y = np.array(polygon).T
+    return 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def test_a_bakes_map_gives_each_cell_its_beams_exact_mean():
+    """A map that no eye pass reads (a bake's, `sub_cell` off) keeps its
+    small beams, those of a few cells and under, on its own cells, so each
+    cell of its image holds exactly the beams' flux over it divided by its
+    area; a fine layer of unaligned cells would approximate it."""
+    verts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    chart = PlaneChart(np.array([0.5, 0.5, 0.0]), np.array([0.0, 0.0, 1.0]), verts)
+    imap = BeamMap("floor", chart, 0.1, MapEstimate(16), sub_cell=False)
+    rng = np.random.default_rng(3)
+    corners = rng.uniform(0.2, 0.8, (30, 1, 2)) + rng.uniform(-0.12, 0.12, (30, 3, 2))
+    irradiance = rng.uniform(0.5, 2.0, (30, 3))
+    imap.add_beams(corners + chart.origin, irradiance)
+    image = imap.irradiance()
+    exact = np.zeros_like(image)
+    for row in range(image.shape[0]):
+        for col in range(image.shape[1]):
+            lo, hi = np.array([col, row]) * 0.1, np.array([col + 1, row + 1]) * 0.1
+            areas = np.array([clipped_area(t, lo, hi) for t in corners])
+            exact[row, col] = areas @ irradiance / 0.01
+    spans = (corners.max(axis=1) - corners.min(axis=1)).max(axis=1)
+    assert (layer_shares(spans / 0.1)[0] > 0.0).all() and min(layer.cell for layer in imap._layers) == 0.1
+    np.testing.assert_allclose(image, exact, rtol=1e-9, atol=1e-12)
+
+
+def test_a_bake_traces_no_eye_pass_and_holds_the_renders_light():
+    """Without the eye pass (a bake) the maps hold the light a render's
+    maps hold, the same beams on the receiver's own cells; the two are
+    kept apart in a cache, since a render's maps carry finer layers."""
+    scene, settings = ball_lens(), quick(lamp_rays=4_000, density="beam")
+    cache = MapCache(capacity=2)
+    rendered = render(scene, settings, cache=cache)
+    baked = render(scene, replace(settings, eye_pass=False), cache=cache)
+    assert "eye" not in baked.stats["seconds"] and not baked.stats["maps_cached"] and not baked.image[..., :3].any()
+    full, bake = rendered.maps["Floor"].irradiance(), baked.maps["Floor"].irradiance()
+    np.testing.assert_allclose(bake.sum(axis=(0, 1)), full.sum(axis=(0, 1)), rtol=1e-9)
+    assert np.linalg.norm(bake - full) / np.linalg.norm(full) < 0.05
 
 
 def test_beams_of_about_a_cell_share_their_light_between_layers_smoothly():
