@@ -5,11 +5,12 @@ entry point; the add-on and the CLI call `render` and nothing below it."""
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Optional
 
 import numpy as np
 
+from .emission.mesh_lights import mesh_lights
 from .emission.world_sun import extract_sun
 from .errors import SceneError
 from .maps.cache import MapCache, lamp_pass_key
@@ -21,7 +22,7 @@ from .passes.camera_rays import image_view
 from .passes.eye import HOLDOUT, PASSES, eye_pass
 from .passes.lamp_pass import LampPassStats, lamps_in_glass
 from .passes.photon import photon_pass
-from .scene import AreaLight, RenderSettings, Scene, SunLight
+from .scene import AreaLight, MeshLight, RenderSettings, Scene, SunLight
 from .scene.material_table import Materials
 from .scene.validate import rough_caster_warnings, validate_scene
 from .tracing.accelerator import Accelerator
@@ -69,6 +70,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
     seconds = {}
     # an environment's sun is a lamp, the rest of the world the sky the eye
     # pass sees through the casters
+    scene = replace(scene, lights=scene.lights + mesh_lights(scene))
     sun, sky = extract_sun(scene.world)
     lamps = scene.lights + ([sun] if sun is not None else [])
 
@@ -150,7 +152,7 @@ def lamps_on_surfaces(scene: Scene, accel: Accelerator) -> list[str]:
     """A warning for each point, spot or area lamp whose centre lies on a
     surface, within the tracing epsilon: its rays start on that surface and
     meet it at once, so it sends no light through the casters."""
-    lamps = [light for light in scene.lights if not isinstance(light, SunLight)]
+    lamps = [light for light in scene.lights if not isinstance(light, (SunLight, MeshLight))]
     if not lamps:
         return []
     centres = np.array([light.center if isinstance(light, AreaLight) else light.position for light in lamps])

@@ -59,8 +59,8 @@ class Surface:
     reflects nothing (the engine's Dielectric); `roughness` Blender's
     Roughness of glass or metal, `multiscatter` whether its distribution is
     Multiscatter GGX; `emission` the radiance it gives off (an Emission
-    shader, or a Principled BSDF's emission), which the engine shows but
-    does not yet light anything with; `texture` the nodes that drive a
+    shader, or a Principled BSDF's emission), with which the engine's
+    faces light the scene as a lamp does (its MeshLight); `texture` the nodes that drive a
     receiver's colour (textures.py), if read; `specular` a Principled
     receiver's specular layer. `black` says why a material renders black,
     as Cycles renders it: no output node, or no shader connected to it.

@@ -245,9 +245,6 @@ def place(source: MeshSource, name: str, matrices: np.ndarray, visibility: Visib
         if surfaces[key].black is not None:
             warnings.append(f"'{name}': material '{key}' (slot {', '.join(map(str, slots))}) {surfaces[key].black}; "
                             "Cycles renders its faces black, and so does the caustic render")
-        if np.any(surfaces[key].emission > 0.0):
-            warnings.append(f"'{name}': its material '{key}' emits light; the caustic render shows it but lights "
-                            "nothing with it and casts no caustics from it yet (a light in its place would)")
         part = f"{name} [{key if key is not None else 'no material'}]" if several else name
         engine = engines[key]
         if surfaces[key].texture is not None:

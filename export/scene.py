@@ -75,8 +75,8 @@ def read_scene(context, with_camera: bool = True, depsgraph=None, meshes: Option
                                  "shows it, which differs for " + ", ".join(differ))
     read.scene.world = engine_world(scene.world, read.warnings)
     read.scene.ambient = np.array(scene.caustic.ambient[:], dtype=np.float64)
-    if not read.scene.lights and read.scene.world.is_black:
-        raise InputError("Nothing lights the scene: it has no light, and its world is black")
+    if not read.scene.lights and not read.scene.emitting and read.scene.world.is_black:
+        raise InputError("Nothing lights the scene: it has no light and no emitting surface, and its world is black")
     if not read.scene.receivers:
         raise InputError("No object receives caustics: give a mesh a diffuse material or set its "
                          "Caustics role to Receiver")

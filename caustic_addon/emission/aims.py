@@ -104,7 +104,8 @@ def visible_targets(light: Light, targets: list[Sphere]) -> list[Sphere]:
 
 def reach(light: Light) -> float:
     """How far a lamp's emitting points lie from its centre, m: a point or
-    spot lamp's radius, an area lamp's half-diagonal; 0 for a sun."""
+    spot lamp's radius, an area lamp's half-diagonal, a mesh light's reach
+    from its centroid; 0 for a sun."""
     if isinstance(light, AreaLight):
         return float(np.linalg.norm(light.axis_x) + np.linalg.norm(light.axis_y))
     if isinstance(light, SunLight):

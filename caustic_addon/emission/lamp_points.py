@@ -30,8 +30,9 @@ import numpy as np
 
 from ..sampling.sequences import r2_sequence
 from ..sampling.warps import cone_directions
-from ..scene import AreaLight, Light, SunLight
+from ..scene import AreaLight, Light, MeshLight, SunLight
 from ..util.vectors import DIVISION_FLOOR
+from . import mesh_lights
 from .aims import Sphere, aims, emitting_points, reach
 
 # Map cells between the caustics of neighbouring points of a lamp.
@@ -40,6 +41,8 @@ BEAM_SHIFT = 2.0
 MAX_PER_AXIS = 16
 # Lamp rays each point's beam grid keeps, at least.
 MIN_GRID_POINTS = 200
+# Pieces a mesh light's flux toward the casters is estimated from.
+FLUX_PIECES = 16
 
 
 def penumbra(light: Light, targets: list[Sphere], receivers: tuple[np.ndarray, np.ndarray]) -> float:
@@ -149,6 +152,14 @@ def grid_phases(count: int) -> np.ndarray:
     return r2_sequence(np.arange(count), np.zeros(2))
 
 
+def flux_toward(light: Light, targets: list[Sphere], scene_sphere: Sphere) -> float:
+    """W (at energy 1) that `light`'s aims hold: a mesh light's from FLUX_PIECES of its pieces."""
+    if isinstance(light, MeshLight):
+        parts = mesh_lights.point_lamps(light, FLUX_PIECES, mesh_lights.lift_off(light))[0]
+        return sum(flux_toward(part, targets, scene_sphere) for part in parts)
+    return sum(aim.flux(1.0) for aim in aims(light, targets, scene_sphere))
+
+
 def beam_lamps(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere, receivers, cell: float,
                lamp_rays: int) -> tuple[list[Light], np.ndarray, list[Optional[np.ndarray]]]:
     """Every lamp as lamps of size 0 for beam mode, with points enough for
@@ -156,11 +167,19 @@ def beam_lamps(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere,
     more than each lamp's share of `lamp_rays` (by its flux toward the
     targets) can give grids of MIN_GRID_POINTS; with the phase (2,) of each
     one's grid (`grid_phases`) and the corners (4,3) of the lamp's cell each
-    one stands for, less the point (`lamp_cells`; None for a lamp of size 0)."""
-    flux = np.array([sum(aim.flux(1.0) for aim in aims(light, targets, scene_sphere)) for light in lights])
+    one stands for, less the point (`lamp_cells`; None for a lamp of size 0).
+    A mesh light's points are its pieces on both sides (mesh_lights.point_lamps)."""
+    flux = np.array([flux_toward(light, targets, scene_sphere) for light in lights])
     budgets = lamp_rays * flux / flux.sum() if flux.sum() > 0 else np.zeros(len(lights))
     out, phases, cells = [], [], []
     for light, budget in zip(lights, budgets):
+        if isinstance(light, MeshLight):
+            per_axis = points_per_axis(light, targets, receivers, cell, budget)
+            points, corners = mesh_lights.point_lamps(light, per_axis * per_axis, mesh_lights.lift_off(light))
+            out += points
+            cells += corners
+            phases.append(grid_phases(len(points)))
+            continue
         if isinstance(light, SunLight) or not targets:
             facing = getattr(light, "direction", np.array([0.0, 0.0, -1.0]))
         else:

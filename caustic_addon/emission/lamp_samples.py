@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..sampling.warps import concentric_disc1, cone_direction1, cone_directions, orthonormal_basis1
-from ..scene import AreaLight, Light, PointLight, SpotLight, SunLight
+from ..scene import AreaLight, Light, MeshLight, PointLight, SpotLight, SunLight
 from ..util.jit import inline, kernel
 from ..util.rows import contiguous
 from ..util.vectors import DIVISION_FLOOR, dot1, set_row
@@ -44,6 +44,11 @@ def sample_lamp(light: Light, energy: float, points: np.ndarray, uv: np.ndarray,
     out = LampSample(np.empty((n, 3)), np.empty(n), np.empty((n, 3)))
     if isinstance(light, SunLight):
         _sun(light, energy, uv, far, out)
+    elif isinstance(light, MeshLight):
+        areas = light.areas
+        _mesh_samples(out.dirs, out.dist, out.irradiance, points, uv, light.triangles,
+                      np.cumsum(areas) / max(float(areas.sum()), DIVISION_FLOOR), float(areas.sum()),
+                      light.radiance * energy)
     elif isinstance(light, AreaLight):
         if light.spread <= 0.0:
             _parallel_area_samples(out.dirs, out.dist, out.irradiance, points, *_area_frame(light),
@@ -64,13 +69,15 @@ def sample_lamp(light: Light, energy: float, points: np.ndarray, uv: np.ndarray,
 
 def apparent_size(light: Light, points: np.ndarray) -> np.ndarray:
     """(n,) radians: the angle the lamp spans as seen from `points (n,3)`,
-    2 atan(half-extent / distance) (the diagonal for an area lamp), a sun's
-    angle, 0 for a lamp of size 0."""
+    2 atan(half-extent / distance) (the diagonal for an area lamp, the reach
+    from its centroid for a mesh light), a sun's angle, 0 for a lamp of size 0."""
     if isinstance(light, SunLight):
         return np.full(len(points), light.angle)
     if isinstance(light, AreaLight):
         half = math.hypot(float(np.linalg.norm(light.axis_x)), float(np.linalg.norm(light.axis_y)))
         center = light.center
+    elif isinstance(light, MeshLight):
+        half, center = light.radius, light.position
     else:
         half, center = light.radius, light.position
     out = np.empty(len(points))
@@ -265,3 +272,34 @@ def _apparent_sizes(out, points, center, half):
     at = (center[0], center[1], center[2])
     for i in range(len(points)):
         out[i] = 2.0 * math.atan(half / max(_toward1(points, i, at)[1], DIVISION_FLOOR))
+
+
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, :, ::1], f8[::1], f8, f8[::1])")
+def _mesh_samples(dirs, dist, irradiance, points, uv, triangles, cdf, area, radiance):
+    """Points uniform by area over `triangles (k,3,3)` (`cdf (k,)` their
+    areas' running share of `area`): triangle j where u falls in its share
+    of the cdf, u rescaled within it, then the point of barycentrics
+    (1 - sqrt(u), v sqrt(u)) (Shirley's warp). E = L |cos_light| A / d^2,
+    |cos| as either side emits, the pdf being 1 / A."""
+    last = len(cdf) - 1
+    for i in range(len(points)):
+        u = uv[i, 0]
+        j = min(np.searchsorted(cdf, u, side="right"), last)
+        low = cdf[j - 1] if j > 0 else 0.0
+        width = cdf[j] - low
+        u = min(max((u - low) / width, 0.0), 1.0) if width > 0.0 else 0.5
+        root = math.sqrt(u)
+        b0, b1 = 1.0 - root, uv[i, 1] * root
+        b2 = 1.0 - b0 - b1
+        a, b, c = triangles[j, 0], triangles[j, 1], triangles[j, 2]
+        at = (b0 * a[0] + b1 * b[0] + b2 * c[0], b0 * a[1] + b1 * b[1] + b2 * c[1], b0 * a[2] + b1 * b[2] + b2 * c[2])
+        e1 = (b[0] - a[0], b[1] - a[1], b[2] - a[2])
+        e2 = (c[0] - a[0], c[1] - a[1], c[2] - a[2])
+        normal = (e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0])
+        length = max(math.sqrt(dot1(normal, normal)), DIVISION_FLOOR)
+        l, d = _toward1(points, i, at)
+        set_row(dirs, i, l)
+        dist[i] = d
+        scale = abs(dot1(l, normal)) / length * area / max(d * d, DIVISION_FLOOR)
+        for ch in range(3):
+            irradiance[i, ch] = radiance[ch] * scale

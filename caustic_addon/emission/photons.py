@@ -22,8 +22,8 @@ import numpy as np
 from ..sampling.hash import hash_uniform
 from ..sampling.sequences import r2_sequence
 from ..sampling.warps import sample_disc
-from ..scene import Light, SunLight
-from . import radiometry
+from ..scene import Light, MeshLight, SunLight
+from . import mesh_lights, radiometry
 from .aims import Aim, Sphere, aims, balance_density, overlapping, share
 
 
@@ -53,10 +53,12 @@ class Photons:
 
 class Emitter:
     """Makes photons [start, stop) of one lamp. `count` is how many it makes
-    in all; its photons' ids start at `id_base`."""
+    in all; its photons' ids start at `id_base`; `source` the scene's lamp
+    it is (a mesh light's pieces are lamps of their own)."""
 
     count: int
     id_base: int = 0
+    source: Light = None
 
     def emit(self, start: int, stop: int) -> Photons:
         raise NotImplementedError
@@ -120,17 +122,26 @@ class AimedEmitter(Emitter):
         return _kept(origins, dirs, flux, ids)
 
 
+def _emitting(light: Light) -> list[Light]:
+    """The lamps that send `light`'s photons: a mesh light's pieces
+    (mesh_lights.area_lamps), any other lamp itself."""
+    if isinstance(light, MeshLight):
+        return mesh_lights.area_lamps(light, mesh_lights.PHOTON_PIECES, mesh_lights.lift_off(light))
+    return [light]
+
+
 def make_emitters(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere, mode: str, energy: float,
                   lamp_rays: int, seed: int) -> list[Emitter]:
     """One emitter per lamp that sends light to a target, with the
     `lamp_rays` shared among the aims in proportion to the flux each
     receives. In 'sphere' mode a point or spot lamp sends its share
-    everywhere (the paper's eq. 1), and a sun over the whole scene's disc."""
+    everywhere (the paper's eq. 1), and a sun over the whole scene's disc;
+    a mesh light's pieces each have an emitter (`_emitting`)."""
     rng = np.random.default_rng(seed)
     if not targets:
         return []
     per_light = []
-    for light in lights:
+    for light, source in ((part, source) for source in lights for part in _emitting(source)):
         if mode == "sphere":
             aimed = aims(light, [scene_sphere], scene_sphere)
             if not isinstance(light, SunLight):
@@ -138,17 +149,18 @@ def make_emitters(lights: list[Light], targets: list[Sphere], scene_sphere: Sphe
         else:
             aimed = aims(light, targets, scene_sphere)
         if aimed and sum(aim.flux(energy) for aim in aimed) > 0:
-            per_light.append((light, aimed))
+            per_light.append((light, source, aimed))
     if not per_light:
         return []
-    fluxes = [np.array([aim.flux(energy) for aim in aimed]) for _, aimed in per_light]
+    fluxes = [np.array([aim.flux(energy) for aim in aimed]) for _, _, aimed in per_light]
     counts = np.split(share(lamp_rays, np.concatenate(fluxes)), np.cumsum([len(f) for f in fluxes])[:-1])
     emitters = []
-    for (light, aimed), n in zip(per_light, counts):
+    for (light, source, aimed), n in zip(per_light, counts):
         if mode == "sphere" and not isinstance(light, SunLight):
             emitters.append(PointSphereEmitter(light, energy, int(n.sum())))
         else:
             emitters.append(AimedEmitter(light, energy, aimed, n, rng.random(2), seed))
+        emitters[-1].source = source
     for k in range(1, len(emitters)):
         emitters[k].id_base = emitters[k - 1].id_base + emitters[k - 1].count
     return emitters

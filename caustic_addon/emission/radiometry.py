@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-from ..scene import AreaLight, Light, SpotLight, SunLight
+from ..scene import AreaLight, Light, MeshLight, SpotLight, SunLight
 from ..util.jit import inline, kernel
 from ..util.rows import contiguous
 from ..util.vectors import dot1, row
@@ -148,4 +148,6 @@ def is_delta(light: Light) -> bool:
         return light.angle <= 0.0
     if isinstance(light, AreaLight):
         return light.spread <= 0.0
+    if isinstance(light, MeshLight):
+        return False
     return light.radius <= 0.0

@@ -26,7 +26,7 @@ from ..scene import RenderSettings, Scene
 # RenderSettings fields that change nothing in the maps.
 _EYE_ONLY = {"spp", "edge_samples", "lamp_samples", "world_samples", "threads", "chunk_size"}
 # Material fields only the eye pass reads: a receiver's map holds irradiance.
-_SHADING_ONLY = {"albedo", "specular", "emission", "texture"}
+_SHADING_ONLY = {"albedo", "specular", "texture"}
 # Lamp fields only the eye pass reads: which eye rays see the lamp itself.
 _SEEN_ONLY = {"visibility"}
 

@@ -612,7 +612,7 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
     as_photons = photon_lamps(lights, scene)
     emitters = [e for e in make_emitters(lights, targets, scene_sphere, "targeted", settings.energy,
                                          settings.lamp_rays, settings.seed)
-                if any(e.light is light for light in as_photons)]
+                if any(e.source is light for light in as_photons)]
     beamed = [light for light in lights if not any(light is other for other in as_photons)]
     # each wavelength band's share of the lamp rays that photons leave
     band_rays = (settings.lamp_rays - sum(e.count for e in emitters)) // count

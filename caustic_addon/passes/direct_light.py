@@ -45,11 +45,11 @@ from ..optics.specular import radiance_scale1
 from ..sampling.hash import hash_uniform, hash_uniform1, stream_key
 from ..sampling.sequences import r2_point1
 from ..sampling.warps import cosine_hemisphere, frames
-from ..scene import Light
+from ..scene import Light, MeshLight
 from ..tracing.accelerator import Accelerator
 from ..util.jit import kernel
 from ..util.rows import contiguous
-from ..util.vectors import dot1, max_channel1, row, set_row
+from ..util.vectors import DIVISION_FLOOR, dot1, max_channel1, row, set_row
 from .world_paths import WorldThroughCasters
 
 # Hash streams of the strata's rotations: two per lamp, two for each of the
@@ -91,6 +91,22 @@ def strata(ids: np.ndarray, index: np.ndarray, stream: int, seed: int) -> np.nda
 def _strata(out, ids, index, key_x, key_y):
     for i in range(len(ids)):
         out[i, 0], out[i, 1] = r2_point1(index[i], hash_uniform1(ids[i], key_x), hash_uniform1(ids[i], key_y))
+
+
+def shadow_rays(accel: Accelerator, points: np.ndarray, facing: np.ndarray, dirs: np.ndarray, dist: np.ndarray,
+                on_surface: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(origins, dirs, lengths) of the shadow rays from `points (n,3)`,
+    lifted off their surface (facing (n,3)), toward lamp samples `dist (n,)`
+    along `dirs (n,3)`, stopping 2 epsilon short. A sample on a surface (a
+    mesh light's face) is aimed at from the lifted origin itself: the ray
+    along `dirs`, moved by the lift, would meet a face it grazes short of
+    the sample (2% of a glowing ball's light was lost so)."""
+    origins = accel.offset(points, facing, dirs)
+    if on_surface:
+        dirs = points + dirs * dist[:, None] - origins
+        dist = np.linalg.norm(dirs, axis=1)
+        dirs = dirs / np.maximum(dist, DIVISION_FLOOR)[:, None]
+    return origins, dirs, dist - 2.0 * accel.epsilon
 
 
 def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,
@@ -139,9 +155,9 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
                         lobe.eta, lobe.alpha, lobe.gain, count)
         return at, dirs, np.take(lamp.dist, idx), radiance
 
-    def clear(at: np.ndarray, dirs: np.ndarray, dist: np.ndarray) -> np.ndarray:
-        origins = accel.offset(np.take(points, at, axis=0), np.take(facing, at, axis=0), dirs)
-        return ~accel.occluded(origins, dirs, dist - 2.0 * accel.epsilon)
+    def clear(at: np.ndarray, dirs: np.ndarray, dist: np.ndarray, light: Light) -> np.ndarray:
+        return ~accel.occluded(*shadow_rays(accel, np.take(points, at, axis=0), np.take(facing, at, axis=0), dirs,
+                                            dist, isinstance(light, MeshLight)))
 
     everyone = np.arange(n, dtype=np.int64)
     for number, light in enumerate(lights):
@@ -150,7 +166,7 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
         cast, seen = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
         for k in range(probes):
             at, dirs, dist, radiance = lamp_sample(light, number, k, count, everyone)
-            visible = clear(at, dirs, dist)
+            visible = clear(at, dirs, dist, light)
             _add_visible(out, at, visible, radiance)
             cast[at] += 1
             seen[at[visible]] += 1
@@ -165,7 +181,7 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
             at, dirs, dist, radiance = lamp_sample(light, number, k, count, rows)
             visible = np.take(open_sky, at)
             test = np.flatnonzero(~visible)
-            visible[test] = clear(at[test], np.take(dirs, test, axis=0), dist[test])
+            visible[test] = clear(at[test], np.take(dirs, test, axis=0), dist[test], light)
             _add_visible(out, at, visible, radiance)
     return out
 
@@ -394,8 +410,8 @@ def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: flo
                                              *tints, count, light.visibility.glossy, light.visibility.transmission)
             if len(idx) == 0:
                 continue
-            origins = accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), dirs)
-            blocked = accel.occluded(origins, dirs, np.take(lamp.dist, idx) - 2.0 * accel.epsilon)
+            blocked = accel.occluded(*shadow_rays(accel, np.take(points, idx, axis=0), np.take(facing, idx, axis=0),
+                                                  dirs, np.take(lamp.dist, idx), isinstance(light, MeshLight)))
             _add_visible(out, idx, contiguous(~blocked, bool), radiance)
     return out
 

@@ -48,7 +48,7 @@ from ..emission.radiometry import is_delta
 from ..maps.charts import PlaneChart
 from ..maps.illumination_map import IlluminationMap
 from ..sampling.hash import stream_key
-from ..scene import RenderSettings, Scene, World
+from ..scene import MeshLight, RenderSettings, Scene, World
 from ..scene.material_table import Materials
 from ..tracing.accelerator import CAMERA, Accelerator
 from ..tracing.hits import MISS, Hits
@@ -105,7 +105,8 @@ class EyeTracer:
         self.holdout, self.adaptive_shadows = holdout, not edge_pass
         self.environment, self.sky_paths, self.settings = environment, sky_paths, settings
         self.dark_world = scene.world.is_black
-        self.sized_lamps = [light for light in scene.lights if not is_delta(light)]
+        # a mesh light is seen as the emission of its own faces
+        self.sized_lamps = [light for light in scene.lights if not is_delta(light) and not isinstance(light, MeshLight)]
         self.energy, self.spp = settings.energy, spp
         self.stratum = 1.0 / math.sqrt(spp)
         self.pixels = np.ascontiguousarray(pixels, dtype=np.int64)
@@ -140,12 +141,18 @@ class EyeTracer:
         (`_highlights`) hold that light."""
         if not self.sized_lamps or not len(rays):
             return
-        after = np.take(self.accel.owner, np.maximum(rays.surface, 0))
-        smooth = (rays.surface == MISS) | (np.take(self.materials.alpha, after) <= 0.0)
+        smooth = self._after_smooth(rays)
         if not smooth.all():
             rays, reach = rays.select(smooth), reach[smooth]
         radiance = lamps_met(self.sized_lamps, self.energy, rays.origins, rays.dirs, reach, rays.kind)
         self._add("direct", rays.ids, rays.weight, radiance)
+
+    def _after_smooth(self, rays: Paths) -> np.ndarray:
+        """(n,) bool: the rays from the camera or a smooth surface, which see
+        lamps and emitting faces; a rough surface's lamp samples hold the
+        light its rays would meet there."""
+        after = np.take(self.accel.owner, np.maximum(rays.surface, 0))
+        return (rays.surface == MISS) | (np.take(self.materials.alpha, after) <= 0.0)
 
     def escaped(self, rays: Paths) -> None:
         self._lamps_met(rays, np.full(len(rays), np.inf))
@@ -184,7 +191,8 @@ class EyeTracer:
         direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view, diffuse,
                                  lobe, self.far, pixel, stratum, settings.lamp_samples, settings.seed,
                                  self.adaptive_shadows, self.spp)
-        self._add("direct", rays.ids, rays.weight, direct + np.take(m.emission, hits.obj, axis=0))
+        emission = np.take(m.emission, hits.obj, axis=0) * self._after_smooth(rays)[:, None]
+        self._add("direct", rays.ids, rays.weight, direct + emission)
         caustic = np.zeros((len(rays), 3))
         for index, imap in self.maps.items():
             on_map = hits.obj == index

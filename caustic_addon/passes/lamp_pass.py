@@ -9,7 +9,7 @@ from typing import Callable
 import numpy as np
 
 from ..maps.deposits import Deposits
-from ..scene import Light, Scene, SunLight
+from ..scene import Light, MeshLight, Scene, SunLight
 from ..tracing.accelerator import Accelerator
 from ..tracing.hits import MISS
 
@@ -65,6 +65,8 @@ def lamps_in_glass(scene: Scene, accel: Accelerator) -> list[str]:
     outside only through the glass: shadow rays stop at glass."""
     warnings = []
     for light in scene.lights:
+        if isinstance(light, MeshLight):
+            continue
         medium = lamp_medium(accel, light)
         if medium != MISS and scene.objects[medium].is_transparent:
             warnings.append(f"light '{light.name}' is inside '{scene.objects[medium].body_name}': what is outside "

@@ -137,7 +137,47 @@ class AreaLight:
         return self.center
 
 
-Light = Union[PointLight, SpotLight, SunLight, AreaLight]
+@dataclass
+class MeshLight:
+    """A mesh's faces with an Emission shader (or a Principled BSDF's
+    emission): each triangle a Lambertian emitter of radiance `radiance`
+    from both sides, as Cycles' emission closure (kernel/closure/emissive.h,
+    |cos|), so a side of area A sends pi A L. The renderer makes one of each
+    emissive object (emission/mesh_lights.py); the object itself stays in the
+    scene, seen and casting shadows.
+
+    triangles     (n,3,3) world corners of the emitting faces
+    radiance      (3,) W/(m^2 sr): the shader's Color x Strength
+    """
+
+    triangles: np.ndarray
+    radiance: RGB
+    name: str = "Emission"
+    visibility: Visibility = LAMP_VISIBILITY
+
+    def __post_init__(self):
+        self.triangles = np.ascontiguousarray(self.triangles, dtype=np.float64).reshape(-1, 3, 3)
+        self.radiance = rgb(self.radiance)
+
+    @property
+    def areas(self) -> np.ndarray:
+        """(n,) m^2 of each triangle."""
+        t = self.triangles
+        return 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
+
+    @property
+    def position(self) -> np.ndarray:
+        """(3,) the emitting area's centroid."""
+        weights = self.areas
+        return (weights @ self.triangles.mean(axis=1)) / max(float(weights.sum()), 1e-300)
+
+    @property
+    def radius(self) -> float:
+        """How far the faces reach from `position`, m."""
+        return float(np.linalg.norm(self.triangles.reshape(-1, 3) - self.position, axis=1).max())
+
+
+Light = Union[PointLight, SpotLight, SunLight, AreaLight, MeshLight]
 
 
 @dataclass

@@ -108,7 +108,9 @@ class Diffuse:
     specular      the specular layer (None: Lambertian only)
     receiver      whether it collects caustics into an illumination map
     emission      (3,) radiance it gives off, W/(m^2 sr), as an Emission
-                  shader's Color x Strength: seen, but lighting nothing else
+                  shader's Color x Strength, from both sides: seen, and
+                  lighting the scene and casting caustics as a lamp
+                  (scene.MeshLight)
     texture       the albedo from nodes (textures.py) at each shading point,
                   in place of `albedo`
     """

@@ -110,6 +110,11 @@ class Scene:
     def receivers(self) -> list[Object]:
         return [o for o in self.objects if o.is_receiver]
 
+    @property
+    def emitting(self) -> list[Object]:
+        """The objects whose material emits light (Diffuse.emission): lamps too (scene.MeshLight)."""
+        return [o for o in self.objects if np.any(getattr(o.material, "emission", 0.0) > 0.0)]
+
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo (3,), hi (3,)) of all geometry."""
         bounds = [o.mesh.bounds for o in self.objects if len(o.mesh.vertices)] or [(np.zeros(3), np.zeros(3))]

@@ -98,8 +98,8 @@ def validate_scene(scene: Scene) -> list[str]:
         warnings += _check_lamp(light, extent)
     _check_world(scene.world)
 
-    if not scene.lights and scene.world.is_black:
-        warnings.append("the scene has no lights and a black world: only the ambient term shows")
+    if not scene.lights and not scene.emitting and scene.world.is_black:
+        warnings.append("the scene has no lights, no emitting surface and a black world: only the ambient term shows")
     if scene.casters and not scene.receivers:
         warnings.append("no object receives caustics: the photon pass is skipped")
     return warnings

@@ -46,6 +46,14 @@ def glass_material(name="Glass", ior=1.5):
     return material
 
 
+def emission_material(name="Emission", strength=10.0, color=(1.0, 1.0, 1.0)):
+    material = _material(name)
+    shader = _shader(material, 'ShaderNodeEmission')
+    shader.inputs['Color'].default_value = (*color, 1.0)
+    shader.inputs['Strength'].default_value = strength
+    return material
+
+
 def glossy_material(name="Mirror", color=(0.9, 0.9, 0.9), roughness=0.0):
     material = _material(name)
     shader = _shader(material, 'ShaderNodeBsdfGlossy')
