@@ -245,10 +245,11 @@ def live(d: dict) -> Table:
              f"{f['bvh_ms_median']:.0f} ms" if "bvh_ms_median" in f else NONE,
              seconds(f["refined_after_s"]) if "refined_after_s" in f else NONE,
              percent(f["preview_error"]), f"{f['resident_growth_mb']:.0f} MB"] for name, f in d["scenes"].items()]
-    for kind, f in d.get("playback", {}).items():
-        rows.append([f"play {f['frames']} frames at {d['fps']} fps, the ball {kind}", NONE,
-                     number(f["shown_per_s"], 2), NONE, NONE, NONE, NONE, NONE, NONE, NONE,
-                     f"maps kept {f['maps_kept']} times"])
+    for kind, played in d.get("playback", {}).items():
+        for loop, f in enumerate(played["loops"]):
+            rows.append([f"play {f['frames']} frames at {d['fps']} fps, the ball {kind}, loop {loop + 1}", NONE,
+                         number(f["shown_per_s"], 2), NONE, NONE, NONE, NONE, NONE, NONE, NONE,
+                         f"maps kept {f['maps_kept']} of {f['shown']} times"])
     return ["run", "triangles", "updates a second", "latency, median", "p95", "main thread, a preview",
             "main thread, the refine", "BVH and bodies, a preview", "full quality after the last change",
             "preview's error", "memory growth"], rows
@@ -270,6 +271,19 @@ def glints(d: dict) -> Table:
     rows.append([f"Cycles, {reference['samples']} samples (the reference; its own noise)", "x1", percent(
         reference["relative_l2_noise"]), seconds(reference["seconds"])])
     return ["render", "image mean against the reference", "relative L2 error", "time"], rows
+
+
+def emitters(d: dict) -> Table:
+    reference = d["cycles_reference"]
+    rows = [[f"the add-on, {name}", f"x{f['mean_ratio']:.3f}", percent(f["relative_l2"]),
+             percent(f["caustic_relative_l2"]), seconds(f["seconds"])] for name, f in d["ours"].items()]
+    rows += [[f"Cycles, {samples} samples", f"x{f['mean_ratio']:.3f}", percent(f["relative_l2"]),
+              percent(f["caustic_relative_l2"]), seconds(f["seconds"])] for samples, f in d["cycles"].items()]
+    rows.append([f"Cycles, {reference['samples']} samples (the reference; its own noise)", "x1",
+                 percent(reference["relative_l2_noise"]), percent(reference["caustic_relative_l2_noise"]),
+                 seconds(reference["seconds"])])
+    return ["render", "image mean against the reference", "relative L2 error",
+            f"over the caustic ({d['caustic_pixels']} pixels)", "time"], rows
 
 
 def allocator(d: dict) -> Table:
@@ -405,7 +419,7 @@ FORMATTERS: dict[str, Callable[[dict], Table]] = {
     "allocator": allocator,
     "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass, "through_glass": through_glass,
     "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "world_paths": world_paths,
-    "flicker": flicker, "gallery": gallery, "glints": glints,
+    "flicker": flicker, "gallery": gallery, "glints": glints, "emitters": emitters,
 }
 
 # (group, [(results name, title)]), in the README's order
@@ -432,6 +446,7 @@ SECTIONS = [
         ("paper", "The paper's experiments"),
         ("sized_lamps", "Lamps with a size, against Cycles"),
         ("glints", "Glints: a lamp seen in glass, against Cycles"),
+        ("emitters", "A softbox built as an emitting mesh, against Cycles"),
         ("rough_glass", "Rough glass, against Cycles"),
         ("through_glass", "The caustic seen through glass"),
         ("dispersion", "Dispersion and coloured glass"),

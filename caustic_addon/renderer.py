@@ -68,59 +68,66 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
     heap.reuse_freed_memory()
     monitor = Monitor(progress, cancel)
     seconds = {}
+    # (the emitting objects' lamps follow from the objects the key holds)
+    key = lamp_pass_key(scene, settings) if cache is not None else None
+    scene = replace(scene, lights=scene.lights + mesh_lights(scene))
     # an environment's sun is a lamp, the rest of the world the sky the eye
     # pass sees through the casters
-    scene = replace(scene, lights=scene.lights + mesh_lights(scene))
     sun, sky = extract_sun(scene.world)
     lamps = scene.lights + ([sun] if sun is not None else [])
 
-    clock = time.perf_counter()
-    accel = Accelerator(scene.objects, scene.extent(), settings.threads)
-    try:
-        warnings += accel.warnings
-        materials = Materials.of(scene.objects, settings.bands)
-        seconds["bvh"] = time.perf_counter() - clock
-
+    view = image_view(scene.camera) if settings.eye_pass else None
+    cached = cache.get(key) if cache is not None else None
+    if cached is not None and not all(imap.sees(view) for imap in cached[0].values()):
+        cached = None
+    cam = scene.camera
+    buffers = {name: np.zeros((cam.pixx * cam.pixy, 3), dtype=np.float32) for name in (*PASSES, HOLDOUT)}
+    rays_lamp_pass = rays_eye_pass = triangles = 0
+    # a bake whose maps are kept needs no BVH
+    if cached is not None and not settings.eye_pass:
+        maps, lamp_stats, map_warnings = cached
+        warnings += [w for w in map_warnings if w not in warnings]
+    else:
         clock = time.perf_counter()
-        key = lamp_pass_key(scene, settings) if cache is not None else None
-        cached = cache.get(key) if cache is not None else None
-        view = image_view(scene.camera) if settings.eye_pass else None
-        if cached is not None and not all(imap.sees(view) for imap in cached[0].values()):
-            cached = None
-        if cached is None:
-            if cache is not None:
-                cache.make_room(key)
-            warnings += lamps_in_glass(scene, accel) + lamps_on_surfaces(scene, accel)
-            maps = build_maps(scene, settings, warnings, view)
-            run_lamps = bool(maps) and bool(scene.casters) and settings.lamp_rays > 0
-            share = (_LAMP_SHARE if settings.eye_pass else 1.0) if run_lamps else 0.0
-            lamp_stats = LampPassStats()
-            if run_lamps:
-                lamp_pass = beam_pass if settings.density == "beam" else photon_pass
-                lamp_stats = lamp_pass(scene, lamps, settings, accel, materials, maps, monitor, share)
-            if cache is not None:
-                cache.put(key, (maps, lamp_stats, list(warnings)))
-        else:
-            maps, lamp_stats, map_warnings = cached
-            warnings += [w for w in map_warnings if w not in warnings]
-            share = 0.0
-        rays_lamp_pass = accel.rays_cast
-        seconds["lamp_pass"] = time.perf_counter() - clock
+        accel = Accelerator(scene.objects, scene.extent(), settings.threads)
+        try:
+            warnings += accel.warnings
+            materials = Materials.of(scene.objects, settings.bands)
+            seconds["bvh"] = time.perf_counter() - clock
 
-        clock = time.perf_counter()
-        for imap in maps.values():
-            imap.prepare()
-        seconds["maps"] = time.perf_counter() - clock
-
-        cam = scene.camera
-        if settings.eye_pass:
             clock = time.perf_counter()
-            buffers = eye_pass(scene, settings, accel, materials, maps, sky, monitor, share)
-            seconds["eye"] = time.perf_counter() - clock
-        else:
-            buffers = {name: np.zeros((cam.pixx * cam.pixy, 3), dtype=np.float32) for name in (*PASSES, HOLDOUT)}
-    finally:
-        accel.close()
+            if cached is None:
+                if cache is not None:
+                    cache.make_room(key)
+                warnings += lamps_in_glass(scene, accel) + lamps_on_surfaces(scene, accel)
+                maps = build_maps(scene, settings, warnings, view)
+                run_lamps = bool(maps) and bool(scene.casters) and settings.lamp_rays > 0
+                share = (_LAMP_SHARE if settings.eye_pass else 1.0) if run_lamps else 0.0
+                lamp_stats = LampPassStats()
+                if run_lamps:
+                    lamp_pass = beam_pass if settings.density == "beam" else photon_pass
+                    lamp_stats = lamp_pass(scene, lamps, settings, accel, materials, maps, monitor, share)
+                if cache is not None:
+                    cache.put(key, (maps, lamp_stats, list(warnings)))
+            else:
+                maps, lamp_stats, map_warnings = cached
+                warnings += [w for w in map_warnings if w not in warnings]
+                share = 0.0
+            rays_lamp_pass = accel.rays_cast
+            seconds["lamp_pass"] = time.perf_counter() - clock
+
+            clock = time.perf_counter()
+            for imap in maps.values():
+                imap.prepare()
+            seconds["maps"] = time.perf_counter() - clock
+
+            if settings.eye_pass:
+                clock = time.perf_counter()
+                buffers = eye_pass(scene, settings, accel, materials, maps, sky, monitor, share)
+                seconds["eye"] = time.perf_counter() - clock
+            rays_eye_pass, triangles = accel.rays_cast - rays_lamp_pass, int(len(accel.owner))
+        finally:
+            accel.close()
 
     passes = {}
     for name in PASSES:
@@ -140,10 +147,10 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
         "landed": lamp_stats.landed,
         "flux_landed_w": lamp_stats.flux_landed.tolist(),
         "rays_lamp_pass": rays_lamp_pass,
-        "rays_eye_pass": accel.rays_cast - rays_lamp_pass,
+        "rays_eye_pass": rays_eye_pass,
         "seconds": seconds,
         "maps_cached": cached is not None,
-        "triangles": int(len(accel.owner)),
+        "triangles": triangles,
     }
     return RenderResult(image, passes, {m.name: m for m in maps.values()}, stats, warnings)
 

@@ -16,6 +16,7 @@ from dataclasses import replace
 from typing import Callable, Optional
 
 from ..caustic_addon import RenderSettings
+from ..caustic_addon.maps.cache import lamp_pass_key
 from .job import RenderJob, map_rgba
 
 PREVIEW, REFINE = "preview", "refine"
@@ -51,14 +52,21 @@ def preview_settings(settings: RenderSettings, refined: bool = False) -> RenderS
 class LiveJob(RenderJob):
     """A Live update: the render, then each map's image (`images`,
     receiver name -> map_rgba), both on the worker thread; `changed_at`
-    is when the first change it shows was made (None for a refine)."""
+    is when the first change it shows was made (None for a refine). With
+    `alternative` settings (a preview's other refinement), these run
+    instead where the cache keeps their maps and not the settings' own:
+    a frame seen again shows at once, whichever way it was first traced."""
 
-    def __init__(self, *args, changed_at: Optional[float] = None, **kwargs):
+    def __init__(self, *args, changed_at: Optional[float] = None, alternative: Optional[RenderSettings] = None,
+                 **kwargs):
         super().__init__(*args, **kwargs)
-        self.changed_at = changed_at
+        self.changed_at, self.alternative = changed_at, alternative
         self.images: dict = {}
 
     def run(self) -> None:
+        if self.alternative is not None and self.cache.get(lamp_pass_key(self.scene, self.settings)) is None \
+                and self.cache.get(lamp_pass_key(self.scene, self.alternative)) is not None:
+            self.settings = self.alternative
         super().run()
         if self.result is not None:
             self.images = {name: map_rgba(imap, self.settings.threads) for name, imap in self.result.maps.items()}

@@ -39,6 +39,11 @@ from .changes import forget_meshes, moves_caustic, settings_key
 # shows another scene, one without Live.
 INTERVAL = 0.01
 AWAY_INTERVAL = 0.25
+# The maps Live keeps, so that a frame or a state seen again (playback's
+# next loop, scrubbing, undo) shows at once: at most this many, holding at
+# most this many bytes.
+KEPT_MAPS = 1024
+KEPT_MAP_BYTES = 256 << 20
 
 
 @dataclass
@@ -63,7 +68,7 @@ class Live:
     scene: str
     schedule: LiveSchedule = field(default_factory=LiveSchedule)
     images: LiveImages = field(default_factory=LiveImages)
-    cache: MapCache = field(default_factory=lambda: MapCache(capacity=2))
+    cache: MapCache = field(default_factory=lambda: MapCache(KEPT_MAPS, KEPT_MAP_BYTES))
     read_from: set = field(default_factory=set)
     meshes: dict = field(default_factory=dict)
     settings: tuple = ()
@@ -143,9 +148,10 @@ def _begin_update(live: Live, kind: str) -> None:
         return
     live.read, live.read_from = read, set(read.sources.values())
     live.read_seconds = time.perf_counter() - clock
-    preview = preview_settings(settings, live.schedule.refined_previews)
-    job = LiveJob(read.scene, preview if kind == PREVIEW else settings, live.cache,
-                  changed_at=live.changed_at if kind == PREVIEW else None)
+    refined = live.schedule.refined_previews
+    job = LiveJob(read.scene, preview_settings(settings, refined) if kind == PREVIEW else settings, live.cache,
+                  changed_at=live.changed_at if kind == PREVIEW else None,
+                  alternative=preview_settings(settings, not refined) if kind == PREVIEW else None)
     if kind == PREVIEW:
         live.changed_at = None
     live.schedule.started(kind, job)

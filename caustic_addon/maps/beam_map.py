@@ -201,6 +201,14 @@ class BeamMap(IlluminationMap):
         self.beams = 0
         self._held = 0
 
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the map's arrays: its photons' cells, its layers and
+        the beams it keeps (not its screen layer's coverage)."""
+        layers = sum(layer.values.nbytes + layer.tables.nbytes for layer in self._layers)
+        kept = sum(corners.nbytes + light.nbytes for corners, light in self._kept or ())
+        return super().nbytes + layers + kept
+
     def add_beams(self, corners: np.ndarray, irradiance: np.ndarray) -> None:
         """Beams `corners (m,k,2)` chart metres (triangles, or convex
         polygons: beams spread over a lamp's cell), `irradiance (m,3)` W/m^2.

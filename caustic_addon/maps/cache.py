@@ -18,6 +18,7 @@ import math
 import threading
 from collections import OrderedDict
 from dataclasses import fields
+from typing import Optional
 
 import numpy as np
 
@@ -71,12 +72,19 @@ def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
 
 class MapCache:
     """The lamp passes of the last `capacity` distinct scenes: key ->
-    (maps, their figures, their warnings). Safe to share between threads."""
+    (maps, their figures, their warnings), the least recently used dropped
+    first, also while they hold more than `max_bytes` (but the newest).
+    Safe to share between threads."""
 
-    def __init__(self, capacity: int = 1):
-        self.capacity = capacity
+    def __init__(self, capacity: int = 1, max_bytes: Optional[int] = None):
+        self.capacity, self.max_bytes = capacity, max_bytes
         self._entries: OrderedDict = OrderedDict()
         self._lock = threading.Lock()
+
+    @property
+    def nbytes(self) -> int:
+        with self._lock:
+            return sum(imap.nbytes for maps, _, _ in self._entries.values() for imap in maps.values())
 
     def get(self, key: str):
         with self._lock:
@@ -104,3 +112,8 @@ class MapCache:
             self._entries.move_to_end(key)
             while len(self._entries) > self.capacity:
                 self._entries.popitem(last=False)
+            if self.max_bytes is not None:
+                sizes = [sum(imap.nbytes for imap in maps.values()) for maps, _, _ in self._entries.values()]
+                while len(self._entries) > 1 and sum(sizes) > self.max_bytes:
+                    self._entries.popitem(last=False)
+                    sizes.pop(0)

@@ -112,6 +112,13 @@ class IlluminationMap:
                 self._covered = None if share is None else summed_area_table(share)[None]
                 self._covered_ready = True
 
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the map's arrays: its cells and their look-up tables."""
+        tables = [t for t in (self._tables or ()) if t is not None]
+        return self._cells.nbytes + sum(t.nbytes for t in tables) + (
+            self._covered.nbytes if self._covered is not None else 0)
+
     def irradiance_at(self, xy: np.ndarray) -> np.ndarray:
         """Caustic irradiance (n,3) W/m^2 at chart coordinates `xy (n,2)`."""
         self.prepare()

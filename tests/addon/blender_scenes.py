@@ -186,6 +186,23 @@ def glass_ball_under_a_softbox(width=80, height=60):
     return lamp
 
 
+def glass_ball_under_an_emitting_plane(width=80, height=60, strength=12.0):
+    """A product shot: a smooth glass ball (radius 0.5) on a white floor in
+    a black world, under a 1 m plane of Emission `strength` (a softbox
+    built as a mesh) up and behind to the left, facing the ball, which
+    throws its caustic forward; seen from the front. Returns the plane."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    add_plane(10.0, diffuse_material())
+    add_sphere(0.5, (0.0, 0.0, 0.5), glass_material(), segments=96, rings=48)
+    bpy.ops.object.shade_smooth()
+    softbox = add_plane(1.0, emission_material(strength=strength), name="Softbox")
+    softbox.location = (-0.7, 1.0, 2.0)
+    softbox.rotation_euler = Vector((-0.7, 1.0, 1.5)).normalized().to_track_quat('Z', 'Y').to_euler()
+    add_camera((0.0, -3.5, 1.8), target=(0.0, 0.0, 0.35), lens=40.0)
+    set_resolution(width, height)
+    return softbox
+
+
 def pixels_of(name):
     """(h, w, 4) float32 pixels of image `name`, row 0 at the top."""
     image = bpy.data.images[name]

@@ -241,6 +241,13 @@ def test_each_frame_gets_its_own_caustic(live):
         pump(live)
         focus = focus_on_floor(parts["lamp"], ball)
         assert np.linalg.norm(brightest_point(parts["floor"].active_material)[:2] - focus[:2]) < 0.05
+    # a frame seen again shows from its kept maps, its preview's and its refine's
+    shown = len(session.updates)
+    scene.frame_set(10)
+    pump(live)
+    assert [u.maps_cached for u in session.updates[shown:]] == [True, True]
+    focus = focus_on_floor(parts["lamp"], ball)
+    assert np.linalg.norm(brightest_point(parts["floor"].active_material)[:2] - focus[:2]) < 0.05
 
 
 def test_live_says_why_nothing_shows(live):

@@ -196,6 +196,26 @@ def test_the_cache_holds_one_fewer_scene_while_a_new_one_traces_and_keeps_the_sa
     assert last.get("frame 1") is None
 
 
+def test_a_cache_with_a_byte_budget_keeps_the_newest_maps_that_fit():
+    """Live's cache keeps many scenes' maps, the least recently used
+    dropped first once they hold more than its bytes; the newest always
+    stays. A bake of kept maps builds no BVH."""
+    scene = ball_lens(pixels=16)
+    bake = quick(lamp_rays=20_000, density="beam", eye_pass=False)
+    one = render(scene, bake, cache=MapCache()).maps["Floor"].nbytes
+    cache = MapCache(capacity=100, max_bytes=int(2.5 * one))
+    for height in (2.0, 2.1, 2.2):
+        scene.objects[1].mesh = shapes.uv_sphere(0.5, (0.0, 0.0, height), 32, 16)
+        assert not render(scene, bake, cache=cache).stats["maps_cached"]
+    assert cache.nbytes <= 2.5 * one
+    again = render(scene, bake, cache=cache)
+    assert again.stats["maps_cached"] and "bvh" not in again.stats["seconds"]
+    scene.objects[1].mesh = shapes.uv_sphere(0.5, (0.0, 0.0, 2.1), 32, 16)
+    assert render(scene, bake, cache=cache).stats["maps_cached"]
+    scene.objects[1].mesh = shapes.uv_sphere(0.5, (0.0, 0.0, 2.0), 32, 16)
+    assert not render(scene, bake, cache=cache).stats["maps_cached"]
+
+
 def test_the_wavy_slab_is_closed_faces_out_and_holds_its_volume():
     """Its height field over [-1, 1]^2 integrates in closed form: depth plus
     a cos(k.x) integrates to a sin(kx L/2) sin(ky L/2) (2 / kx)(2 / ky)."""
