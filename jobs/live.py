@@ -26,6 +26,9 @@ REFINE_AFTER = 0.2
 PREVIEW_RAY_SHARE = 1 / 8
 PREVIEW_MIN_RAYS = 1000
 PREVIEW_MAP_CELLS = 256
+# Wavelength bands a preview of a dispersive caster traces, at most: the
+# lamp rays are shared among the bands, so fewer bands have finer grids.
+PREVIEW_BANDS = 3
 # Seconds of engine a preview may take: 10 updates a second. Previews refine
 # their beams once (about twice the time, half the error at silhouettes)
 # while an unrefined one takes under a third of it, and stop where a refined
@@ -36,7 +39,12 @@ PREVIEW_BUDGET_S = 0.1
 def preview_settings(settings: RenderSettings, refined: bool = False) -> RenderSettings:
     """The settings of a preview of `settings`: a share of the light rays,
     beam refinement once if `refined` and none otherwise, cells four times
-    wider (or a map at most PREVIEW_MAP_CELLS a side). The adaptive density's k nearest photons
+    wider (or a map at most PREVIEW_MAP_CELLS a side), and at most
+    PREVIEW_BANDS wavelength bands, whose grids then get more of the rays
+    (a dispersive gem's preview, 40,000 lamp rays: 43% relative L2 against
+    the full caustic with 6 bands refined, 31% with 3, at the same cost;
+    fewer rays a band cut more grid triangles across facet edges, whose
+    light goes to photons, a haze). The adaptive density's k nearest photons
     shrink with the photons, so its kernel keeps its width: k-nearest
     estimates are biased up where photons are few (+16% over the ball
     lens's floor at an eighth of 40,000 with k = 64), and the preview would
@@ -44,6 +52,7 @@ def preview_settings(settings: RenderSettings, refined: bool = False) -> RenderS
     rays = min(settings.lamp_rays, max(PREVIEW_MIN_RAYS, round(settings.lamp_rays * PREVIEW_RAY_SHARE)))
     share = rays / max(settings.lamp_rays, 1)
     return replace(settings, lamp_rays=rays, beam_refinement=min(settings.beam_refinement, int(refined)), spp=1,
+                   bands=min(settings.bands, PREVIEW_BANDS),
                    k_nearest=max(1, round(settings.k_nearest * share)),
                    map_scale=None if settings.map_scale is None else settings.map_scale * 4.0,
                    map_resolution_limit=min(settings.map_resolution_limit, PREVIEW_MAP_CELLS))
