@@ -295,6 +295,7 @@ def test_approximations_are_named_in_warnings(addon):
     assert "emits light" not in warnings
     neon_material = next(o.material for o in result.scene.objects if o.name == "Neon")
     assert np.allclose(neon_material.emission, 5.0) and np.allclose(neon_material.albedo, 0.0)
+    assert not neon_material.receiver  # it reflects nothing: no bake for its material
 
 
 def test_lamps_in_blender_units(addon):
