@@ -17,8 +17,10 @@ PHOTON_PIECES = 64
 
 
 def mesh_lights(scene: Scene) -> list[MeshLight]:
-    """A MeshLight of each object whose material emits (Scene.emitting)."""
-    return [MeshLight(obj.mesh.corners, obj.material.emission, name=obj.name) for obj in scene.emitting]
+    """A MeshLight of each object whose material emits (Scene.emitting) and
+    that has an area."""
+    lights = [MeshLight(obj.mesh.corners, obj.material.emission, name=obj.name) for obj in scene.emitting]
+    return [light for light in lights if light.areas.sum() > 0.0]
 
 
 def _subdivision(n: int) -> np.ndarray:

@@ -41,6 +41,9 @@ def _material_finite(name: str, material) -> None:
         parts = []
     for what, value in parts:
         _finite(name, what, value)
+    if isinstance(material, Diffuse) and np.max(material.emission) > _MAX_POWER:
+        raise SceneError(f"{name}: its emission of {np.max(material.emission):.3g} W/(m^2 sr) is past the "
+                         f"{_MAX_POWER:.0e} that the render's float32 images hold: lower its Strength")
 
 
 def validate_scene(scene: Scene) -> list[str]:

@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from caustic_addon import AreaLight, Camera, Dielectric, Diffuse, Object, Reflector, RenderSettings, Scene, render, shapes
+from caustic_addon import (AreaLight, Camera, Dielectric, Diffuse, Object, Reflector, RenderSettings, Scene, SceneError,
+                           render, shapes)
 from caustic_addon.emission.mesh_lights import mesh_lights, pieces
 from caustic_addon.scene import Mesh, MeshLight
 
@@ -133,3 +134,17 @@ def test_only_emitting_objects_are_mesh_lights():
     scene = floor_below(softbox())
     assert [light.name for light in mesh_lights(scene)] == ["Softbox"]
     np.testing.assert_allclose(mesh_lights(scene)[0].areas.sum(), 1.0)
+
+
+def test_an_emitter_too_bright_for_the_image_is_refused_by_name_and_one_of_no_area_lights_nothing():
+    bright = softbox()
+    bright.material = Diffuse(albedo=0.0, emission=np.full(3, 1e300))
+    with pytest.raises(SceneError, match="Softbox: its emission of 1e[+]300 W/[(]m.2 sr[)] is past"):
+        render(floor_below(bright), RenderSettings(spp=1))
+    square = shapes.plane(1.0)
+    flat = Object("Flat", Mesh(square.vertices * np.array([1.0, 0.0, 1.0]) + [0.0, 0.0, 1.0], square.triangles),
+                  Diffuse(albedo=0.0, emission=np.full(3, 5.0)))
+    scene = ball_under([equal_area_light()], False)
+    scene.objects.append(flat)
+    assert mesh_lights(scene) == []
+    assert render(scene, RenderSettings(spp=1, lamp_rays=4_000, eye_pass=False)).stats["flux_landed_w"][0] > 0
