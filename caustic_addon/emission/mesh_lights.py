@@ -9,7 +9,8 @@ from __future__ import annotations
 import math
 import numpy as np
 
-from ..scene import AreaLight, Light, MeshLight, Scene
+from ..scene import AreaLight, MeshLight, Object, Scene
+from ..tracing.topology import open_edge_count, signed_volume, triangle_normals
 from ..util.vectors import DIVISION_FLOOR
 
 # Pieces a mesh light is cut into where photons leave it, each side.
@@ -19,8 +20,27 @@ PHOTON_PIECES = 64
 def mesh_lights(scene: Scene) -> list[MeshLight]:
     """A MeshLight of each object whose material emits (Scene.emitting) and
     that has an area."""
-    lights = [MeshLight(obj.mesh.corners, obj.material.emission, name=obj.name) for obj in scene.emitting]
+    lights = [MeshLight(obj.mesh.corners, obj.material.emission, name=obj.name, sides=_leaving_sides(obj, scene))
+              for obj in scene.emitting]
     return [light for light in lights if light.areas.sum() > 0.0]
+
+
+def _leaving_sides(emitter: Object, scene: Scene) -> tuple[bool, bool]:
+    """The sides of `emitter`'s faces whose light can reach another object:
+    both of an open mesh; of a closed one its outer side (by the sign of its
+    volume), unless another object's centre lies within its bounds. (A
+    glowing ball sent half its lamp rays inward, where its own faces stop
+    them.)"""
+    mesh = emitter.mesh
+    if open_edge_count(mesh.triangles, mesh.vertices) > 0:
+        return True, True
+    lo, hi = mesh.bounds
+    for other in scene.objects:
+        centre = 0.5 * (other.mesh.bounds[0] + other.mesh.bounds[1])
+        if other is not emitter and np.all(centre > lo) and np.all(centre < hi):
+            return True, True
+    outward = signed_volume(mesh.corners) > 0.0
+    return outward, not outward
 
 
 def _subdivision(n: int) -> np.ndarray:
@@ -62,9 +82,8 @@ def pieces(light: MeshLight, count: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _sides(triangles: np.ndarray) -> np.ndarray:
-    """(k,2,3) unit normals of each triangle's two sides."""
-    normal = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
-    normal /= np.maximum(np.linalg.norm(normal, axis=1), DIVISION_FLOOR)[:, None]
+    """(k,2,3) unit normals of each triangle's two sides, along its winding's normal and against it."""
+    normal = triangle_normals(triangles)[0]
     return np.stack([normal, -normal], axis=1)
 
 
@@ -82,8 +101,8 @@ def point_lamps(light: MeshLight, count: int, lift: float) -> tuple[list[AreaLig
     """(lamps, cells) for beam mode (lamp_points.beam_lamps): the light's
     `pieces`, about count / 3, each as three quadrilateral cells (`_kites`:
     beams spread over a cell's image as over a lamp's cells, in its
-    quadrilateral's parts), each cell on each side an area lamp of size 0 at
-    its centroid, `lift` m off the face, sending pi a L; its cell (4,3) the
+    quadrilateral's parts), each cell on each side whose light leaves the
+    mesh (MeshLight.sides) an area lamp of size 0 at its centroid, `lift` m off the face, sending pi a L; its cell (4,3) the
     corners less the centroid."""
     triangles, areas = pieces(light, max(1, count // 3))
     quads = _kites(triangles)
@@ -96,7 +115,7 @@ def point_lamps(light: MeshLight, count: int, lift: float) -> tuple[list[AreaLig
     zero = np.zeros(3)
     for centroid, area, cell, sides in zip(centroids, np.repeat(areas / 3.0, 3), cells,
                                            np.repeat(_sides(triangles), 3, axis=0)):
-        for normal in sides:
+        for normal in sides[list(light.sides)]:
             lamps.append(AreaLight(centroid + lift * normal, zero, zero, normal, math.pi * float(area),
                                    color=light.radiance, name=light.name))
             corners.append(cell)
@@ -104,8 +123,8 @@ def point_lamps(light: MeshLight, count: int, lift: float) -> tuple[list[AreaLig
 
 
 def area_lamps(light: MeshLight, count: int, lift: float) -> list[AreaLight]:
-    """The light for photons: each of its `pieces` on each side the
-    parallelogram area lamp of the piece's area about its centroid, spanned
+    """The light for photons: each of its `pieces` on each side whose light
+    leaves the mesh the parallelogram area lamp of the piece's area about its centroid, spanned
     by its edges (half-extents (b - a) / 2 and (c - a) / 4), `lift` m off
     the face, sending pi a L."""
     triangles, areas = pieces(light, count)
@@ -113,7 +132,8 @@ def area_lamps(light: MeshLight, count: int, lift: float) -> list[AreaLight]:
     axis_x = 0.5 * (triangles[:, 1] - triangles[:, 0])
     axis_y = 0.25 * (triangles[:, 2] - triangles[:, 0])
     return [AreaLight(c + lift * normal, x, y, normal, math.pi * float(a), color=light.radiance, name=light.name)
-            for c, x, y, a, sides in zip(centroids, axis_x, axis_y, areas, _sides(triangles)) for normal in sides]
+            for c, x, y, a, sides in zip(centroids, axis_x, axis_y, areas, _sides(triangles))
+            for normal in sides[list(light.sides)]]
 
 
 def lift_off(light: MeshLight) -> float:

@@ -148,12 +148,17 @@ class MeshLight:
 
     triangles     (n,3,3) world corners of the emitting faces
     radiance      (3,) W/(m^2 sr): the shader's Color x Strength
+    sides         (along, against) each face's winding normal: whether
+                  that side's light leaves the mesh; a closed mesh's inner
+                  side lights only what it holds, and the pass from the
+                  lamps leaves it out (emission/mesh_lights.py)
     """
 
     triangles: np.ndarray
     radiance: RGB
     name: str = "Emission"
     visibility: Visibility = LAMP_VISIBILITY
+    sides: tuple[bool, bool] = (True, True)
 
     def __post_init__(self):
         self.triangles = np.ascontiguousarray(self.triangles, dtype=np.float64).reshape(-1, 3, 3)

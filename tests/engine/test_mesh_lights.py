@@ -148,3 +148,25 @@ def test_an_emitter_too_bright_for_the_image_is_refused_by_name_and_one_of_no_ar
     scene.objects.append(flat)
     assert mesh_lights(scene) == []
     assert render(scene, RenderSettings(spp=1, lamp_rays=4_000, eye_pass=False)).stats["flux_landed_w"][0] > 0
+
+
+def test_a_closed_emitter_sends_the_pass_from_the_lamps_from_its_outer_side_only():
+    """A glowing ball's inner side lights only its inside: its lamp rays go
+    out from its outer side, twice as many as from both, for the same
+    caustic light. An open emitter, or a closed one around another
+    object, keeps both sides."""
+    glow = Object("Glow", shapes.uv_sphere(0.2, (0.0, 0.0, 1.6), 24, 12), Diffuse(albedo=0.0, emission=np.full(3, 40.0)))
+    scene = ball_under([], False)
+    scene.objects.append(glow)
+    light = mesh_lights(scene)[0]
+    assert light.sides == (True, False)
+    settings = RenderSettings(spp=1, lamp_rays=40_000, eye_pass=False)
+    outer = caustic(scene, settings)[0]
+    glow.mesh = Mesh(glow.mesh.vertices, glow.mesh.triangles[:-1])  # one face short of closed
+    assert mesh_lights(scene)[0].sides == (True, True)
+    both = caustic(scene, settings)[0]
+    assert outer == pytest.approx(both, rel=0.02)
+    assert mesh_lights(floor_below(softbox()))[0].sides == (True, True)
+    around = Object("Shade", shapes.uv_sphere(0.5, (0.0, 0.0, 0.5), 24, 12), Diffuse(albedo=0.0, emission=np.ones(3)))
+    scene.objects.append(around)
+    assert mesh_lights(scene)[-1].sides == (True, True)
