@@ -168,7 +168,8 @@ def beam_lamps(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere,
     targets) can give grids of MIN_GRID_POINTS; with the phase (2,) of each
     one's grid (`grid_phases`) and the corners (4,3) of the lamp's cell each
     one stands for, less the point (`lamp_cells`; None for a lamp of size 0).
-    A mesh light's points are its pieces on both sides (mesh_lights.point_lamps)."""
+    A mesh light's points are its pieces' cells, on each side whose light
+    leaves it (mesh_lights.point_lamps)."""
     flux = np.array([flux_toward(light, targets, scene_sphere) for light in lights])
     budgets = lamp_rays * flux / flux.sum() if flux.sum() > 0 else np.zeros(len(lights))
     out, phases, cells = [], [], []

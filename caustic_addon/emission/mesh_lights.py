@@ -1,12 +1,13 @@
 """Emissive meshes as lamps (scene.MeshLight): one of each object whose
 material emits, sampled by area for shadow rays, and cut into pieces of
 about equal area for the pass from the lamps, where each piece is a small
-area lamp on either side of its face. Shadow rays sample it in
-lamp_samples.py."""
+area lamp on each side whose light leaves the mesh. Shadow rays sample it
+in lamp_samples.py."""
 
 from __future__ import annotations
 
 import math
+
 import numpy as np
 
 from ..scene import AreaLight, MeshLight, Object, Scene
@@ -52,10 +53,6 @@ def _subdivision(n: int) -> np.ndarray:
     return np.stack([1.0 - steps.sum(axis=2), steps[..., 0], steps[..., 1]], axis=2)
 
 
-def _areas(triangles: np.ndarray) -> np.ndarray:
-    return 0.5 * np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]), axis=1)
-
-
 def pieces(light: MeshLight, count: int) -> tuple[np.ndarray, np.ndarray]:
     """(triangles (k,3,3), areas (k,)): the light's faces in about `count`
     pieces of area A / count or more, A the light's. A face of area a is cut
@@ -73,12 +70,16 @@ def pieces(light: MeshLight, count: int) -> tuple[np.ndarray, np.ndarray]:
             for n in np.unique(splits)]
     cut = np.concatenate(done)
     if len(cut) <= count:
-        return cut, _areas(cut)
-    cdf = np.cumsum(_areas(cut)) / total
+        return cut, _area_of(cut)
+    cdf = np.cumsum(_area_of(cut)) / total
     chosen = cut[np.minimum(np.searchsorted(cdf, (np.arange(count) + 0.5) / count), len(cut) - 1)]
     centroid = chosen.mean(axis=1, keepdims=True)
-    scale = np.sqrt(total / count / np.maximum(_areas(chosen), DIVISION_FLOOR))
+    scale = np.sqrt(total / count / np.maximum(_area_of(chosen), DIVISION_FLOOR))
     return centroid + (chosen - centroid) * scale[:, None, None], np.full(count, total / count)
+
+
+def _area_of(triangles: np.ndarray) -> np.ndarray:
+    return triangle_normals(triangles)[1]
 
 
 def _sides(triangles: np.ndarray) -> np.ndarray:
@@ -102,12 +103,13 @@ def point_lamps(light: MeshLight, count: int, lift: float) -> tuple[list[AreaLig
     `pieces`, about count / 3, each as three quadrilateral cells (`_kites`:
     beams spread over a cell's image as over a lamp's cells, in its
     quadrilateral's parts), each cell on each side whose light leaves the
-    mesh (MeshLight.sides) an area lamp of size 0 at its centroid, `lift` m off the face, sending pi a L; its cell (4,3) the
-    corners less the centroid."""
+    mesh (MeshLight.sides) an area lamp of size 0 at its centroid, `lift` m
+    off the face, sending pi a L; its cell (4,3) the corners less the
+    centroid."""
     triangles, areas = pieces(light, max(1, count // 3))
     quads = _kites(triangles)
     # the quadrilateral as triangles (0, 1, 2) and (0, 2, 3): its centroid by area
-    halves = [_areas(quads[:, [0, a, b]]) for a, b in ((1, 2), (2, 3))]
+    halves = [_area_of(quads[:, [0, a, b]]) for a, b in ((1, 2), (2, 3))]
     centroids = ((halves[0][:, None] * quads[:, :3].sum(axis=1) + halves[1][:, None] * quads[:, [0, 2, 3]].sum(axis=1))
                  / (3.0 * np.maximum(halves[0] + halves[1], DIVISION_FLOOR)[:, None]))
     cells = quads - centroids[:, None, :]
@@ -123,10 +125,10 @@ def point_lamps(light: MeshLight, count: int, lift: float) -> tuple[list[AreaLig
 
 
 def area_lamps(light: MeshLight, count: int, lift: float) -> list[AreaLight]:
-    """The light for photons: each of its `pieces` on each side whose light
-    leaves the mesh the parallelogram area lamp of the piece's area about its centroid, spanned
-    by its edges (half-extents (b - a) / 2 and (c - a) / 4), `lift` m off
-    the face, sending pi a L."""
+    """The light for photons: each of its `pieces`, on each side whose
+    light leaves the mesh, as the parallelogram area lamp of the piece's
+    area about its centroid, spanned by its edges (half-extents (b - a) / 2
+    and (c - a) / 4), `lift` m off the face, sending pi a L."""
     triangles, areas = pieces(light, count)
     centroids = triangles.mean(axis=1)
     axis_x = 0.5 * (triangles[:, 1] - triangles[:, 0])

@@ -9,6 +9,6 @@ from .materials import Dielectric, Diffuse, Material, Reflector, Specular
 from .scene import Instances, Object, Scene, Visibility
 from .settings import RenderSettings
 
-__all__ = ["AreaLight", "Camera", "Dielectric", "Diffuse", "Instances", "Light", "Material", "Mesh", "MeshLight", "Object",
-           "PointLight", "Reflector", "RenderSettings", "Scene", "Specular", "SpotLight", "SunLight", "Visibility",
-           "World", "paper", "shapes", "textures"]
+__all__ = ["AreaLight", "Camera", "Dielectric", "Diffuse", "Instances", "Light", "Material", "Mesh", "MeshLight",
+           "Object", "PointLight", "Reflector", "RenderSettings", "Scene", "Specular", "SpotLight", "SunLight",
+           "Visibility", "World", "paper", "shapes", "textures"]

@@ -87,7 +87,8 @@ HUGE = [
 
 CASES = [
     (no_camera, "The scene has no active camera", {"render", "compare_cycles"}),
-    (no_lamp, "Nothing lights the scene: it has no light and no emitting surface, and its world is black", {"render", "compare_cycles", "bake"}),
+    (no_lamp, "Nothing lights the scene: it has no light and no emitting surface, and its world is black",
+     {"render", "compare_cycles", "bake"}),
     (an_area_lamp_of_size_0, "light 'Lamp': its size is 0", {"render", "compare_cycles", "bake"}),
     (no_receiver, "No object receives caustics", {"render", "compare_cycles", "bake"}),
     (zero_lamp_rays, "Light Rays is 0", {"render", "compare_cycles", "bake"}),

@@ -155,7 +155,8 @@ def test_a_closed_emitter_sends_the_pass_from_the_lamps_from_its_outer_side_only
     out from its outer side, twice as many as from both, for the same
     caustic light. An open emitter, or a closed one around another
     object, keeps both sides."""
-    glow = Object("Glow", shapes.uv_sphere(0.2, (0.0, 0.0, 1.6), 24, 12), Diffuse(albedo=0.0, emission=np.full(3, 40.0)))
+    glow = Object("Glow", shapes.uv_sphere(0.2, (0.0, 0.0, 1.6), 24, 12),
+                  Diffuse(albedo=0.0, emission=np.full(3, 40.0)))
     scene = ball_under([], False)
     scene.objects.append(glow)
     light = mesh_lights(scene)[0]
