@@ -6,6 +6,7 @@ call returns. EEVEE cannot render in the bpy module here (see
 test_bake_animation), so Cycles renders."""
 
 import os
+import sys
 
 import bpy
 import numpy as np
@@ -103,10 +104,31 @@ def test_the_render_menu_has_both_entries(addon):
 
 @pytest.fixture
 def blender_keys():
-    """Blender's default key map loaded, as the interface has it; the bpy module starts without one."""
-    bpy.utils.keyconfig_set(bpy.utils.preset_find("Blender", "keyconfig"))
-    bpy.context.window_manager.keyconfigs.update()
-    return bpy.context.window_manager.keyconfigs.user.keymaps["Screen"]
+    """The Screen key map as the interface merges it, with Blender's own
+    F12 items (from its default key map's data, km_screen) in the default
+    key configuration: the bpy module starts with none, and Blender 4.2's
+    crashes at exit once the whole default key map is loaded."""
+    folder = os.path.join(os.path.dirname(bpy.utils.preset_find("Blender", "keyconfig")), "keymap_data")
+    sys.path.insert(0, folder)
+    try:
+        import blender_default
+    finally:
+        sys.path.remove(folder)
+    _, _, screen = blender_default.km_screen(blender_default.Params())
+    keyconfigs = bpy.context.window_manager.keyconfigs
+    keymap = keyconfigs.default.keymaps.new("Screen", space_type='EMPTY')
+    added = []
+    for idname, event, extra in screen["items"]:
+        if event.get("type") == 'F12' and not event.get("alt"):
+            item = keymap.keymap_items.new(idname, event["type"], event["value"], ctrl=event.get("ctrl", False))
+            for name, value in extra["properties"]:
+                setattr(item.properties, name, value)
+            added.append(item)
+    keyconfigs.update()
+    yield keyconfigs.user.keymaps["Screen"]
+    for item in added:
+        keymap.keymap_items.remove(item)
+    keyconfigs.update()
 
 
 @pytest.mark.parametrize("ctrl, ours", [(False, "caustic.render_image_with_caustics"),
