@@ -53,12 +53,14 @@ class RenderResult:
 
 
 def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Optional[Progress] = None,
-           cancel: Optional[Cancel] = None, cache: Optional[MapCache] = None) -> RenderResult:
+           cancel: Optional[Cancel] = None, cache: Optional[MapCache] = None,
+           key: Optional[str] = None) -> RenderResult:
     """Render `scene`. `progress(fraction, stage)` is called between chunks;
     `cancel()` returning True stops the render with `Cancelled`. With a
     `cache`, the pass from the lamps is skipped when an earlier render had
-    the same geometry, lamps and lamp-pass settings. Raises `SceneError` (naming the
-    culprit) for scenes that cannot render."""
+    the same geometry, lamps and lamp-pass settings (their `key`,
+    maps.cache.lamp_pass_key, where the caller has it). Raises `SceneError`
+    (naming the culprit) for scenes that cannot render."""
     settings = settings or RenderSettings()
     settings.validate()
     warnings = validate_scene(scene) + rough_caster_warnings(scene, settings.density)
@@ -69,7 +71,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
     monitor = Monitor(progress, cancel)
     seconds = {}
     # (the emitting objects' lamps follow from the objects the key holds)
-    key = lamp_pass_key(scene, settings) if cache is not None else None
+    key = (key or lamp_pass_key(scene, settings)) if cache is not None else None
     scene = replace(scene, lights=scene.lights + mesh_lights(scene))
     # an environment's sun is a lamp, the rest of the world the sky the eye
     # pass sees through the casters

@@ -46,10 +46,12 @@ def map_rgba(imap, threads: int = 1) -> np.ndarray:
 class RenderJob:
     """fraction and stage follow the engine's progress; after the run, either
     `result` is set or `error` holds the message for the user (None when
-    cancelled). `cache` keeps the maps a later job can reuse."""
+    cancelled). `cache` keeps the maps a later job can reuse; `key` is their
+    key in it, where the job knows it before the render (None: the render's)."""
 
     def __init__(self, scene: Scene, settings: RenderSettings, cache: MapCache = MAP_CACHE):
         self.scene, self.settings, self.cache = scene, settings, cache
+        self.key: str | None = None
         self.fraction, self.stage = 0.0, ""
         self.result: RenderResult | None = None
         self.error: str | None = None
@@ -65,7 +67,7 @@ class RenderJob:
         clock = time.perf_counter()
         try:
             self.result = render(self.scene, self.settings, progress=self._progress, cancel=self._cancel.is_set,
-                                 cache=self.cache)
+                                 cache=self.cache, key=self.key)
         except Cancelled:
             self.cancelled = True
         except SceneError as exc:

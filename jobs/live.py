@@ -16,7 +16,7 @@ from dataclasses import replace
 from typing import Callable, Optional
 
 from ..caustic_addon import RenderSettings
-from ..caustic_addon.maps.cache import lamp_pass_key
+from ..caustic_addon.maps.cache import lamp_pass_key, scene_digest
 from .job import RenderJob, map_rgba
 
 PREVIEW, REFINE = "preview", "refine"
@@ -73,9 +73,12 @@ class LiveJob(RenderJob):
         self.images: dict = {}
 
     def run(self) -> None:
-        if self.alternative is not None and self.cache.get(lamp_pass_key(self.scene, self.settings)) is None \
-                and self.cache.get(lamp_pass_key(self.scene, self.alternative)) is not None:
-            self.settings = self.alternative
+        digest = scene_digest(self.scene)
+        self.key = lamp_pass_key(self.scene, self.settings, digest)
+        if self.alternative is not None and self.cache.get(self.key) is None:
+            other = lamp_pass_key(self.scene, self.alternative, digest)
+            if self.cache.get(other) is not None:
+                self.settings, self.key = self.alternative, other
         super().run()
         if self.result is not None:
             self.images = {name: map_rgba(imap, self.settings.threads) for name, imap in self.result.maps.items()}

@@ -32,16 +32,15 @@ _SHADING_ONLY = {"albedo", "specular", "texture"}
 _SEEN_ONLY = {"visibility"}
 
 
-def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
-    """SHA-1 of the objects in order (name, body, geometry, material), the lamps,
-    the world and the lamp pass's settings: equal keys give equal maps. The band count
-    counts only if a material disperses."""
+def scene_digest(scene: Scene) -> bytes:
+    """SHA-1 of what the pass from the lamps reads of `scene`: the objects
+    in order (name, body, geometry, material), the lamps and the world."""
     digest = hashlib.sha1()
 
     def add(value) -> None:
         if isinstance(value, np.ndarray):
             digest.update(str((value.dtype, value.shape)).encode())
-            digest.update(np.ascontiguousarray(value).tobytes())
+            digest.update(np.ascontiguousarray(value))
         else:
             digest.update(repr(value).encode())
 
@@ -64,10 +63,18 @@ def lamp_pass_key(scene: Scene, settings: RenderSettings) -> str:
                 continue
             add(name)
             add(value if isinstance(value, np.ndarray) else np.asarray(value))
+    return digest.digest()
+
+
+def lamp_pass_key(scene: Scene, settings: RenderSettings, digest: Optional[bytes] = None) -> str:
+    """SHA-1 of `scene_digest` (`digest`, where the caller has it) and the
+    lamp pass's settings: equal keys give equal maps. The band count counts
+    only if a material disperses."""
+    key = hashlib.sha1(scene_digest(scene) if digest is None else digest)
     disperses = any(math.isfinite(getattr(o.material, "abbe", math.inf)) for o in scene.objects)
     ignored = _EYE_ONLY if disperses else _EYE_ONLY | {"bands"}
-    add({f.name: getattr(settings, f.name) for f in fields(settings) if f.name not in ignored})
-    return digest.hexdigest()
+    key.update(repr({f.name: getattr(settings, f.name) for f in fields(settings) if f.name not in ignored}).encode())
+    return key.hexdigest()
 
 
 class MapCache:

@@ -2,12 +2,14 @@
 floor, progress and cancel work, bad scenes are named, odd meshes warned."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from caustic_addon import (Camera, Cancelled, Dielectric, Diffuse, MapCache, Mesh, Object, PointLight,
                            RenderSettings, Scene, SceneError, SpotLight, SunLight, render, shapes)
+from caustic_addon.maps.cache import lamp_pass_key, scene_digest
 from caustic_addon.tracing.topology import open_edge_count, signed_volume, triangle_normals
 from benchmarks.references.metrics import annulus_means, annulus_points, relative_l2
 from scenes import ball_lens, quick, shadow_radius
@@ -214,6 +216,11 @@ def test_a_cache_with_a_byte_budget_keeps_the_newest_maps_that_fit():
     assert render(scene, bake, cache=cache).stats["maps_cached"]
     scene.objects[1].mesh = shapes.uv_sphere(0.5, (0.0, 0.0, 2.0), 32, 16)
     assert not render(scene, bake, cache=cache).stats["maps_cached"]
+    # a caller that knows the key (Live, which tries two settings) gives it; one scene digest serves both
+    digest = scene_digest(scene)
+    assert lamp_pass_key(scene, bake, digest) == lamp_pass_key(scene, bake)
+    assert lamp_pass_key(scene, replace(bake, lamp_rays=10_000), digest) != lamp_pass_key(scene, bake)
+    assert render(scene, bake, cache=cache, key=lamp_pass_key(scene, bake, digest)).stats["maps_cached"]
 
 
 def test_the_wavy_slab_is_closed_faces_out_and_holds_its_volume():
