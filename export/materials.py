@@ -286,11 +286,12 @@ def engine_material(surface: Surface, settings,
     transparent = role == 'TRANSPARENT' or (role == 'AUTO' and surface.transparent)
     if not transparent:
         opaque = not (surface.transparent or surface.reflector)
-        # a surface that reflects nothing (an Emission shader alone) shows no caustic, unless asked to
+        # an emitting surface that reflects nothing (an Emission shader alone) shows no caustic, unless
+        # asked to; a black one that emits nothing still receives, rendered black as in Cycles
         reflects = not opaque or np.any(surface.albedo > 0.0) or texture is not None or surface.specular is not None
         return Diffuse(albedo=surface.albedo if opaque else DEFAULT_ALBEDO, emission=surface.emission,
                        texture=texture if opaque else None, specular=surface.specular if opaque else None,
-                       receiver=reflects or role == 'RECEIVER')
+                       receiver=reflects or not np.any(surface.emission > 0.0) or role == 'RECEIVER')
     ior = settings.ior if settings.use_ior else (surface.ior if surface.transparent else 1.5)
     reflection_tint, transmission_tint = surface.tints if surface.transparent else (np.ones(3), np.ones(3))
     if settings.absorption_from == 'COLOR':
