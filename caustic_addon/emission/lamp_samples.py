@@ -45,10 +45,8 @@ def sample_lamp(light: Light, energy: float, points: np.ndarray, uv: np.ndarray,
     if isinstance(light, SunLight):
         _sun(light, energy, uv, far, out)
     elif isinstance(light, MeshLight):
-        areas = light.areas
-        _mesh_samples(out.dirs, out.dist, out.irradiance, points, uv, light.triangles,
-                      np.cumsum(areas) / max(float(areas.sum()), DIVISION_FLOOR), float(areas.sum()),
-                      light.radiance * energy)
+        _mesh_samples(out.dirs, out.dist, out.irradiance, points, uv, light.triangles, light.area_cdf,
+                      float(light.areas.sum()), light.radiance * energy)
     elif isinstance(light, AreaLight):
         if light.spread <= 0.0:
             _parallel_area_samples(out.dirs, out.dist, out.irradiance, points, *_area_frame(light),

@@ -88,10 +88,15 @@ class MapCache:
         self._entries: OrderedDict = OrderedDict()
         self._lock = threading.Lock()
 
+    @staticmethod
+    def _entry_bytes(entry) -> int:
+        maps, _, _ = entry
+        return sum(imap.nbytes for imap in maps.values())
+
     @property
     def nbytes(self) -> int:
         with self._lock:
-            return sum(imap.nbytes for maps, _, _ in self._entries.values() for imap in maps.values())
+            return sum(map(self._entry_bytes, self._entries.values()))
 
     def get(self, key: str):
         with self._lock:
@@ -120,7 +125,7 @@ class MapCache:
             while len(self._entries) > self.capacity:
                 self._entries.popitem(last=False)
             if self.max_bytes is not None:
-                sizes = [sum(imap.nbytes for imap in maps.values()) for maps, _, _ in self._entries.values()]
+                sizes = [self._entry_bytes(entry) for entry in self._entries.values()]
                 while len(self._entries) > 1 and sum(sizes) > self.max_bytes:
                     self._entries.popitem(last=False)
                     sizes.pop(0)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Literal, Optional, Union
 
 import numpy as np
@@ -164,19 +165,24 @@ class MeshLight:
         self.triangles = np.ascontiguousarray(self.triangles, dtype=np.float64).reshape(-1, 3, 3)
         self.radiance = rgb(self.radiance)
 
-    @property
+    @cached_property
     def areas(self) -> np.ndarray:
         """(n,) m^2 of each triangle."""
         t = self.triangles
         return 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
 
-    @property
+    @cached_property
+    def area_cdf(self) -> np.ndarray:
+        """(n,) the triangles' running share of the light's area, for sampling by area."""
+        return np.cumsum(self.areas) / max(float(self.areas.sum()), 1e-300)
+
+    @cached_property
     def position(self) -> np.ndarray:
         """(3,) the emitting area's centroid."""
         weights = self.areas
         return (weights @ self.triangles.mean(axis=1)) / max(float(weights.sum()), 1e-300)
 
-    @property
+    @cached_property
     def radius(self) -> float:
         """How far the faces reach from `position`, m."""
         return float(np.linalg.norm(self.triangles.reshape(-1, 3) - self.position, axis=1).max())
