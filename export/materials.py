@@ -93,10 +93,10 @@ def _value(node, name: str, what: str, warnings: list[str]):
     return np.array(value[:3], dtype=np.float64) if hasattr(value, "__len__") else float(value)
 
 
-def _albedo(node, name: str, what: str, warnings: list[str]) -> tuple[np.ndarray, Optional[Recipe]]:
+def _albedo(material, node, name: str, what: str, warnings: list[str]) -> tuple[np.ndarray, Optional[Recipe]]:
     """(a colour input's own value, the recipe of the nodes that drive it or None)."""
     socket = node.inputs[name]
-    return np.array(socket.default_value[:3], dtype=np.float64), color_recipe(socket, what, warnings)
+    return np.array(socket.default_value[:3], dtype=np.float64), color_recipe(material.name, socket, what, warnings)
 
 
 def albedo_socket(material):
@@ -161,11 +161,11 @@ def read_surface(material) -> Surface:
     if kind == 'ShaderNodeBsdfPrincipled':
         emission = _value(shader, "Emission Color", what, warnings) * _value(shader, "Emission Strength", what,
                                                                               warnings)
-        albedo, texture = _albedo(shader, "Base Color", what, warnings)
+        albedo, texture = _albedo(material, shader, "Base Color", what, warnings)
         return Surface(transparent=False, albedo=albedo, texture=texture, emission=emission,
                        specular=_specular_layer(shader, what, warnings), warnings=warnings)
     if kind == 'ShaderNodeBsdfDiffuse':
-        albedo, texture = _albedo(shader, "Color", what, warnings)
+        albedo, texture = _albedo(material, shader, "Color", what, warnings)
         return Surface(transparent=False, albedo=albedo, texture=texture, warnings=warnings)
     if kind == 'ShaderNodeEmission':
         return Surface(transparent=False, albedo=np.zeros(3), warnings=warnings,

@@ -251,7 +251,7 @@ def place(source: MeshSource, name: str, matrices: np.ndarray, visibility: Visib
             data = source.original.data
             frame = ObjectFrame({layer: np.take(corners, rows, axis=0) for layer, corners in uv_maps.items()},
                                 np.linalg.pinv(matrix), np.array(data.texspace_location[:], dtype=np.float64),
-                                np.array(data.texspace_size[:], dtype=np.float64))
+                                np.array(data.texspace_size[:], dtype=np.float64), source.original)
             engine = engine_material(surfaces[key], source.original.caustic,
                                      bind(surfaces[key].texture, frame, f"'{part}'", warnings))
         conflict = abbe_conflict(surfaces[key], source.original.caustic, name, key)

@@ -2,8 +2,9 @@
 nodes (caustic_addon/scene/textures.py): an Image Texture on a UV map, or
 on Generated or Object coordinates, through a Mapping node; RGB, Value,
 Mix Color (and the older MixRGB), Math and Color Ramp after it; reroutes
-anywhere. Anything else is named in a warning, and the socket's own value
-is used instead.
+anywhere. Anything else Cycles bakes to an image on the object's UV map
+(`receiver_bake.py`); what it cannot bake, and an image that cannot be
+read, is named in a warning, and the socket's own value is used instead.
 
 A reading is a recipe: a function of the object it is on (`ObjectFrame`),
 since UV maps, object space and texture space are the object's."""
@@ -13,11 +14,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, Optional
 
+import bpy
 import numpy as np
 from mathutils import Euler, Matrix
 
 from ..caustic_addon import textures as nodes
 from .pixels import can_read, image_pixels, is_srgb_encoded
+from .receiver_bake import CannotBake, baked_color
 
 
 @dataclass
@@ -28,19 +31,27 @@ class ObjectFrame:
                    corners; "" is the active map
     to_object      (4,4) world to object space
     texspace_location, texspace_size  (3,) the mesh's texture space
+    owner          the Blender object, which Cycles bakes what is not read
     """
 
     corner_uvs: dict[str, np.ndarray]
     to_object: np.ndarray
     texspace_location: np.ndarray
     texspace_size: np.ndarray
+    owner: Optional[bpy.types.Object] = None
 
 
 Recipe = Callable[[ObjectFrame], nodes.Node]
 
 
 class NotRead(Exception):
-    """A node the reader does not take; the message names it."""
+    """A node the reader does not take, which Cycles bakes; the message
+    names it."""
+
+
+class Unreadable(NotRead):
+    """A node that gives Cycles nothing to bake either (an image that cannot
+    be read); the message names it."""
 
 
 def _constant(value) -> Recipe:
@@ -153,9 +164,9 @@ def _coordinates(node, images: dict) -> tuple[str, str, np.ndarray]:
 def _image(node, socket, images: dict) -> Recipe:
     image = node.image
     if image is None:
-        raise NotRead(f"'{node.name}', an Image Texture with no image")
+        raise Unreadable(f"'{node.name}', an Image Texture with no image")
     if image.source not in ('FILE', 'GENERATED') or not can_read(image):
-        raise NotRead(f"'{node.name}', whose image '{image.name}' cannot be read")
+        raise Unreadable(f"'{node.name}', whose image '{image.name}' cannot be read")
     if node.projection != 'FLAT':
         raise NotRead(f"'{node.name}', an Image Texture with {node.projection.lower()} projection")
     if node.interpolation not in nodes.INTERPOLATIONS or node.extension not in nodes.EXTENSIONS:
@@ -176,7 +187,7 @@ def _image(node, socket, images: dict) -> Recipe:
 
     def bind(frame: ObjectFrame) -> nodes.Node:
         if coordinates == "UV" and uv_map not in frame.corner_uvs:
-            raise NotRead(f"'{node.name}', whose UV map '{uv_map or 'active'}' the mesh does not have")
+            raise Unreadable(f"'{node.name}', whose UV map '{uv_map or 'active'}' the mesh does not have")
         return nodes.ImageTexture(pixels, coordinates, frame.corner_uvs.get(uv_map), frame.to_object,
                             frame.texspace_location, frame.texspace_size, mapping, interpolation, extension, alpha,
                             srgb)
@@ -184,19 +195,36 @@ def _image(node, socket, images: dict) -> Recipe:
     return bind
 
 
-def color_recipe(socket, what: str, warnings: list[str]) -> Optional[Recipe]:
-    """The recipe of what drives the colour input `socket`, or None when
-    nothing does or a node in the way is not read (with a warning naming
-    it: the socket's own value is used)."""
+def _baked(material_name: str, socket, reason: str) -> Recipe:
+    """The recipe of a colour input whose nodes Cycles bakes on each object."""
+    node_name, identifier = socket.node.name, socket.identifier
+
+    def bind(frame: ObjectFrame) -> nodes.Node:
+        try:
+            pixels = baked_color(frame, material_name, node_name, identifier)
+        except CannotBake as exc:
+            raise Unreadable(f"{reason}, {exc}") from None
+        return nodes.ImageTexture(pixels, "UV", frame.corner_uvs[""], interpolation="Linear", extension="EXTEND")
+
+    return bind
+
+
+def color_recipe(material_name: str, socket, what: str, warnings: list[str]) -> Optional[Recipe]:
+    """The recipe of what drives the colour input `socket` of material
+    `material_name`, or None when nothing does or a node in the way gives
+    nothing to read (with a warning naming it: the socket's own value is
+    used). Nodes the reader does not take are baked by Cycles."""
     if not socket.is_linked:
         return None
     link = socket.links[0]
     try:
         return _output(link.from_node, link.from_socket, {})
-    except NotRead as exc:
+    except Unreadable as exc:
         warnings.append(f"{what}: its {socket.name} comes from {exc}, which the caustic render does not read; "
                         "the unconnected value is used")
         return None
+    except NotRead as exc:
+        return _baked(material_name, socket, str(exc))
 
 
 def bind(recipe: Recipe, frame: ObjectFrame, what: str, warnings: list[str]) -> Optional[nodes.Node]:

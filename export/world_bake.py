@@ -14,53 +14,16 @@ import bpy
 import numpy as np
 
 from .cycles_still import cycles_enabled, render_still
+from .node_fingerprint import fingerprint
 from .overrides import Overrides
 
 # The Nishita sky's sun (0.545 degrees) is 3 pixels across.
 BAKE_WIDTH = 2048
 # Box-filtered samples per pixel: enough to give a 3-pixel sun its area.
 BAKE_SAMPLES = 16
-# Node properties that change only how the node looks in the editor.
-_LOOKS = {"rna_type", "location", "location_absolute", "width", "height", "dimensions", "name", "label", "select",
-          "show_options", "show_preview", "show_texture", "hide", "use_custom_color", "color", "color_tag",
-          "warning_propagation", "parent", "inputs", "outputs", "internal_links", "type"}
 
 # world name -> (its nodes' fingerprint, its bake (h, w, 3))
 _bakes: dict[str, tuple[tuple, np.ndarray]] = {}
-
-
-def _values(struct, depth: int = 0) -> tuple:
-    """The values of a node's (or a texture mapping's) RNA properties, IDs by name."""
-    values = []
-    for prop in struct.bl_rna.properties:
-        if prop.identifier in _LOOKS or prop.identifier.startswith("bl_"):
-            continue
-        value = getattr(struct, prop.identifier)
-        if prop.type == 'POINTER':
-            if isinstance(value, bpy.types.ID):
-                value = (value.name_full, getattr(value, "filepath", ""), getattr(value, "is_dirty", False))
-            elif value is not None and depth < 2:
-                value = _values(value, depth + 1)
-            else:
-                continue
-        elif prop.type == 'COLLECTION':
-            continue
-        elif getattr(prop, "is_array", False):
-            value = tuple(np.ravel(value).tolist())
-        values.append((prop.identifier, value))
-    return tuple(values)
-
-
-def fingerprint(tree) -> tuple:
-    """What the tree's light depends on: every node's settings and unlinked
-    inputs, and every link."""
-    nodes = tuple((node.name, node.bl_idname, node.mute, _values(node),
-                   tuple(np.ravel(s.default_value).tolist() if hasattr(s, "default_value") else None
-                         for s in node.inputs))
-                  for node in tree.nodes)
-    links = tuple((link.from_node.name, link.from_socket.identifier, link.to_node.name, link.to_socket.identifier,
-                   link.is_muted) for link in tree.links)
-    return nodes, links
 
 
 def _render(world) -> np.ndarray:
