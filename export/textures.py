@@ -41,7 +41,10 @@ class ObjectFrame:
     owner: Optional[bpy.types.Object] = None
 
 
-Recipe = Callable[[ObjectFrame], nodes.Node]
+# ObjectFrame by name: typing keeps every alias it makes, and one that held the class would hold this module's
+# globals, and bpy through them, past the point where Blender 4.2's bpy module must be freed to shut Blender down
+# (it crashes at exit otherwise).
+Recipe = Callable[["ObjectFrame"], nodes.Node]
 
 
 class NotRead(Exception):
