@@ -273,6 +273,19 @@ def glints(d: dict) -> Table:
     return ["render", "image mean against the reference", "relative L2 error", "time"], rows
 
 
+def glossy_floor(d: dict) -> Table:
+    rows = []
+    for roughness, floor in d["roughness"].items():
+        for samples, ours in floor["ours"].items():
+            theirs = floor["cycles"][samples]
+            rows.append([roughness, samples, f"x{ours['mean_ratio']:.3f}", percent(ours["relative_l2"]),
+                         seconds(ours["seconds"]), percent(theirs["relative_l2"]), seconds(theirs["seconds"]),
+                         percent(floor["cycles_reference"]["relative_l2_noise"])])
+    return ["roughness", "light samples a pixel", "the add-on's mean against the reference",
+            "the add-on's relative L2 error", "its time", "Cycles' relative L2 error", "its time",
+            "the reference's own noise"], rows
+
+
 def emitters(d: dict) -> Table:
     reference = d["cycles_reference"]
     rows = [[f"the add-on, {name}", f"x{f['mean_ratio']:.3f}", percent(f["relative_l2"]),
@@ -419,7 +432,8 @@ FORMATTERS: dict[str, Callable[[dict], Table]] = {
     "allocator": allocator,
     "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass, "through_glass": through_glass,
     "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "world_paths": world_paths,
-    "flicker": flicker, "gallery": gallery, "glints": glints, "emitters": emitters,
+    "flicker": flicker, "gallery": gallery, "glints": glints, "glossy_floor": glossy_floor,
+    "emitters": emitters,
 }
 
 # (group, [(results name, title)]), in the README's order
@@ -446,6 +460,7 @@ SECTIONS = [
         ("paper", "The paper's experiments"),
         ("sized_lamps", "Lamps with a size, against Cycles"),
         ("glints", "Glints: a lamp seen in glass, against Cycles"),
+        ("glossy_floor", "A glossy floor under a large light, against Cycles"),
         ("emitters", "A softbox built as an emitting mesh, against Cycles"),
         ("rough_glass", "Rough glass, against Cycles"),
         ("through_glass", "The caustic seen through glass"),

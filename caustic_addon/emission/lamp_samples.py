@@ -3,7 +3,9 @@ SampleLi of pbrt-v4's lights): a point on the lamp, or a direction of a
 sun's disc, with the estimate of the irradiance it brings. The mean over a
 lamp's samples, each times the receiver's cosine, is the lamp's irradiance
 on the surface, shadows aside; a lamp of size 0 (radiometry.is_delta)
-needs one sample and gives it exactly."""
+needs one sample and gives it exactly. Each sample carries the solid-angle
+density its direction was drawn with, which multiple importance sampling
+weighs against a lobe's (passes/direct_light.py)."""
 
 from __future__ import annotations
 
@@ -29,11 +31,15 @@ class LampSample:
     dist        (n,) the distance a shadow ray must clear
     irradiance  (n,3) W/m^2 estimate, to be times the receiver's cosine
                 with `dirs` (0 where the sample sends nothing)
+    pdf         (n,) 1/sr, the density of drawing `dirs` (pbrt-v4's PDF_Li);
+                inf for a lamp or sun of size 0, and for a mesh light,
+                which no lobe's rays meet as a lamp
     """
 
     dirs: np.ndarray
     dist: np.ndarray
     irradiance: np.ndarray
+    pdf: np.ndarray
 
 
 def sample_lamp(light: Light, energy: float, points: np.ndarray, uv: np.ndarray, far: float) -> LampSample:
@@ -41,7 +47,7 @@ def sample_lamp(light: Light, energy: float, points: np.ndarray, uv: np.ndarray,
     unit square (ignored by lamps of size 0)."""
     points, uv = contiguous(points, np.float64), contiguous(uv, np.float64)
     n = len(points)
-    out = LampSample(np.empty((n, 3)), np.empty(n), np.empty((n, 3)))
+    out = LampSample(np.empty((n, 3)), np.empty(n), np.empty((n, 3)), np.full(n, np.inf))
     if isinstance(light, SunLight):
         _sun(light, energy, uv, far, out)
     elif isinstance(light, MeshLight):
@@ -52,7 +58,7 @@ def sample_lamp(light: Light, energy: float, points: np.ndarray, uv: np.ndarray,
             _parallel_area_samples(out.dirs, out.dist, out.irradiance, points, *_area_frame(light),
                                    light.shape == "ELLIPSE", light.color * (light.power * energy / light.area), far)
         else:
-            _area_samples(out.dirs, out.dist, out.irradiance, points, uv, *_area_frame(light),
+            _area_samples(out.dirs, out.dist, out.irradiance, out.pdf, points, uv, *_area_frame(light),
                           light.shape == "ELLIPSE", float(light.spread), float(light.area),
                           radiometry.lamp_radiance(light, energy))
     elif light.radius <= 0.0:
@@ -60,7 +66,7 @@ def sample_lamp(light: Light, energy: float, points: np.ndarray, uv: np.ndarray,
                        radiometry.point_intensity(light.power * energy, light.color), *_cone(light))
     else:
         sampler = _facing_disc_samples if light.soft_falloff else _sphere_samples
-        sampler(out.dirs, out.dist, out.irradiance, points, uv, _position(light), float(light.radius),
+        sampler(out.dirs, out.dist, out.irradiance, out.pdf, points, uv, _position(light), float(light.radius),
                 radiometry.lamp_radiance(light, energy), *_cone(light))
     return out
 
@@ -110,7 +116,25 @@ def _sun(light: SunLight, energy: float, uv: np.ndarray, far: float, out: LampSa
         cos_half = math.cos(0.5 * light.angle)
         out.dirs[:] = cone_directions(-light.direction, cos_half, uv)
         out.irradiance[:] = radiometry.sun_radiance(light, energy) * (2.0 * math.pi * (1.0 - cos_half))
+        out.pdf[:] = cone_pdf.py_func(cos_half)
     out.dist[:] = far
+
+
+@inline
+def cone_pdf(cos_max):
+    """1/sr: the density of directions drawn uniformly over a cone of
+    half-angle acos(cos_max), 1 / (2 pi (1 - cos_max))."""
+    return 1.0 / max(2.0 * math.pi * (1.0 - cos_max), DIVISION_FLOOR)
+
+
+@inline
+def area_pdf1(dist, cos_lamp, area):
+    """1/sr: the solid-angle density of a point drawn uniformly over a
+    lamp's `area`, seen at `dist` and at cosine `cos_lamp` to its normal,
+    t^2 / (A cos) (pbrt-v4, 4.2.3); inf edge-on or from behind."""
+    if cos_lamp <= 0.0:
+        return math.inf
+    return dist * dist / (area * cos_lamp)
 
 
 @inline
@@ -172,13 +196,14 @@ def _point_samples(dirs, dist, irradiance, points, position, intensity, masked, 
             irradiance[i, c] = intensity[c] * mask / d2
 
 
-@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8, f8[::1], b1, f8[::1], f8, f8)")
-def _facing_disc_samples(dirs, dist, irradiance, points, uv, position, radius, radiance, masked, axis, cos_half,
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8, f8[::1], b1, f8[::1], "
+        "f8, f8)")
+def _facing_disc_samples(dirs, dist, irradiance, pdf, points, uv, position, radius, radiance, masked, axis, cos_half,
                          blend):
     """Soft Falloff: a disc of `radius` through the lamp's centre, facing
     the point, of radiance `radiance (3,)`, sampled uniformly by area
     (facing_disc_point1): E = L cos_disc (pi r^2) / t^2 at distance t, cos_disc
-    the disc's cosine toward the point."""
+    the disc's cosine toward the point; pdf = area_pdf1(t, cos_disc, pi r^2)."""
     at = (position[0], position[1], position[2])
     area = math.pi * (radius * radius)
     for i in range(len(points)):
@@ -188,19 +213,21 @@ def _facing_disc_samples(dirs, dist, irradiance, points, uv, position, radius, r
         set_row(dirs, i, l)
         dist[i] = d
         cos_disc = max(-dot1(l, normal), 0.0)
+        pdf[i] = area_pdf1(d, cos_disc, area)
         scale = cos_disc * area / max(d * d, DIVISION_FLOOR) * _mask1(masked, (-l[0], -l[1], -l[2]), axis,
                                                                        cos_half, blend)
         for c in range(3):
             irradiance[i, c] = radiance[c] * scale
 
 
-@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8, f8[::1], b1, f8[::1], f8, f8)")
-def _sphere_samples(dirs, dist, irradiance, points, uv, position, radius, radiance, masked, axis, cos_half, blend):
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8, f8[::1], b1, f8[::1], "
+        "f8, f8)")
+def _sphere_samples(dirs, dist, irradiance, pdf, points, uv, position, radius, radiance, masked, axis, cos_half, blend):
     """Soft Falloff off: a sphere of `radius` and uniform radiance `radiance
     (3,)`, sampled uniformly over the cap a point sees (cone_direction1),
     E = L x the cap's solid angle 2 pi (1 - cos_max), cos_max = sqrt(1 -
     (r/d)^2); a point inside it sees it everywhere (E = L 4 pi over the
-    uniform sphere of directions). The distance to clear is the sphere's
+    uniform sphere of directions); pdf = cone_pdf(cos_max). The distance to clear is the sphere's
     near root along the direction, its far one from inside; Cycles applies
     no cone mask to a point inside a spot's sphere."""
     at = (position[0], position[1], position[2])
@@ -209,6 +236,7 @@ def _sphere_samples(dirs, dist, irradiance, points, uv, position, radius, radian
         inside = d <= radius
         q = radius / max(d, DIVISION_FLOOR)
         cos_max = -1.0 if inside else math.sqrt(max(0.0, 1.0 - q * q))
+        pdf[i] = cone_pdf(cos_max)
         t, b = orthonormal_basis1(toward)
         l = cone_direction1(toward, t, b, cos_max, uv[i, 0], uv[i, 1])
         set_row(dirs, i, l)
@@ -221,21 +249,22 @@ def _sphere_samples(dirs, dist, irradiance, points, uv, position, radius, radian
             irradiance[i, c] = radiance[c] * weight
 
 
-@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1], b1, f8, f8,"
-        " f8[::1])")
-def _area_samples(dirs, dist, irradiance, points, uv, center, axis_x, axis_y, normal, ellipse, spread, area,
+@kernel("void(f8[:, ::1], f8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1], "
+        "b1, f8, f8, f8[::1])")
+def _area_samples(dirs, dist, irradiance, pdf, points, uv, center, axis_x, axis_y, normal, ellipse, spread, area,
                   radiance):
     """Points uniform over an area lamp's rectangle, or its inscribed
     ellipse (area_point1):
     E = L s(a) cos_lamp A / t^2 at distance t, L = `radiance (3,)` along the
     `normal (3,)`, s(a) its spread weight (radiometry.spread_factor1) at the
-    angle a from it, A = `area`."""
+    angle a from it, A = `area`; pdf = area_pdf1(t, cos_lamp, A)."""
     n = (normal[0], normal[1], normal[2])
     for i in range(len(points)):
         l, d = _toward1(points, i, area_point1(uv[i, 0], uv[i, 1], ellipse, center, axis_x, axis_y))
         set_row(dirs, i, l)
         dist[i] = d
         cos_lamp = -dot1(l, n)
+        pdf[i] = area_pdf1(d, cos_lamp, area)
         weight = max(cos_lamp, 0.0) * spread_factor1(spread, cos_lamp) * area / max(d * d, DIVISION_FLOOR)
         for c in range(3):
             irradiance[i, c] = radiance[c] * weight

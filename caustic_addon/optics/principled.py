@@ -354,6 +354,10 @@ class Lobe:
         """(n,) the points whose lobe lamps light: not a mirror (Cycles evaluates no mirror)."""
         return self.active & (self.alpha * self.alpha > microfacet.SPECULAR_ALPHA2)
 
+    def take(self, rows: np.ndarray) -> Lobe:
+        """The layers at the points `rows (m,)`."""
+        return Lobe(*(np.take(a, rows, axis=0) for a in (self.active, self.f0, self.eta, self.alpha, self.gain)))
+
     def weight(self, normal: np.ndarray, view: np.ndarray, dirs: np.ndarray) -> np.ndarray:
         """(n,3) lobe_weight1 of each point: f cos(theta_l) toward the eye
         `view (n,3)` for light from unit `dirs (n,3)`, at `normal (n,3)`."""

@@ -17,6 +17,14 @@ them first, at least two a pixel, and the rest only where a pixel's
 points disagree (`direct_radiance`). A sample behind the surface gets no shadow ray.
 Dielectrics and reflectors block the lamps' shadow rays: the light they
 redirect arrives through the illumination maps.
+
+A rough specular layer takes a lamp's light by two strategies (Veach 1997,
+multiple importance sampling, as Cycles does): the lamp's samples, and as
+many rays drawn from the lobe by its visible normals (`lobe_drawn_lamps`),
+which meet the lamp itself (seen_lamps.py). Each weighs what it finds by
+the balance heuristic, p_own / (p_lamp + p_lobe): a narrow lobe under a
+large lamp gets its highlight from its own rays, a wide one from the
+lamp's samples. The diffuse base takes the lamp's samples alone.
 Rough casters show the lamps' highlights (`rough_specular_radiance`), as
 Cycles' glossy and glass closures do.
 
@@ -46,16 +54,19 @@ from ..sampling.hash import hash_uniform, hash_uniform1, stream_key
 from ..sampling.sequences import r2_point1
 from ..sampling.warps import cosine_hemisphere, frames
 from ..scene import Light, MeshLight
-from ..tracing.accelerator import Accelerator
+from ..tracing.accelerator import REFLECTED, Accelerator
 from ..util.jit import kernel
 from ..util.rows import contiguous
-from ..util.vectors import DIVISION_FLOOR, dot1, max_channel1, row, set_row
+from ..util.vectors import DIVISION_FLOOR, dot, dot1, max_channel1, row, set_row
+from .seen_lamps import lamps_met
 from .world_paths import WorldThroughCasters
 
 # Hash streams of the strata's rotations: two per lamp, two for each of the
-# world's strategies, two per lamp seen in rough casters.
+# world's strategies, two per lamp seen in rough casters, two for the rays
+# drawn from lobes toward the lamps.
 _WORLD_STREAM = 1 << 16
 _ROUGH_STREAM = 1 << 18
+_LOBE_STREAM = 1 << 20
 # A lamp that looks smaller than this (radians; the sun is 0.0093) casts
 # SHADOW_PROBES shadow rays a pixel first, the rest only where they disagree.
 SMALL_LAMP = math.radians(1.0)
@@ -151,8 +162,8 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
         idx, radiance = _lambert_lit(rows, shading, facing, diffuse, lamp.dirs, lamp.irradiance, count)
         at, dirs = rows[idx], np.take(lamp.dirs, idx, axis=0)
         if lobe is not None and light.visibility.glossy:
-            _add_glossy(radiance, at, dirs, np.take(lamp.irradiance, idx, axis=0), shading, view, lamp_lit, lobe.f0,
-                        lobe.eta, lobe.alpha, lobe.gain, count)
+            _add_glossy(radiance, at, dirs, np.take(lamp.irradiance, idx, axis=0), np.take(lamp.pdf, idx), shading,
+                        view, lamp_lit, lobe.f0, lobe.eta, lobe.alpha, lobe.gain, count)
         return at, dirs, np.take(lamp.dist, idx), radiance
 
     def clear(at: np.ndarray, dirs: np.ndarray, dist: np.ndarray, light: Light) -> np.ndarray:
@@ -183,6 +194,41 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
             test = np.flatnonzero(~visible)
             visible[test] = clear(at[test], np.take(dirs, test, axis=0), dist[test], light)
             _add_visible(out, at, visible, radiance)
+    if lobe is not None:
+        out += lobe_drawn_lamps(accel, lights, energy, points, shading, facing, view, lobe, pixel, first_stratum,
+                                samples, seed)
+    return out
+
+
+def lobe_drawn_lamps(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,
+                     shading: np.ndarray, facing: np.ndarray, view: np.ndarray, lobe: Lobe, pixel: np.ndarray,
+                     first_stratum: np.ndarray, samples: int, seed: int) -> np.ndarray:
+    """Radiance (n,3) toward the eye of the lamps that rays drawn from the
+    points' lamp-lit lobes meet, `samples` rays a point stratified over its
+    pixel as the lamps' are: L f cos / (p samples) of each lamp met in front
+    of what the ray meets first, times its balance heuristic weight
+    (seen_lamps.lamps_met); the other strategy of `direct_radiance`'s
+    glossy term. Rays see the objects and lamps that glossy rays see."""
+    out = np.zeros((len(points), 3))
+    met = [light for light in lights if light.visibility.glossy and not radiometry.is_delta(light)
+           and not isinstance(light, MeshLight)]
+    rows = np.flatnonzero(lobe.lamp_lit)
+    if not met or not len(rows):
+        return out
+    normal, eye, above = (np.take(a, rows, axis=0) for a in (shading, view, facing))
+    layers, tangent, bitangent = lobe.take(rows), *frames(normal)
+    ids, first = np.take(pixel, rows), np.take(first_stratum, rows)
+    for k in range(samples):
+        dirs = layers.sample(normal, tangent, bitangent, eye, strata(ids, first * samples + k, _LOBE_STREAM, seed))
+        pdf = layers.pdf(normal, eye, dirs)
+        up = np.flatnonzero((dot(dirs, normal) > 0.0) & (dot(dirs, above) > 0.0) & (pdf > 0.0))
+        at, toward, density = np.take(rows, up), np.take(dirs, up, axis=0), np.take(pdf, up)
+        origins = accel.offset(np.take(points, at, axis=0), np.take(facing, at, axis=0), toward)
+        kind = np.full(len(up), REFLECTED)
+        reach = accel.intersect(origins, toward, kind=kind).t
+        radiance = lamps_met(met, energy, origins, toward, reach, kind, density)
+        weight = layers.take(up).weight(np.take(normal, up, axis=0), np.take(eye, up, axis=0), toward)
+        np.add.at(out, at, radiance * weight / (density * samples)[:, None])
     return out
 
 
@@ -209,20 +255,25 @@ def _lambert_lit(rows, shading, facing, diffuse, dirs, irradiance, count):
     return idx[:lit].copy(), radiance[:lit].copy()
 
 
-@kernel("void(f8[:, ::1], i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[:, ::1], f8[::1], "
-        "f8[::1], f8[:, ::1], i8)")
-def _add_glossy(radiance, at, dirs, irradiance, shading, view, lamp_lit, f0, eta, alpha, gain, count):
+@kernel("void(f8[:, ::1], i8[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[:, ::1], "
+        "f8[::1], f8[::1], f8[:, ::1], i8)")
+def _add_glossy(radiance, at, dirs, irradiance, pdf, shading, view, lamp_lit, f0, eta, alpha, gain, count):
     """radiance[j] += (E_j / count) f cos(theta_l) of the specular layer at
     point `at[j]` (principled.lobe_weight1) where its lobe is `lamp_lit`,
-    for the lamp samples `dirs, irradiance (l,3)`; `shading, view, f0,
-    gain (n,3)` and `eta, alpha (n,)` per point."""
+    for the lamp samples `dirs, irradiance (l,3)` drawn with density
+    `pdf (l,)`, times the balance heuristic's p / (p + p_lobe)
+    (principled.lobe_pdf1; 1 for a density of inf, which no lobe's ray
+    meets); `shading, view, f0, gain (n,3)` and `eta, alpha (n,)` per point."""
     for j in range(len(at)):
         r = at[j]
         if not lamp_lit[r]:
             continue
         w = lobe_weight1(row(shading, r), row(view, r), row(dirs, j), row(f0, r), eta[r], alpha[r], row(gain, r))
+        share = 1.0
+        if pdf[j] < math.inf:
+            share = pdf[j] / (pdf[j] + lobe_pdf1(row(shading, r), row(view, r), row(dirs, j), alpha[r]))
         for c in range(3):
-            radiance[j, c] += irradiance[j, c] / count * w[c]
+            radiance[j, c] += irradiance[j, c] / count * (w[c] * share)
 
 
 @kernel("void(f8[:, ::1], i8[::1], b1[::1], f8[:, ::1])")

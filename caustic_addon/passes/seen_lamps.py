@@ -15,7 +15,12 @@ lamps themselves (`kernel/light/{area,point,distant}.h`, *_intersect):
 Lamps hide nothing: a ray sees every lamp in front of what it meets. Each
 lamp is seen by the kinds of ray its Ray Visibility allows (Camera,
 Glossy, Transmission; in Blender a lamp is not seen by the camera until
-its Camera box is ticked). Lamps of size 0 are never met."""
+its Camera box is ticked). Lamps of size 0 are never met.
+
+Rays drawn from a rough lobe meet a lamp as one of two strategies for its
+light (passes/direct_light.py): given their density, each lamp's radiance
+is weighed by the balance heuristic against the density its own samples
+draw that direction with (emission/lamp_samples.py)."""
 
 from __future__ import annotations
 
@@ -24,10 +29,11 @@ import math
 import numpy as np
 
 from ..emission import radiometry
+from ..emission.lamp_samples import area_pdf1, cone_pdf
 from ..emission.radiometry import spot_attenuation1, spread_factor1
 from ..scene import AreaLight, Light, SpotLight, SunLight
 from ..tracing.accelerator import CAMERA, REFLECTED, REFRACTED
-from ..util.jit import kernel
+from ..util.jit import inline, kernel
 from ..util.rows import contiguous
 from ..util.vectors import dot1, row
 
@@ -42,47 +48,64 @@ def seen_by(light: Light, kind: np.ndarray) -> np.ndarray:
 
 
 def lamps_met(lights: list[Light], energy: float, origins: np.ndarray, dirs: np.ndarray, reach: np.ndarray,
-              kind: np.ndarray) -> np.ndarray:
+              kind: np.ndarray, drawn_pdf: np.ndarray | None = None) -> np.ndarray:
     """(n,3) radiance W/(m^2 sr) of the lamps with a size that rays from
     `origins (n,3)` along unit `dirs (n,3)` of `kind (n,)` meet before
-    `reach (n,)` (inf where they leave the scene)."""
+    `reach (n,)` (inf where they leave the scene). Rays a lobe drew with
+    density `drawn_pdf (n,)` take each lamp's radiance times
+    drawn_pdf / (drawn_pdf + the lamp's own pdf) (Veach 1997, the balance
+    heuristic); a lamp its samples reach along one direction only (an area
+    lamp of spread 0) is left to them."""
     out = np.zeros((len(dirs), 3))
     origins, dirs, reach = contiguous(origins, np.float64), contiguous(dirs, np.float64), contiguous(reach, np.float64)
+    drawn = np.zeros(0) if drawn_pdf is None else contiguous(drawn_pdf, np.float64)
     for light in lights:
-        if radiometry.is_delta(light):
+        if radiometry.is_delta(light) or (len(drawn) and isinstance(light, AreaLight) and light.spread <= 0.0):
             continue
         rows = np.flatnonzero(seen_by(light, kind))
         if not len(rows):
             continue
         if isinstance(light, SunLight):
             _sun_met(out, dirs, reach, rows, contiguous(-light.direction, np.float64), math.cos(0.5 * light.angle),
-                     radiometry.sun_radiance(light, energy))
+                     radiometry.sun_radiance(light, energy), drawn)
         elif isinstance(light, AreaLight):
             _area_met(out, origins, dirs, reach, rows, *(contiguous(v, np.float64) for v in (
                 light.center, light.axis_x, light.axis_y, light.direction)), light.shape == "ELLIPSE",
-                float(light.spread), radiometry.lamp_radiance(light, energy))
+                float(light.spread), float(light.area), radiometry.lamp_radiance(light, energy), drawn)
         else:
             spot = isinstance(light, SpotLight)
             _point_met(out, origins, dirs, reach, rows, contiguous(light.position, np.float64), float(light.radius),
                        bool(light.soft_falloff), radiometry.lamp_radiance(light, energy), spot,
                        contiguous(light.direction if spot else np.zeros(3), np.float64),
-                       math.cos(0.5 * light.spot_size) if spot else 1.0, float(light.blend) if spot else 0.0)
+                       math.cos(0.5 * light.spot_size) if spot else 1.0, float(light.blend) if spot else 0.0, drawn)
     return out
 
 
-@kernel("void(f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8, f8[::1])")
-def _sun_met(out, dirs, reach, rows, toward, cos_half, radiance):
+@inline
+def _drawn_share1(drawn, i, lamp_pdf):
+    """The balance heuristic's weight of row i's lobe-drawn ray against a
+    lamp's sample of density `lamp_pdf`; 1 where `drawn` is (0,)."""
+    if len(drawn) == 0:
+        return 1.0
+    p = drawn[i]
+    return p / (p + lamp_pdf) if p > 0.0 else 0.0
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8, f8[::1], f8[::1])")
+def _sun_met(out, dirs, reach, rows, toward, cos_half, radiance, drawn):
     """The sun's disc, `toward (3,)` unit, half-angle acos(cos_half), in the
     directions of the rows that leave the scene."""
     for i in rows:
         if reach[i] == math.inf and dot1(row(dirs, i), (toward[0], toward[1], toward[2])) >= cos_half:
+            weight = _drawn_share1(drawn, i, cone_pdf(cos_half))
             for c in range(3):
-                out[i, c] += radiance[c]
+                out[i, c] += radiance[c] * weight
 
 
 @kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8[::1], f8[::1], f8[::1], b1, f8,"
-        " f8[::1])")
-def _area_met(out, origins, dirs, reach, rows, center, axis_x, axis_y, normal, ellipse, spread, radiance):
+        " f8, f8[::1], f8[::1])")
+def _area_met(out, origins, dirs, reach, rows, center, axis_x, axis_y, normal, ellipse, spread, area, radiance,
+              drawn):
     """The area lamp: the plane of its axes, met in front of its emitting
     side; the point's coordinates (x, y) along the half-axes, by their
     Gram matrix, inside the unit square or, for an `ellipse`, disc."""
@@ -109,14 +132,15 @@ def _area_met(out, origins, dirs, reach, rows, center, axis_x, axis_y, normal, e
         x, y = (yy * qx - xy * qy) / det, (xx * qy - xy * qx) / det
         inside = x * x + y * y <= 1.0 if ellipse else abs(x) <= 1.0 and abs(y) <= 1.0
         if inside:
-            weight = spread_factor1(spread, cos_a)
+            weight = spread_factor1(spread, cos_a) * _drawn_share1(drawn, i, area_pdf1(t, cos_a, area))
             for c in range(3):
                 out[i, c] += radiance[c] * weight
 
 
-@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8, b1, f8[::1], b1, f8[::1], f8, f8)")
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8, b1, f8[::1], b1, f8[::1], f8, f8,"
+        " f8[::1])")
 def _point_met(out, origins, dirs, reach, rows, position, radius, facing_disc, radiance, masked, axis, cos_half,
-               blend):
+               blend, drawn):
     """A point or spot lamp of `radius`: the disc about `position` that
     faces the ray's origin (`facing_disc`: Soft Falloff) or the sphere, met
     in front of the origin; a spot's cone mask along the ray, reversed."""
@@ -131,6 +155,7 @@ def _point_met(out, origins, dirs, reach, rows, position, radius, facing_disc, r
                 continue
             t = dist2 / along
             miss2 = t * t - dist2
+            lamp_pdf = area_pdf1(t, along / math.sqrt(dist2), math.pi * radius * radius)
         else:
             miss2 = dist2 - along * along
             if miss2 > radius * radius:
@@ -139,10 +164,11 @@ def _point_met(out, origins, dirs, reach, rows, position, radius, facing_disc, r
             root = math.sqrt(radius * radius - miss2)
             t = along + root if dist2 <= radius * radius else along - root
             miss2 = 0.0
+            lamp_pdf = cone_pdf(-1.0 if dist2 <= radius * radius else math.sqrt(1.0 - radius * radius / dist2))
         if miss2 > radius * radius or not 0.0 < t < reach[i]:
             continue
-        weight = 1.0
+        weight = _drawn_share1(drawn, i, lamp_pdf)
         if masked:
-            weight = spot_attenuation1(-dot1(d, (axis[0], axis[1], axis[2])), cos_half, blend)
+            weight *= spot_attenuation1(-dot1(d, (axis[0], axis[1], axis[2])), cos_half, blend)
         for c in range(3):
             out[i, c] += radiance[c] * weight

@@ -203,6 +203,23 @@ def glass_ball_under_an_emitting_plane(width=80, height=60, strength=12.0):
     return softbox
 
 
+def glossy_floor_under_a_softbox(width=160, height=120, roughness=0.1):
+    """A dark Principled floor of `roughness` in a black world, a 1 m
+    square lamp of 200 W 1.5 m above it, tilted toward the camera, whose
+    highlight the floor shows; seen from the front. Returns the lamp."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    add_plane(10.0, principled_material(color=(0.1, 0.1, 0.1), roughness=roughness))
+    light = bpy.data.lights.new("Softbox", 'AREA')
+    light.energy, light.size = 200.0, 1.0
+    lamp = bpy.data.objects.new("Softbox", light)
+    lamp.location = (0.0, 1.5, 1.5)
+    lamp.rotation_euler = Vector((0.0, 1.0, 2.0)).normalized().to_track_quat('Z', 'Y').to_euler()
+    bpy.context.scene.collection.objects.link(lamp)
+    add_camera((0.0, -3.0, 1.2), target=(0.0, 0.8, 0.0), lens=35.0)
+    set_resolution(width, height)
+    return lamp
+
+
 def pixels_of(name):
     """(h, w, 4) float32 pixels of image `name`, row 0 at the top."""
     image = bpy.data.images[name]
