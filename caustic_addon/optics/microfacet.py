@@ -129,6 +129,19 @@ def visible_normal_about1(wi, normal, tangent, bitangent, alpha, disc_x, disc_y)
 
 
 @inline
+def half_vector1(view, light, normal, eta, through):
+    """The microfacet normal that turns `view` into `light` (both unit,
+    away from the surface), on the side of `normal`: normalize(v + l) by
+    reflection, -normalize(eta v + l) by refraction (`through`), eta =
+    eta_v / eta_l (Walter et al. 2007, eq. 13 and 16)."""
+    if through:
+        half = normalize1(scale1(-1.0, sum1(eta, view, 1.0, light)))
+    else:
+        half = normalize1(sum1(1.0, view, 1.0, light))
+    return scale1(-1.0, half) if dot1(half, normal) < 0.0 else half
+
+
+@inline
 def bsdf_cosine1(view, light, normal, alpha, eta, mirror):
     """f(view, light) |cos theta_light| of a rough GGX interface, the
     radiance toward `view` per unit irradiance (at normal incidence)
@@ -147,12 +160,7 @@ def bsdf_cosine1(view, light, normal, alpha, eta, mirror):
     such microfacet normal (and where eta v.h + l.h = 0, h's limit)."""
     cos_v, cos_l = dot1(view, normal), dot1(light, normal)
     through = cos_l < 0.0
-    if through:
-        half = normalize1(scale1(-1.0, sum1(eta, view, 1.0, light)))
-    else:
-        half = normalize1(sum1(1.0, view, 1.0, light))
-    if dot1(half, normal) < 0.0:
-        half = scale1(-1.0, half)
+    half = half_vector1(view, light, normal, eta, through)
     v_h, l_h = dot1(view, half), dot1(light, half)
     if not (cos_v > 0.0 and v_h > 0.0 and ((l_h < 0.0 and not mirror) if through else l_h > 0.0)):
         return 0.0
@@ -166,6 +174,33 @@ def bsdf_cosine1(view, light, normal, alpha, eta, mirror):
     if across == 0.0:
         return 0.0
     return (1.0 - f) * common * abs(v_h * l_h) / (across * across)
+
+
+@inline
+def branch_pdf1(view, light, normal, alpha, eta):
+    """Solid-angle density of a rough interface's branch toward `light`
+    for a normal h drawn from the normals visible from `view` (both unit,
+    away from the surface, about the macro `normal` on the view's side):
+    the reflected branch's reflection_pdf1, h = normalize(v + l), and the
+    refracted one's D_v(h) |l.h| / (eta v.h + l.h)^2, D_v(h) = G1(v) D(h)
+    v.h / cos_v, h = -normalize(eta v + l) for eta = eta_v / eta_l (Heitz
+    2018, eq. 3; Walter et al. 2007, eq. 17). Over what bsdf_cosine1
+    gives, it is what a branch keeps, F G2 / G1 or (1 - F) G2 / G1. 0 where
+    the pair has no such normal."""
+    cos_v, cos_l = dot1(view, normal), dot1(light, normal)
+    through = cos_l < 0.0
+    half = half_vector1(view, light, normal, eta, through)
+    v_h, l_h = dot1(view, half), dot1(light, half)
+    if not (cos_v > 0.0 and v_h > 0.0 and (l_h < 0.0 if through else l_h > 0.0)):
+        return 0.0
+    a = max(alpha, 1e-12)
+    if not through:
+        return reflection_pdf1(cos_v, dot1(half, normal), a)
+    across = eta * v_h + l_h
+    if across == 0.0:
+        return 0.0
+    visible = ggx_d1(dot1(half, normal), a) / (1.0 + ggx_lambda1(cos_v, a)) * v_h / cos_v
+    return visible * abs(l_h) / (across * across)
 
 
 @kernel("void(f8[::1], f8[::1], f8[::1])")
@@ -267,4 +302,20 @@ def bsdf_cosine(view: np.ndarray, light: np.ndarray, normal: np.ndarray, alpha: 
     alpha, eta = float_rows(alpha, eta)
     out = np.empty(len(view))
     _bsdf_cosines(view, light, normal, alpha, eta, np.ascontiguousarray(mirror, dtype=bool), out)
+    return out
+
+
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[::1])")
+def _branch_pdfs(view, light, normal, alpha, eta, out):
+    for i in range(len(view)):
+        out[i] = branch_pdf1(row(view, i), row(light, i), row(normal, i), alpha[i], eta[i])
+
+
+def branch_pdf(view: np.ndarray, light: np.ndarray, normal: np.ndarray, alpha: np.ndarray,
+               eta: np.ndarray) -> np.ndarray:
+    """(n,) branch_pdf1 of each row: `view, light, normal (n,3)`, `alpha, eta (n,)`."""
+    view, light, normal = float_rows(view, light, normal)
+    alpha, eta = float_rows(alpha, eta)
+    out = np.empty(len(view))
+    _branch_pdfs(view, light, normal, alpha, eta, out)
     return out

@@ -30,7 +30,7 @@ from typing import Protocol
 import numpy as np
 
 from ..optics.media import beer_lambert1
-from ..optics.microfacet import shadowing_weight1, visible_normal_about1
+from ..optics.microfacet import branch_pdf1, shadowing_weight1, visible_normal_about1
 from ..optics.multiscatter import albedo_at1, multiscatter_factor1
 from ..optics.specular import basic_irradiance_scale, fresnel_dielectric1, radiance_scale1, reflect1, refract1
 from ..sampling.hash import hash_uniform1
@@ -294,7 +294,8 @@ def _own_families(surface: Interface) -> np.ndarray:
 def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
               points, facing, shading, scattering, entering, eta, fresnel, alpha, own,
               reflection_tint, transmission_tint, dielectric, surface_of, factor, radiance, epsilon, roulette, draws,
-              strata, key, out_origins, out_dirs, out_weight, out_medium, out_family, out_kind, out_surface, source):
+              strata, key, out_origins, out_dirs, out_weight, out_medium, out_family, out_kind, out_surface, out_pdf,
+              source):
     """split's branches, all reflected ones, then all refracted ones, into
     the out_ arrays (2n rows); returns how many there are. `source` is the
     path each comes from; `factor (2n,3)` the multiscatter factors of the
@@ -302,7 +303,9 @@ def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
     the paths carry radiance (eye rays), whose refracted branches take
     radiance_scale1; `family` (0,) where the paths have none; `draws (n,)`
     the ids the roulette of each path's branches hashes, or (0,): no
-    roulette, `strata` how many draws share one stratified set (Roulette)."""
+    roulette, `strata` how many draws share one stratified set (Roulette);
+    `out_pdf` the density each branch's direction was drawn with
+    (microfacet.branch_pdf1 where rough, inf where smooth)."""
     n, count = len(dirs), 0
     for event in range(2):
         mirror = event == 0
@@ -338,6 +341,10 @@ def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
                 out_family[count] = next_family1(family[i], surface_of[o], event, ids[i], own[i])
             out_kind[count] = REFRACTED if crossed else REFLECTED
             out_surface[count], source[count] = prim[i], i
+            pdf = math.inf
+            if alpha[i] > 0.0:
+                pdf = branch_pdf1(scale1(-1.0, d), out, row(shading, i), alpha[i], eta[i])
+            out_pdf[count] = pdf
             count += 1
     return count
 
@@ -393,7 +400,7 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
                out_medium=np.empty(2 * n, dtype=np.int64),
                out_family=np.empty(2 * n if len(family) else 0, dtype=np.uint64),
                out_kind=np.empty(2 * n, dtype=np.int8), out_surface=np.empty(2 * n, dtype=np.int64),
-               source=np.empty(2 * n, dtype=np.int64))
+               out_pdf=np.empty(2 * n), source=np.empty(2 * n, dtype=np.int64))
     f8, i8 = np.float64, np.int64
     count = _branches(
         dirs=contiguous(paths.dirs, f8), weight=contiguous(paths.weight, f8), medium=contiguous(paths.medium, i8),
@@ -409,14 +416,14 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
         draws=np.zeros(0, dtype=i8) if roulette is None else contiguous(roulette.draws, i8),
         strata=1 if roulette is None else roulette.strata, key=np.uint64(0 if roulette is None else roulette.key),
         **out)
-    origins, dirs, weight, medium, family, kind, prim, source = (out[name][:count] for name in out)
+    origins, dirs, weight, medium, family, kind, prim, pdf, source = (out[name][:count] for name in out)
     d_origins = d_dirs = None
     if paths.d_origins is not None:
         d_origins, d_dirs = branch_differentials(accel, paths, hits, surface, source, kind, dirs)
     return Paths(origins, dirs, weight, medium, np.take(paths.ids, source), np.take(paths.floor, source),
                  np.ones(count, dtype=bool), None if paths.band is None else np.take(paths.band, source),
                  None if paths.family is None else family, None if paths.kind is None else kind, prim,
-                 d_origins, d_dirs)
+                 d_origins, d_dirs, None if paths.pdf is None else pdf)
 
 
 @kernel("void(f8[:, ::1], i8[::1], f8[::1], i8[::1], f8[:, ::1], b1[::1], f8[:, ::1], i1[::1])")

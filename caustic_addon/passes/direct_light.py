@@ -26,7 +26,9 @@ the balance heuristic, p_own / (p_lamp + p_lobe): a narrow lobe under a
 large lamp gets its highlight from its own rays, a wide one from the
 lamp's samples. The diffuse base takes the lamp's samples alone.
 Rough casters show the lamps' highlights (`rough_specular_radiance`), as
-Cycles' glossy and glass closures do.
+Cycles' glossy and glass closures do, weighed against the rays the eye
+pass's bounce draws there, which meet the lamps themselves, by the same
+heuristic.
 
 The world lights a surface with E = int L(w) V(w) cos(theta) dw over the
 hemisphere, and its lobe with int L(w) V(w) f_s(v, w) cos(theta) dw, what
@@ -47,7 +49,7 @@ import numpy as np
 from ..emission import radiometry
 from ..emission.environment import Environment
 from ..emission.lamp_samples import apparent_size, sample_lamp
-from ..optics.microfacet import bsdf_cosine1
+from ..optics.microfacet import branch_pdf1, bsdf_cosine1
 from ..optics.principled import Lobe, lobe_pdf1, lobe_weight1
 from ..optics.specular import radiance_scale1
 from ..sampling.hash import hash_uniform, hash_uniform1, stream_key
@@ -432,12 +434,15 @@ def _add_world(irradiance, glossy, idx, seen, toward, light, density, cos, sampl
 def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,
                             shading: np.ndarray, facing: np.ndarray, view: np.ndarray, alpha: np.ndarray,
                             eta: np.ndarray, mirror: np.ndarray, tints: tuple[np.ndarray, np.ndarray], far: float,
-                            pixel: np.ndarray, first_stratum: np.ndarray, samples: int, seed: int) -> np.ndarray:
+                            pixel: np.ndarray, first_stratum: np.ndarray, samples: int, seed: int,
+                            branches_traced: bool = True) -> np.ndarray:
     """Radiance (n,3) toward the eye from all lamps' direct light at points
     of rough casters: each lamp sample's irradiance times the GGX
     interface's f |cos| (optics.microfacet.bsdf_cosine1) and the tint of
     what it does there, what Cycles adds at a glossy or glass closure by
-    next-event estimation. A lamp on the far side of glass (`eta (n,)`
+    next-event estimation; where the eye pass traces the rays its bounce
+    draws there (`branches_traced`), which meet the lamps too, weighed
+    against them by multiple importance sampling (`_rough_lit`). A lamp on the far side of glass (`eta (n,)`
     eta_view / eta_lamp, not a `mirror (n,)`) shines through it, its
     radiance scaled as the eye's refracted rays' (specular.radiance_scale1);
     shadow rays as in direct_radiance.
@@ -456,8 +461,9 @@ def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: flo
         for k in range(count):
             uv = strata(pixel, first_stratum * count + k, _ROUGH_STREAM + 2 * number, seed)
             lamp = sample_lamp(light, energy, points, uv, far)
+            pdf = lamp.pdf if branches_traced else np.full(len(points), np.inf)
             idx, dirs, radiance = _rough_lit(facing, shading, view, contiguous(lamp.dirs, np.float64),
-                                             contiguous(lamp.irradiance, np.float64), alpha, eta, mirror,
+                                             contiguous(lamp.irradiance, np.float64), pdf, alpha, eta, mirror,
                                              *tints, count, light.visibility.glossy, light.visibility.transmission)
             if len(idx) == 0:
                 continue
@@ -468,14 +474,18 @@ def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: flo
 
 
 @kernel("Tuple((i8[::1], f8[:, ::1], f8[:, ::1]))(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], "
-        "f8[::1], f8[::1], b1[::1], f8[:, ::1], f8[:, ::1], i8, b1, b1)")
-def _rough_lit(facing, shading, view, dirs, irradiance, alpha, eta, mirror, reflection_tint, transmission_tint,
+        "f8[::1], f8[::1], f8[::1], b1[::1], f8[:, ::1], f8[:, ::1], i8, b1, b1)")
+def _rough_lit(facing, shading, view, dirs, irradiance, pdf, alpha, eta, mirror, reflection_tint, transmission_tint,
                count, glossy, transmission):
     """The lamp samples `dirs, irradiance (n,3)` that light the rough points
     through their GGX interface (idx (l,)), their directions (l,3) and the
     radiance (l,3) each brings toward the eye, one of `count` samples:
     E f |cos| / count (optics.microfacet.bsdf_cosine1) times the tint,
-    where f |cos| > 0; a transmitted sample times radiance_scale1 too.
+    where f |cos| > 0; a transmitted sample times radiance_scale1 too, and
+    each of density `pdf (n,)` times the balance heuristic's
+    count p / (count p + p_branch) against the ray the eye pass's bounce
+    draws there (optics.microfacet.branch_pdf1; 1 for a density of inf,
+    which no such ray meets).
     A sample counts on the eye's side of both normals if the lamp is seen
     by `glossy` rays, or, but at a `mirror`, behind both if by
     `transmission` rays (its Ray Visibility, as Cycles' next-event
@@ -497,7 +507,10 @@ def _rough_lit(facing, shading, view, dirs, irradiance, alpha, eta, mirror, refl
         set_row(toward, lit, d)
         through = along < 0.0
         tint = row(transmission_tint, i) if through else row(reflection_tint, i)
-        scale = f / count * (radiance_scale1(eta[i]) if through else 1.0)
+        share = 1.0
+        if pdf[i] < math.inf:
+            share = count * pdf[i] / (count * pdf[i] + branch_pdf1(row(view, i), d, row(shading, i), alpha[i], eta[i]))
+        scale = f / count * share * (radiance_scale1(eta[i]) if through else 1.0)
         for c in range(3):
             radiance[lit, c] = irradiance[i, c] * (tint[c] * scale)
         lit += 1

@@ -136,20 +136,18 @@ class EyeTracer:
 
     def _lamps_met(self, rays: Paths, reach: np.ndarray) -> None:
         """The lamps with a size that `rays` meet before `reach (n,)`, into
-        the direct pass: seen straight on and in smooth surfaces. Rays that
-        left a rough surface see none, as its lobe's lamp samples
-        (`_highlights`) hold that light."""
+        the direct pass: seen straight on, in smooth surfaces, and by the
+        rays a rough caster drew, these weighed against the lamp samples of
+        its highlights (`_highlights`) by multiple importance sampling."""
         if not self.sized_lamps or not len(rays):
             return
-        smooth = self._after_smooth(rays)
-        if not smooth.all():
-            rays, reach = rays.select(smooth), reach[smooth]
-        radiance = lamps_met(self.sized_lamps, self.energy, rays.origins, rays.dirs, reach, rays.kind)
+        radiance = lamps_met(self.sized_lamps, self.energy, rays.origins, rays.dirs, reach, rays.kind, rays.pdf,
+                             self.settings.lamp_samples)
         self._add("direct", rays.ids, rays.weight, radiance)
 
     def _after_smooth(self, rays: Paths) -> np.ndarray:
         """(n,) bool: the rays from the camera or a smooth surface, which see
-        lamps and emitting faces; a rough surface's lamp samples hold the
+        emitting faces; a rough surface's samples of a mesh light hold the
         light its rays would meet there."""
         after = np.take(self.accel.owner, np.maximum(rays.surface, 0))
         return (rays.surface == MISS) | (np.take(self.materials.alpha, after) <= 0.0)
@@ -253,16 +251,18 @@ class EyeTracer:
             rays = replace(rays, d_origins=d_origins.astype(np.float32), d_dirs=d_dirs.astype(np.float32))
         _, pixel, stratum = self._samples(rays.ids)
         if surface.rough.any():
-            self._highlights(rays, hits, surface)
+            self._highlights(rays, hits, surface, depth < self.settings.max_depth)
             uv = strata(pixel, stratum, _FACET_STREAM + 2 * depth, self.settings.seed)
             surface = facets(surface, rays.dirs, self.materials, hits.obj, uv)
         roulette = Roulette(ROULETTE_WEIGHT, pixel * self.spp + stratum,
                             stream_key(_ROULETTE_STREAM + depth, self.settings.seed), self.spp)
         return split(self.accel, self.materials, rays, hits, surface, carries_light=False, roulette=roulette)
 
-    def _highlights(self, rays: Paths, hits: Hits, surface: Interface) -> None:
+    def _highlights(self, rays: Paths, hits: Hits, surface: Interface, branches_traced: bool) -> None:
         """The lamps' direct light on the rough rows of `surface`, into the
-        direct pass, times Multiscatter GGX's factor."""
+        direct pass, times Multiscatter GGX's factor; weighed against the
+        rays the bounce draws there where they are traced (`branches_traced`:
+        not after the last bounce)."""
         if not self.scene.lights:
             return
         rows = np.flatnonzero(surface.rough)
@@ -274,7 +274,7 @@ class EyeTracer:
             self.accel, self.scene.lights, self.energy, np.take(surface.points, rows, axis=0),
             np.take(surface.shading, rows, axis=0), np.take(surface.facing, rows, axis=0),
             -np.take(rays.dirs, rows, axis=0), surface.alpha[rows], surface.eta[rows], m.reflector[obj], tints,
-            self.far, pixel, stratum, self.settings.lamp_samples, self.settings.seed)
+            self.far, pixel, stratum, self.settings.lamp_samples, self.settings.seed, branches_traced)
         factor = multiscatter(surface, m, hits.obj, rays.dirs, rays.dirs, np.zeros(len(rays), dtype=bool), False)
         self._add("direct", ids, np.take(rays.weight, rows, axis=0), np.take(factor, rows, axis=0) * radiance)
 

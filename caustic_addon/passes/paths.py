@@ -45,6 +45,10 @@ class Paths:
               beam vertex's per unit along its lamp cell's axes), or
               None where no one asks (eye rays ask once they meet a
               specular surface, beam vertices from lamps with a size)
+    pdf       (n,) 1/sr: the density the path's last bounce drew its
+              direction with, where rough (microfacet.branch_pdf1), inf
+              where smooth or none yet; None where no one asks (the pass
+              from the lamps)
     """
 
     origins: np.ndarray
@@ -60,6 +64,7 @@ class Paths:
     surface: Optional[np.ndarray] = None
     d_origins: Optional[np.ndarray] = None
     d_dirs: Optional[np.ndarray] = None
+    pdf: Optional[np.ndarray] = None
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -73,7 +78,8 @@ class Paths:
         n = len(ids)
         return Paths(origins, dirs, weight, np.full(n, medium, dtype=np.int64), ids, floor,
                      np.zeros(n, dtype=bool), band, np.zeros(n, dtype=np.uint64) if family else None,
-                     np.full(n, CAMERA, dtype=np.int8) if camera else None, np.full(n, MISS, dtype=np.int64))
+                     np.full(n, CAMERA, dtype=np.int8) if camera else None, np.full(n, MISS, dtype=np.int64),
+                     pdf=np.full(n, np.inf) if camera else None)
 
     def _columns(self) -> list[str]:
         return [f.name for f in fields(self) if getattr(self, f.name) is not None]
@@ -107,4 +113,5 @@ def relative_floor(weight: np.ndarray) -> np.ndarray:
 # name (util.jit.named_kernel).
 PATH_TYPES = {"origins": "f8[:, ::1]", "dirs": "f8[:, ::1]", "weight": "f8[:, ::1]", "medium": "i8[::1]",
               "ids": "i8[::1]", "floor": "f8[::1]", "specular": "b1[::1]", "band": "i8[::1]", "family": "u8[::1]",
-              "kind": "i1[::1]", "surface": "i8[::1]", "d_origins": "f4[:, :, ::1]", "d_dirs": "f4[:, :, ::1]"}
+              "kind": "i1[::1]", "surface": "i8[::1]", "d_origins": "f4[:, :, ::1]", "d_dirs": "f4[:, :, ::1]",
+              "pdf": "f8[::1]"}

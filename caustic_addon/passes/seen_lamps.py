@@ -20,7 +20,8 @@ its Camera box is ticked). Lamps of size 0 are never met.
 Rays drawn from a rough lobe meet a lamp as one of two strategies for its
 light (passes/direct_light.py): given their density, each lamp's radiance
 is weighed by the balance heuristic against the density its own samples
-draw that direction with (emission/lamp_samples.py)."""
+draw that direction with (emission/lamp_samples.py), times how many of
+them there are to each lobe ray."""
 
 from __future__ import annotations
 
@@ -48,64 +49,69 @@ def seen_by(light: Light, kind: np.ndarray) -> np.ndarray:
 
 
 def lamps_met(lights: list[Light], energy: float, origins: np.ndarray, dirs: np.ndarray, reach: np.ndarray,
-              kind: np.ndarray, drawn_pdf: np.ndarray | None = None) -> np.ndarray:
+              kind: np.ndarray, drawn_pdf: np.ndarray | None = None, lamp_draws: int = 1) -> np.ndarray:
     """(n,3) radiance W/(m^2 sr) of the lamps with a size that rays from
     `origins (n,3)` along unit `dirs (n,3)` of `kind (n,)` meet before
     `reach (n,)` (inf where they leave the scene). Rays a lobe drew with
-    density `drawn_pdf (n,)` take each lamp's radiance times
-    drawn_pdf / (drawn_pdf + the lamp's own pdf) (Veach 1997, the balance
-    heuristic); a lamp its samples reach along one direction only (an area
-    lamp of spread 0) is left to them."""
+    density `drawn_pdf (n,)` (inf: a smooth surface's, or the camera's)
+    take each lamp's radiance times p / (p + lamp_draws p_lamp), p_lamp the
+    density of its samples, `lamp_draws` to each ray (Veach 1997, the
+    balance heuristic); what an area lamp of spread 0 sends along its one
+    direction is left to its samples."""
     out = np.zeros((len(dirs), 3))
     origins, dirs, reach = contiguous(origins, np.float64), contiguous(dirs, np.float64), contiguous(reach, np.float64)
     drawn = np.zeros(0) if drawn_pdf is None else contiguous(drawn_pdf, np.float64)
     for light in lights:
-        if radiometry.is_delta(light) or (len(drawn) and isinstance(light, AreaLight) and light.spread <= 0.0):
+        if radiometry.is_delta(light):
             continue
         rows = np.flatnonzero(seen_by(light, kind))
         if not len(rows):
             continue
         if isinstance(light, SunLight):
             _sun_met(out, dirs, reach, rows, contiguous(-light.direction, np.float64), math.cos(0.5 * light.angle),
-                     radiometry.sun_radiance(light, energy), drawn)
+                     radiometry.sun_radiance(light, energy), drawn, lamp_draws)
         elif isinstance(light, AreaLight):
             _area_met(out, origins, dirs, reach, rows, *(contiguous(v, np.float64) for v in (
                 light.center, light.axis_x, light.axis_y, light.direction)), light.shape == "ELLIPSE",
-                float(light.spread), float(light.area), radiometry.lamp_radiance(light, energy), drawn)
+                float(light.spread), float(light.area), radiometry.lamp_radiance(light, energy), drawn, lamp_draws)
         else:
             spot = isinstance(light, SpotLight)
             _point_met(out, origins, dirs, reach, rows, contiguous(light.position, np.float64), float(light.radius),
                        bool(light.soft_falloff), radiometry.lamp_radiance(light, energy), spot,
                        contiguous(light.direction if spot else np.zeros(3), np.float64),
-                       math.cos(0.5 * light.spot_size) if spot else 1.0, float(light.blend) if spot else 0.0, drawn)
+                       math.cos(0.5 * light.spot_size) if spot else 1.0, float(light.blend) if spot else 0.0, drawn,
+                       lamp_draws)
     return out
 
 
 @inline
-def _drawn_share1(drawn, i, lamp_pdf):
-    """The balance heuristic's weight of row i's lobe-drawn ray against a
-    lamp's sample of density `lamp_pdf`; 1 where `drawn` is (0,)."""
-    if len(drawn) == 0:
+def _drawn_share1(drawn, i, lamp_pdf, lamp_draws):
+    """The balance heuristic's weight of row i's ray, drawn with density
+    drawn[i], against `lamp_draws` samples of a lamp of density `lamp_pdf`:
+    1 where `drawn` is (0,) or drawn[i] inf, 0 where `lamp_pdf` is inf."""
+    p = drawn[i] if len(drawn) else math.inf
+    if p == math.inf:
         return 1.0
-    p = drawn[i]
-    return p / (p + lamp_pdf) if p > 0.0 else 0.0
+    if lamp_pdf == math.inf or not p > 0.0:
+        return 0.0
+    return p / (p + lamp_draws * lamp_pdf)
 
 
-@kernel("void(f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8, f8[::1], f8[::1])")
-def _sun_met(out, dirs, reach, rows, toward, cos_half, radiance, drawn):
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8, f8[::1], f8[::1], i8)")
+def _sun_met(out, dirs, reach, rows, toward, cos_half, radiance, drawn, lamp_draws):
     """The sun's disc, `toward (3,)` unit, half-angle acos(cos_half), in the
     directions of the rows that leave the scene."""
     for i in rows:
         if reach[i] == math.inf and dot1(row(dirs, i), (toward[0], toward[1], toward[2])) >= cos_half:
-            weight = _drawn_share1(drawn, i, cone_pdf(cos_half))
+            weight = _drawn_share1(drawn, i, cone_pdf(cos_half), lamp_draws)
             for c in range(3):
                 out[i, c] += radiance[c] * weight
 
 
 @kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8[::1], f8[::1], f8[::1], b1, f8,"
-        " f8, f8[::1], f8[::1])")
+        " f8, f8[::1], f8[::1], i8)")
 def _area_met(out, origins, dirs, reach, rows, center, axis_x, axis_y, normal, ellipse, spread, area, radiance,
-              drawn):
+              drawn, lamp_draws):
     """The area lamp: the plane of its axes, met in front of its emitting
     side; the point's coordinates (x, y) along the half-axes, by their
     Gram matrix, inside the unit square or, for an `ellipse`, disc."""
@@ -132,15 +138,16 @@ def _area_met(out, origins, dirs, reach, rows, center, axis_x, axis_y, normal, e
         x, y = (yy * qx - xy * qy) / det, (xx * qy - xy * qx) / det
         inside = x * x + y * y <= 1.0 if ellipse else abs(x) <= 1.0 and abs(y) <= 1.0
         if inside:
-            weight = spread_factor1(spread, cos_a) * _drawn_share1(drawn, i, area_pdf1(t, cos_a, area))
+            lamp_pdf = area_pdf1(t, cos_a, area) if spread > 0.0 else math.inf
+            weight = spread_factor1(spread, cos_a) * _drawn_share1(drawn, i, lamp_pdf, lamp_draws)
             for c in range(3):
                 out[i, c] += radiance[c] * weight
 
 
 @kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8, b1, f8[::1], b1, f8[::1], f8, f8,"
-        " f8[::1])")
+        " f8[::1], i8)")
 def _point_met(out, origins, dirs, reach, rows, position, radius, facing_disc, radiance, masked, axis, cos_half,
-               blend, drawn):
+               blend, drawn, lamp_draws):
     """A point or spot lamp of `radius`: the disc about `position` that
     faces the ray's origin (`facing_disc`: Soft Falloff) or the sphere, met
     in front of the origin; a spot's cone mask along the ray, reversed."""
@@ -167,7 +174,7 @@ def _point_met(out, origins, dirs, reach, rows, position, radius, facing_disc, r
             lamp_pdf = cone_pdf(-1.0 if dist2 <= radius * radius else math.sqrt(1.0 - radius * radius / dist2))
         if miss2 > radius * radius or not 0.0 < t < reach[i]:
             continue
-        weight = _drawn_share1(drawn, i, lamp_pdf)
+        weight = _drawn_share1(drawn, i, lamp_pdf, lamp_draws)
         if masked:
             weight *= spot_attenuation1(-dot1(d, (axis[0], axis[1], axis[2])), cos_half, blend)
         for c in range(3):

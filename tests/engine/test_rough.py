@@ -9,8 +9,8 @@ import pytest
 
 from caustic_addon import (Dielectric, Diffuse, Object, PointLight, Reflector, RenderSettings, Scene,
                            SceneError, render, shapes)
-from caustic_addon.optics.microfacet import (alpha_of, bsdf_cosine, ggx_d, ggx_lambda, sample_visible_normals,
-                                             sample_visible_normals_local, shadowing_weight)
+from caustic_addon.optics.microfacet import (alpha_of, branch_pdf, bsdf_cosine, ggx_d, ggx_lambda,
+                                             sample_visible_normals, sample_visible_normals_local, shadowing_weight)
 from caustic_addon.optics.multiscatter import (albedo_at, albedo_cosines, multiscatter_factor,
                                                single_scatter_albedo)
 from caustic_addon.optics.specular import fresnel_dielectric, reflect, refract
@@ -164,6 +164,36 @@ def test_sampled_glass_parts_are_the_bsdf_integrals(alpha, mu, eta):
     smooth_r, smooth_t = sampled_parts(1e-6, mu, eta)
     f = float(fresnel_dielectric(np.array([mu]), eta)[0])
     assert smooth_r == pytest.approx(f, abs=1e-6) and smooth_t == pytest.approx(1.0 - f, abs=1e-6)
+
+
+@pytest.mark.parametrize("alpha, mu, eta", [(0.16, 0.9, 1.5), (0.25, 0.4, 1 / 1.5), (0.49, 0.7, 1.33)])
+def test_each_branchs_density_is_where_the_sampler_sends_it(alpha, mu, eta):
+    """branch_pdf, which multiple importance sampling weighs a rough
+    caster's rays by, is the density of the directions the passes' branches
+    take (a visible normal, then reflection or refraction about it): its
+    integrals of 1, x and z^2 over each branch's side are the sampled ones;
+    and bsdf_cosine over it is what a branch keeps, F G2/G1 or (1 - F) G2/G1."""
+    wi = incoming(mu)
+    a = np.full(N, alpha)
+    h = sample_visible_normals_local(wi, a, np.random.default_rng(7).random((N, 2)))
+    reflected = reflect(-wi, h)
+    refracted, tir = refract(-wi, h, eta)
+    grid, dw = sphere_grid(800)
+    m = len(grid)
+    density = branch_pdf(incoming(mu, m), grid, np.tile([0.0, 0.0, 1.0], (m, 1)), np.full(m, alpha), np.full(m, eta))
+    for sampled, side in ((reflected[reflected[:, 2] > 0], grid[:, 2] > 0),
+                          (refracted[~tir & (refracted[:, 2] < 0)], grid[:, 2] < 0)):
+        for moment in (lambda d: np.ones(len(d)), lambda d: d[:, 0], lambda d: d[:, 2] ** 2):
+            assert moment(sampled).sum() / N == pytest.approx(np.sum((moment(grid) * density * dw)[side]), abs=4e-3)
+    view, up = incoming(mu, m), np.tile([0.0, 0.0, 1.0], (m, 1))
+    ok = density > 1e-3
+    f_cos = bsdf_cosine(view, grid, up, np.full(m, alpha), np.full(m, eta), np.zeros(m, dtype=bool))
+    half = np.where((grid[:, 2] > 0)[:, None], view + grid, -(eta * view + grid))
+    half /= np.linalg.norm(half, axis=1)[:, None] * np.sign(half[:, 2])[:, None]
+    fresnel = fresnel_dielectric(np.abs(half @ view[0]), eta)
+    kept = np.where(grid[:, 2] > 0, fresnel, 1.0 - fresnel) * shadowing_weight(np.full(m, mu), np.abs(grid[:, 2]),
+                                                                               np.full(m, alpha))
+    assert (f_cos / np.where(ok, density, 1.0))[ok] == pytest.approx(kept[ok], rel=1e-6, abs=1e-9)
 
 
 def test_albedo_tables_and_multiscatter_factor():
