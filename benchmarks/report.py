@@ -281,7 +281,7 @@ def glossy_floor(d: dict) -> Table:
             rows.append([roughness, samples, f"x{ours['mean_ratio']:.3f}", percent(ours["relative_l2"]),
                          seconds(ours["seconds"]), percent(theirs["relative_l2"]), seconds(theirs["seconds"]),
                          percent(floor["cycles_reference"]["relative_l2_noise"])])
-    return ["roughness", "light samples a pixel", "the add-on's mean against the reference",
+    return ["roughness", "samples a pixel", "the add-on's mean against the reference",
             "the add-on's relative L2 error", "its time", "Cycles' relative L2 error", "its time",
             "the reference's own noise"], rows
 

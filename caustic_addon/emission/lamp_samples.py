@@ -14,11 +14,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..sampling.spherical_rectangle import SMALLEST, spherical_rectangle1, spherical_rectangle_point1
 from ..sampling.warps import concentric_disc1, cone_direction1, cone_directions, orthonormal_basis1
 from ..scene import AreaLight, Light, MeshLight, PointLight, SpotLight, SunLight
 from ..util.jit import inline, kernel
 from ..util.rows import contiguous
-from ..util.vectors import DIVISION_FLOOR, dot1, set_row
+from ..util.vectors import DIVISION_FLOOR, dot1, row, set_row
 from . import radiometry
 from .radiometry import spot_attenuation1, spread_factor1
 
@@ -138,6 +139,30 @@ def area_pdf1(dist, cos_lamp, area):
 
 
 @inline
+def _rectangle1(ellipse, center, axis_x, axis_y):
+    """(whether an area lamp of half-axes `axis_x, axis_y (3,)` about
+    `center (3,)` is a rectangle with square corners, its corner, its two
+    edges), the 3-tuples that spherical_rectangle1 takes."""
+    ax, ay = (axis_x[0], axis_x[1], axis_x[2]), (axis_y[0], axis_y[1], axis_y[2])
+    square = not ellipse and abs(dot1(ax, ay)) <= 1e-6 * math.sqrt(dot1(ax, ax) * dot1(ay, ay))
+    corner = (center[0] - ax[0] - ay[0], center[1] - ax[1] - ay[1], center[2] - ax[2] - ay[2])
+    return square, corner, (2.0 * ax[0], 2.0 * ax[1], 2.0 * ax[2]), (2.0 * ay[0], 2.0 * ay[1], 2.0 * ay[2])
+
+
+@inline
+def area_lamp_pdf1(origin, dist, cos_lamp, ellipse, center, axis_x, axis_y, area):
+    """1/sr: the density _area_samples draws the direction toward a point
+    of an area lamp with, seen from the 3-tuple `origin` at `dist` and
+    cosine `cos_lamp`: 1 / S by solid angle, else area_pdf1."""
+    square, corner, edge_x, edge_y = _rectangle1(ellipse, center, axis_x, axis_y)
+    if square:
+        solid_angle = spherical_rectangle1(origin, corner, edge_x, edge_y)[0]
+        if solid_angle > SMALLEST:
+            return 1.0 / solid_angle
+    return area_pdf1(dist, cos_lamp, area)
+
+
+@inline
 def area_point1(u, v, ellipse, center, axis_x, axis_y):
     """The 3-tuple point (u, v) of the unit square on an area lamp:
     center + x axis_x + y axis_y, (x, y) = concentric_disc1(u, v) on its
@@ -253,19 +278,35 @@ def _sphere_samples(dirs, dist, irradiance, pdf, points, uv, position, radius, r
         "b1, f8, f8, f8[::1])")
 def _area_samples(dirs, dist, irradiance, pdf, points, uv, center, axis_x, axis_y, normal, ellipse, spread, area,
                   radiance):
-    """Points uniform over an area lamp's rectangle, or its inscribed
-    ellipse (area_point1):
-    E = L s(a) cos_lamp A / t^2 at distance t, L = `radiance (3,)` along the
-    `normal (3,)`, s(a) its spread weight (radiometry.spread_factor1) at the
-    angle a from it, A = `area`; pdf = area_pdf1(t, cos_lamp, A)."""
+    """Points of an area lamp, L = `radiance (3,)` along the `normal (3,)`,
+    s(a) its spread weight (radiometry.spread_factor1) at the angle a from
+    it. A rectangle with square corners is drawn uniformly over the solid
+    angle S it spans (sampling.spherical_rectangle, as Cycles does):
+    E = L s(a) S, pdf = 1 / S; an ellipse, a sheared rectangle or one that
+    looks smaller than spherical_rectangle.SMALLEST uniformly by area
+    (area_point1): E = L s(a) cos_lamp A / t^2 at distance t, A = `area`,
+    pdf = area_pdf1(t, cos_lamp, A)."""
     n = (normal[0], normal[1], normal[2])
+    square, corner, edge_x, edge_y = _rectangle1(ellipse, center, axis_x, axis_y)
     for i in range(len(points)):
-        l, d = _toward1(points, i, area_point1(uv[i, 0], uv[i, 1], ellipse, center, axis_x, axis_y))
+        point = row(points, i)
+        rect = spherical_rectangle1(point, corner, edge_x, edge_y)
+        by_angle = square and rect[0] > SMALLEST
+        if by_angle:
+            target = spherical_rectangle_point1(point, rect, uv[i, 0], uv[i, 1])
+        else:
+            target = area_point1(uv[i, 0], uv[i, 1], ellipse, center, axis_x, axis_y)
+        l, d = _toward1(points, i, target)
         set_row(dirs, i, l)
         dist[i] = d
         cos_lamp = -dot1(l, n)
-        pdf[i] = area_pdf1(d, cos_lamp, area)
-        weight = max(cos_lamp, 0.0) * spread_factor1(spread, cos_lamp) * area / max(d * d, DIVISION_FLOOR)
+        if by_angle:
+            pdf[i] = 1.0 / rect[0]
+            weight = rect[0] if cos_lamp > 0.0 else 0.0
+        else:
+            pdf[i] = area_pdf1(d, cos_lamp, area)
+            weight = max(cos_lamp, 0.0) * area / max(d * d, DIVISION_FLOOR)
+        weight *= spread_factor1(spread, cos_lamp)
         for c in range(3):
             irradiance[i, c] = radiance[c] * weight
 

@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from ..emission import radiometry
-from ..emission.lamp_samples import area_pdf1, cone_pdf
+from ..emission.lamp_samples import area_lamp_pdf1, area_pdf1, cone_pdf
 from ..emission.radiometry import spot_attenuation1, spread_factor1
 from ..scene import AreaLight, Light, SpotLight, SunLight
 from ..tracing.accelerator import CAMERA, REFLECTED, REFRACTED
@@ -138,7 +138,9 @@ def _area_met(out, origins, dirs, reach, rows, center, axis_x, axis_y, normal, e
         x, y = (yy * qx - xy * qy) / det, (xx * qy - xy * qx) / det
         inside = x * x + y * y <= 1.0 if ellipse else abs(x) <= 1.0 and abs(y) <= 1.0
         if inside:
-            lamp_pdf = area_pdf1(t, cos_a, area) if spread > 0.0 else math.inf
+            origin = (origins[i, 0], origins[i, 1], origins[i, 2])
+            lamp_pdf = (area_lamp_pdf1(origin, t, cos_a, ellipse, center, axis_x, axis_y, area) if spread > 0.0
+                        else math.inf)
             weight = spread_factor1(spread, cos_a) * _drawn_share1(drawn, i, lamp_pdf, lamp_draws)
             for c in range(3):
                 out[i, c] += radiance[c] * weight

@@ -1,11 +1,13 @@
-"""The warps' contracts (sampling/warps.py): frames are orthonormal and
-right-handed about any unit axis, and the maps of the unit square have the
-densities they promise, checked by moments with closed forms over a fine
-midpoint grid."""
+"""The warps' contracts (sampling/warps.py, spherical_rectangle.py): frames
+are orthonormal and right-handed about any unit axis, and the maps of the
+unit square have the densities they promise, checked by moments with
+closed forms or quadratures over a fine midpoint grid."""
 
 import numpy as np
 import pytest
 
+from caustic_addon import AreaLight
+from caustic_addon.emission.lamp_samples import sample_lamp
 from caustic_addon.sampling.warps import (concentric_disc, cone_directions, cosine_hemisphere, frames,
                                           orthonormal_basis)
 
@@ -60,3 +62,28 @@ def test_the_cosine_hemisphere_has_density_cos_over_pi():
     assert cos.min() >= 0.0
     assert cos.mean() == pytest.approx(2.0 / 3.0, abs=1e-3)
     assert (cos * cos).mean() == pytest.approx(0.5, abs=1e-4)
+
+
+@pytest.mark.parametrize("origin", [(0.3, -0.2, 0.0), (2.5, 0.4, 0.9), (0.1, 0.0, 0.9)])
+def test_a_rectangle_lamps_samples_are_uniform_over_the_solid_angle_it_spans(origin):
+    """An area lamp's rectangle, 1 m at z = 1 facing down, drawn by solid
+    angle (sampling/spherical_rectangle.py): every sample's density is
+    1 / S, S the quadrature of cos / d^2 over the rectangle, and the
+    directions' moments are the quadrature's over that solid angle, near
+    it, to its side and far off."""
+    lamp = AreaLight((0.0, 0.0, 1.0), (0.5, 0, 0), (0, 0.5, 0), (0, 0, -1), 10.0)
+    uv = square_grid(300)
+    origin = np.array(origin)
+    drawn = sample_lamp(lamp, 1.0, np.tile(origin, (len(uv), 1)), uv, 100.0)
+    ticks = (np.arange(2000) + 0.5) / 2000 - 0.5
+    x, y = (a.ravel() for a in np.meshgrid(ticks, ticks))
+    offset = np.stack([x, y, np.ones_like(x)], axis=1) - origin
+    d2 = np.sum(offset ** 2, axis=1)
+    d_omega = offset[:, 2] / d2 ** 1.5 / 2000 ** 2
+    solid_angle = d_omega.sum()
+    assert drawn.pdf == pytest.approx(np.full(len(uv), 1.0 / solid_angle), rel=1e-4)
+    dirs = offset / np.sqrt(d2)[:, None]
+    for axis in range(3):
+        assert drawn.dirs[:, axis].mean() == pytest.approx(np.sum(dirs[:, axis] * d_omega) / solid_angle, abs=1e-4)
+        assert (drawn.dirs[:, axis] ** 2).mean() == pytest.approx(np.sum(dirs[:, axis] ** 2 * d_omega) / solid_angle,
+                                                                  abs=1e-4)
