@@ -22,9 +22,9 @@ A rough specular layer takes a lamp's light by two strategies (Veach 1997,
 multiple importance sampling, as Cycles does): the lamp's samples, and as
 many rays drawn from the lobe by its visible normals (`lobe_drawn_lamps`),
 which meet the lamp itself (seen_lamps.py). Each weighs what it finds by
-the balance heuristic, p_own / (p_lamp + p_lobe): a narrow lobe under a
-large lamp gets its highlight from its own rays, a wide one from the
-lamp's samples. The diffuse base takes the lamp's samples alone.
+the power heuristic, p_own^2 / (p_lamp^2 + p_lobe^2) (sampling/mis.py,
+as Cycles does): a narrow lobe under a large lamp gets its highlight from
+its own rays, a wide one from the lamp's samples. The diffuse base takes the lamp's samples alone.
 Rough casters show the lamps' highlights (`rough_specular_radiance`), as
 Cycles' glossy and glass closures do, weighed against the rays the eye
 pass's bounce draws there, which meet the lamps themselves, by the same
@@ -53,6 +53,7 @@ from ..optics.microfacet import branch_pdf1, bsdf_cosine1
 from ..optics.principled import Lobe, lobe_pdf1, lobe_weight1
 from ..optics.specular import radiance_scale1
 from ..sampling.hash import hash_uniform, hash_uniform1, stream_key
+from ..sampling.mis import power_heuristic1
 from ..sampling.sequences import r2_point1
 from ..sampling.warps import cosine_hemisphere, frames
 from ..scene import Light, MeshLight
@@ -208,7 +209,7 @@ def lobe_drawn_lamps(accel: Accelerator, lights: list[Light], energy: float, poi
     """Radiance (n,3) toward the eye of the lamps that rays drawn from the
     points' lamp-lit lobes meet, `samples` rays a point stratified over its
     pixel as the lamps' are: L f cos / (p samples) of each lamp met in front
-    of what the ray meets first, times its balance heuristic weight
+    of what the ray meets first, times its power heuristic weight
     (seen_lamps.lamps_met); the other strategy of `direct_radiance`'s
     glossy term. Rays see the objects and lamps that glossy rays see."""
     out = np.zeros((len(points), 3))
@@ -263,7 +264,7 @@ def _add_glossy(radiance, at, dirs, irradiance, pdf, shading, view, lamp_lit, f0
     """radiance[j] += (E_j / count) f cos(theta_l) of the specular layer at
     point `at[j]` (principled.lobe_weight1) where its lobe is `lamp_lit`,
     for the lamp samples `dirs, irradiance (l,3)` drawn with density
-    `pdf (l,)`, times the balance heuristic's p / (p + p_lobe)
+    `pdf (l,)`, times the power heuristic's weight against p_lobe
     (principled.lobe_pdf1; 1 for a density of inf, which no lobe's ray
     meets); `shading, view, f0, gain (n,3)` and `eta, alpha (n,)` per point."""
     for j in range(len(at)):
@@ -273,7 +274,7 @@ def _add_glossy(radiance, at, dirs, irradiance, pdf, shading, view, lamp_lit, f0
         w = lobe_weight1(row(shading, r), row(view, r), row(dirs, j), row(f0, r), eta[r], alpha[r], row(gain, r))
         share = 1.0
         if pdf[j] < math.inf:
-            share = pdf[j] / (pdf[j] + lobe_pdf1(row(shading, r), row(view, r), row(dirs, j), alpha[r]))
+            share = power_heuristic1(1.0, pdf[j], 1.0, lobe_pdf1(row(shading, r), row(view, r), row(dirs, j), alpha[r]))
         for c in range(3):
             radiance[j, c] += irradiance[j, c] / count * (w[c] * share)
 
@@ -482,8 +483,8 @@ def _rough_lit(facing, shading, view, dirs, irradiance, pdf, alpha, eta, mirror,
     radiance (l,3) each brings toward the eye, one of `count` samples:
     E f |cos| / count (optics.microfacet.bsdf_cosine1) times the tint,
     where f |cos| > 0; a transmitted sample times radiance_scale1 too, and
-    each of density `pdf (n,)` times the balance heuristic's
-    count p / (count p + p_branch) against the ray the eye pass's bounce
+    each of density `pdf (n,)` times the power heuristic's weight, `count`
+    of them against p_branch of the one ray the eye pass's bounce
     draws there (optics.microfacet.branch_pdf1; 1 for a density of inf,
     which no such ray meets).
     A sample counts on the eye's side of both normals if the lamp is seen
@@ -509,7 +510,8 @@ def _rough_lit(facing, shading, view, dirs, irradiance, pdf, alpha, eta, mirror,
         tint = row(transmission_tint, i) if through else row(reflection_tint, i)
         share = 1.0
         if pdf[i] < math.inf:
-            share = count * pdf[i] / (count * pdf[i] + branch_pdf1(row(view, i), d, row(shading, i), alpha[i], eta[i]))
+            branch = branch_pdf1(row(view, i), d, row(shading, i), alpha[i], eta[i])
+            share = power_heuristic1(count, pdf[i], 1.0, branch)
         scale = f / count * share * (radiance_scale1(eta[i]) if through else 1.0)
         for c in range(3):
             radiance[lit, c] = irradiance[i, c] * (tint[c] * scale)

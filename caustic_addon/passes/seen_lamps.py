@@ -19,7 +19,7 @@ its Camera box is ticked). Lamps of size 0 are never met.
 
 Rays drawn from a rough lobe meet a lamp as one of two strategies for its
 light (passes/direct_light.py): given their density, each lamp's radiance
-is weighed by the balance heuristic against the density its own samples
+is weighed by the power heuristic against the density its own samples
 draw that direction with (emission/lamp_samples.py), times how many of
 them there are to each lobe ray."""
 
@@ -32,6 +32,7 @@ import numpy as np
 from ..emission import radiometry
 from ..emission.lamp_samples import area_lamp_pdf1, area_pdf1, cone_pdf
 from ..emission.radiometry import spot_attenuation1, spread_factor1
+from ..sampling.mis import power_heuristic1
 from ..scene import AreaLight, Light, SpotLight, SunLight
 from ..tracing.accelerator import CAMERA, REFLECTED, REFRACTED
 from ..util.jit import inline, kernel
@@ -54,9 +55,9 @@ def lamps_met(lights: list[Light], energy: float, origins: np.ndarray, dirs: np.
     `origins (n,3)` along unit `dirs (n,3)` of `kind (n,)` meet before
     `reach (n,)` (inf where they leave the scene). Rays a lobe drew with
     density `drawn_pdf (n,)` (inf: a smooth surface's, or the camera's)
-    take each lamp's radiance times p / (p + lamp_draws p_lamp), p_lamp the
-    density of its samples, `lamp_draws` to each ray (Veach 1997, the
-    balance heuristic); what an area lamp of spread 0 sends along its one
+    take each lamp's radiance times p^2 / (p^2 + (lamp_draws p_lamp)^2),
+    p_lamp the density of its samples, `lamp_draws` to each ray (Veach 1997,
+    the power heuristic); what an area lamp of spread 0 sends along its one
     direction is left to its samples."""
     out = np.zeros((len(dirs), 3))
     origins, dirs, reach = contiguous(origins, np.float64), contiguous(dirs, np.float64), contiguous(reach, np.float64)
@@ -86,7 +87,7 @@ def lamps_met(lights: list[Light], energy: float, origins: np.ndarray, dirs: np.
 
 @inline
 def _drawn_share1(drawn, i, lamp_pdf, lamp_draws):
-    """The balance heuristic's weight of row i's ray, drawn with density
+    """The power heuristic's weight of row i's ray, drawn with density
     drawn[i], against `lamp_draws` samples of a lamp of density `lamp_pdf`:
     1 where `drawn` is (0,) or drawn[i] inf, 0 where `lamp_pdf` is inf."""
     p = drawn[i] if len(drawn) else math.inf
@@ -94,7 +95,7 @@ def _drawn_share1(drawn, i, lamp_pdf, lamp_draws):
         return 1.0
     if lamp_pdf == math.inf or not p > 0.0:
         return 0.0
-    return p / (p + lamp_draws * lamp_pdf)
+    return power_heuristic1(1.0, p, lamp_draws, lamp_pdf)
 
 
 @kernel("void(f8[:, ::1], f8[:, ::1], f8[::1], i8[::1], f8[::1], f8, f8[::1], f8[::1], i8)")

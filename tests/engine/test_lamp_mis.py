@@ -1,5 +1,5 @@
 """A sized lamp's highlight on a rough surface, taken by the lamp's samples
-and by the surface's own rays weighed by the balance heuristic
+and by the surface's own rays weighed by the power heuristic
 (passes/direct_light.py): a Principled receiver's specular layer, whose
 rays the eye pass draws for it, and a rough metal caster, whose rays are
 its bounce's branches. Against the integral over the lamp's surface: the
