@@ -117,12 +117,12 @@ def _sun(light: SunLight, energy: float, uv: np.ndarray, far: float, out: LampSa
         cos_half = math.cos(0.5 * light.angle)
         out.dirs[:] = cone_directions(-light.direction, cos_half, uv)
         out.irradiance[:] = radiometry.sun_radiance(light, energy) * (2.0 * math.pi * (1.0 - cos_half))
-        out.pdf[:] = cone_pdf.py_func(cos_half)
+        out.pdf[:] = cone_pdf1.py_func(cos_half)
     out.dist[:] = far
 
 
 @inline
-def cone_pdf(cos_max):
+def cone_pdf1(cos_max):
     """1/sr: the density of directions drawn uniformly over a cone of
     half-angle acos(cos_max), 1 / (2 pi (1 - cos_max))."""
     return 1.0 / max(2.0 * math.pi * (1.0 - cos_max), DIVISION_FLOOR)
@@ -147,6 +147,18 @@ def _rectangle1(ellipse, center, axis_x, axis_y):
     square = not ellipse and abs(dot1(ax, ay)) <= 1e-6 * math.sqrt(dot1(ax, ax) * dot1(ay, ay))
     corner = (center[0] - ax[0] - ay[0], center[1] - ax[1] - ay[1], center[2] - ax[2] - ay[2])
     return square, corner, (2.0 * ax[0], 2.0 * ax[1], 2.0 * ax[2]), (2.0 * ay[0], 2.0 * ay[1], 2.0 * ay[2])
+
+
+@inline
+def _area_point_drawn1(point, u, v, square, corner, edge_x, edge_y, ellipse, center, axis_x, axis_y):
+    """(the 3-tuple point of an area lamp at (u, v) of the unit square, seen
+    from the 3-tuple `point`, and the solid angle S it was drawn uniformly
+    over, or 0 where it was drawn uniformly by area): _area_samples' choice."""
+    if square:
+        rect = spherical_rectangle1(point, corner, edge_x, edge_y)
+        if rect[0] > SMALLEST:
+            return spherical_rectangle_point1(point, rect, u, v), rect[0]
+    return area_point1(u, v, ellipse, center, axis_x, axis_y), 0.0
 
 
 @inline
@@ -252,7 +264,7 @@ def _sphere_samples(dirs, dist, irradiance, pdf, points, uv, position, radius, r
     (3,)`, sampled uniformly over the cap a point sees (cone_direction1),
     E = L x the cap's solid angle 2 pi (1 - cos_max), cos_max = sqrt(1 -
     (r/d)^2); a point inside it sees it everywhere (E = L 4 pi over the
-    uniform sphere of directions); pdf = cone_pdf(cos_max). The distance to clear is the sphere's
+    uniform sphere of directions); pdf = cone_pdf1(cos_max). The distance to clear is the sphere's
     near root along the direction, its far one from inside; Cycles applies
     no cone mask to a point inside a spot's sphere."""
     at = (position[0], position[1], position[2])
@@ -261,7 +273,7 @@ def _sphere_samples(dirs, dist, irradiance, pdf, points, uv, position, radius, r
         inside = d <= radius
         q = radius / max(d, DIVISION_FLOOR)
         cos_max = -1.0 if inside else math.sqrt(max(0.0, 1.0 - q * q))
-        pdf[i] = cone_pdf(cos_max)
+        pdf[i] = cone_pdf1(cos_max)
         t, b = orthonormal_basis1(toward)
         l = cone_direction1(toward, t, b, cos_max, uv[i, 0], uv[i, 1])
         set_row(dirs, i, l)
@@ -289,20 +301,15 @@ def _area_samples(dirs, dist, irradiance, pdf, points, uv, center, axis_x, axis_
     n = (normal[0], normal[1], normal[2])
     square, corner, edge_x, edge_y = _rectangle1(ellipse, center, axis_x, axis_y)
     for i in range(len(points)):
-        point = row(points, i)
-        rect = spherical_rectangle1(point, corner, edge_x, edge_y)
-        by_angle = square and rect[0] > SMALLEST
-        if by_angle:
-            target = spherical_rectangle_point1(point, rect, uv[i, 0], uv[i, 1])
-        else:
-            target = area_point1(uv[i, 0], uv[i, 1], ellipse, center, axis_x, axis_y)
+        target, solid_angle = _area_point_drawn1(row(points, i), uv[i, 0], uv[i, 1], square, corner, edge_x, edge_y,
+                                                 ellipse, center, axis_x, axis_y)
         l, d = _toward1(points, i, target)
         set_row(dirs, i, l)
         dist[i] = d
         cos_lamp = -dot1(l, n)
-        if by_angle:
-            pdf[i] = 1.0 / rect[0]
-            weight = rect[0] if cos_lamp > 0.0 else 0.0
+        if solid_angle > 0.0:
+            pdf[i] = 1.0 / solid_angle
+            weight = solid_angle if cos_lamp > 0.0 else 0.0
         else:
             pdf[i] = area_pdf1(d, cos_lamp, area)
             weight = max(cos_lamp, 0.0) * area / max(d * d, DIVISION_FLOOR)

@@ -290,12 +290,12 @@ def _own_families(surface: Interface) -> np.ndarray:
 
 @named_kernel("i8", PATH_TYPES, HIT_TYPES, INTERFACE_TYPES, MATERIAL_TYPES, GEOMETRY_TYPES,
               {"own": "b1[::1]", "factor": "f8[:, ::1]", "radiance": "b1", "roulette": "f8", "draws": "i8[::1]",
-               "strata": "i8", "key": "u8", "source": "i8[::1]"})
+               "strata": "i8", "key": "u8", "source": "i8[::1]", "with_pdf": "b1"})
 def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
               points, facing, shading, scattering, entering, eta, fresnel, alpha, own,
               reflection_tint, transmission_tint, dielectric, surface_of, factor, radiance, epsilon, roulette, draws,
-              strata, key, out_origins, out_dirs, out_weight, out_medium, out_family, out_kind, out_surface, out_pdf,
-              source):
+              strata, key, with_pdf, out_origins, out_dirs, out_weight, out_medium, out_family, out_kind, out_surface,
+              out_pdf, source):
     """split's branches, all reflected ones, then all refracted ones, into
     the out_ arrays (2n rows); returns how many there are. `source` is the
     path each comes from; `factor (2n,3)` the multiscatter factors of the
@@ -304,8 +304,8 @@ def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
     radiance_scale1; `family` (0,) where the paths have none; `draws (n,)`
     the ids the roulette of each path's branches hashes, or (0,): no
     roulette, `strata` how many draws share one stratified set (Roulette);
-    `out_pdf` the density each branch's direction was drawn with
-    (microfacet.branch_pdf1 where rough, inf where smooth)."""
+    `out_pdf`, where `with_pdf`, the density each branch's direction was
+    drawn with (microfacet.branch_pdf1 where rough, inf where smooth)."""
     n, count = len(dirs), 0
     for event in range(2):
         mirror = event == 0
@@ -341,10 +341,11 @@ def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
                 out_family[count] = next_family1(family[i], surface_of[o], event, ids[i], own[i])
             out_kind[count] = REFRACTED if crossed else REFLECTED
             out_surface[count], source[count] = prim[i], i
-            pdf = math.inf
-            if alpha[i] > 0.0:
-                pdf = branch_pdf1(scale1(-1.0, d), out, row(shading, i), alpha[i], eta[i])
-            out_pdf[count] = pdf
+            if with_pdf:
+                pdf = math.inf
+                if alpha[i] > 0.0:
+                    pdf = branch_pdf1(scale1(-1.0, d), out, row(shading, i), alpha[i], eta[i])
+                out_pdf[count] = pdf
             count += 1
     return count
 
@@ -415,6 +416,7 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
         roulette=0.0 if roulette is None else roulette.weight,
         draws=np.zeros(0, dtype=i8) if roulette is None else contiguous(roulette.draws, i8),
         strata=1 if roulette is None else roulette.strata, key=np.uint64(0 if roulette is None else roulette.key),
+        with_pdf=paths.pdf is not None,
         **out)
     origins, dirs, weight, medium, family, kind, prim, pdf, source = (out[name][:count] for name in out)
     d_origins = d_dirs = None

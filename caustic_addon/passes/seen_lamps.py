@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from ..emission import radiometry
-from ..emission.lamp_samples import area_lamp_pdf1, area_pdf1, cone_pdf
+from ..emission.lamp_samples import area_lamp_pdf1, area_pdf1, cone_pdf1
 from ..emission.radiometry import spot_attenuation1, spread_factor1
 from ..sampling.mis import power_heuristic1
 from ..scene import AreaLight, Light, SpotLight, SunLight
@@ -86,13 +86,17 @@ def lamps_met(lights: list[Light], energy: float, origins: np.ndarray, dirs: np.
 
 
 @inline
-def _drawn_share1(drawn, i, lamp_pdf, lamp_draws):
-    """The power heuristic's weight of row i's ray, drawn with density
-    drawn[i], against `lamp_draws` samples of a lamp of density `lamp_pdf`:
-    1 where `drawn` is (0,) or drawn[i] inf, 0 where `lamp_pdf` is inf."""
-    p = drawn[i] if len(drawn) else math.inf
-    if p == math.inf:
-        return 1.0
+def _lobe_drawn1(drawn, i):
+    """Whether row i's ray was drawn from a rough lobe: `drawn` is not (0,)
+    and drawn[i] is finite (the lamp's own density then weighs it)."""
+    return len(drawn) > 0 and drawn[i] < math.inf
+
+
+@inline
+def _drawn_share1(p, lamp_pdf, lamp_draws):
+    """The power heuristic's weight of a ray drawn with density `p` against
+    `lamp_draws` samples of a lamp of density `lamp_pdf`; 0 where
+    `lamp_pdf` is inf."""
     if lamp_pdf == math.inf or not p > 0.0:
         return 0.0
     return power_heuristic1(1.0, p, lamp_draws, lamp_pdf)
@@ -104,7 +108,7 @@ def _sun_met(out, dirs, reach, rows, toward, cos_half, radiance, drawn, lamp_dra
     directions of the rows that leave the scene."""
     for i in rows:
         if reach[i] == math.inf and dot1(row(dirs, i), (toward[0], toward[1], toward[2])) >= cos_half:
-            weight = _drawn_share1(drawn, i, cone_pdf(cos_half), lamp_draws)
+            weight = _drawn_share1(drawn[i], cone_pdf1(cos_half), lamp_draws) if _lobe_drawn1(drawn, i) else 1.0
             for c in range(3):
                 out[i, c] += radiance[c] * weight
 
@@ -139,10 +143,12 @@ def _area_met(out, origins, dirs, reach, rows, center, axis_x, axis_y, normal, e
         x, y = (yy * qx - xy * qy) / det, (xx * qy - xy * qx) / det
         inside = x * x + y * y <= 1.0 if ellipse else abs(x) <= 1.0 and abs(y) <= 1.0
         if inside:
-            origin = (origins[i, 0], origins[i, 1], origins[i, 2])
-            lamp_pdf = (area_lamp_pdf1(origin, t, cos_a, ellipse, center, axis_x, axis_y, area) if spread > 0.0
-                        else math.inf)
-            weight = spread_factor1(spread, cos_a) * _drawn_share1(drawn, i, lamp_pdf, lamp_draws)
+            weight = spread_factor1(spread, cos_a)
+            if _lobe_drawn1(drawn, i):
+                origin = (origins[i, 0], origins[i, 1], origins[i, 2])
+                lamp_pdf = (area_lamp_pdf1(origin, t, cos_a, ellipse, center, axis_x, axis_y, area) if spread > 0.0
+                            else math.inf)
+                weight *= _drawn_share1(drawn[i], lamp_pdf, lamp_draws)
             for c in range(3):
                 out[i, c] += radiance[c] * weight
 
@@ -174,10 +180,10 @@ def _point_met(out, origins, dirs, reach, rows, position, radius, facing_disc, r
             root = math.sqrt(radius * radius - miss2)
             t = along + root if dist2 <= radius * radius else along - root
             miss2 = 0.0
-            lamp_pdf = cone_pdf(-1.0 if dist2 <= radius * radius else math.sqrt(1.0 - radius * radius / dist2))
+            lamp_pdf = cone_pdf1(-1.0 if dist2 <= radius * radius else math.sqrt(1.0 - radius * radius / dist2))
         if miss2 > radius * radius or not 0.0 < t < reach[i]:
             continue
-        weight = _drawn_share1(drawn, i, lamp_pdf, lamp_draws)
+        weight = _drawn_share1(drawn[i], lamp_pdf, lamp_draws) if _lobe_drawn1(drawn, i) else 1.0
         if masked:
             weight *= spot_attenuation1(-dot1(d, (axis[0], axis[1], axis[2])), cos_half, blend)
         for c in range(3):
