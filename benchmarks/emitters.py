@@ -41,7 +41,7 @@ import bpy  # noqa: E402
 import blender_scenes as scenes  # noqa: E402
 import conftest  # noqa: E402
 from benchmarks import record  # noqa: E402
-from caustic_addon.cli.image_io import write_image  # noqa: E402
+from benchmarks.against_cycles import figures, reference_noise, write_pair  # noqa: E402
 
 PIXX, PIXY = 160, 120
 OURS = {"defaults (4 samples)": 4, "16 samples": 16}
@@ -52,37 +52,14 @@ def ours(spp: int) -> tuple[np.ndarray, np.ndarray, float]:
     """(image, caustic pass, seconds) of the add-on's render at `spp`."""
     settings = bpy.context.scene.caustic
     settings.spp, settings.edge_samples = spp, max(8, spp)
-    assert bpy.ops.caustic.render() == {'FINISHED'}
-    clock = time.perf_counter()
-    assert bpy.ops.caustic.render() == {'FINISHED'}
-    seconds = time.perf_counter() - clock
-    return (scenes.pixels_of("Caustic Render")[..., :3].astype(np.float64),
-            scenes.pixels_of("Caustic Render Caustic")[..., :3].astype(np.float64), seconds)
+    return scenes.warm_caustic_render()
 
 
 def cycles(samples: int, seed: int, folder: str) -> tuple[np.ndarray, float]:
-    """Cycles on the CPU with the caustic's bounces (above), box-filtered,
-    neither denoised nor adaptive: (image, seconds)."""
-    scene = bpy.context.scene
-    scene.render.engine = 'CYCLES'
-    settings = scene.cycles
-    settings.device, settings.samples, settings.seed, settings.use_denoising = 'CPU', samples, seed, False
-    settings.max_bounces, settings.diffuse_bounces = 9, 1
-    settings.glossy_bounces = settings.transmission_bounces = 8
-    settings.caustics_refractive = settings.caustics_reflective = True
-    settings.sample_clamp_indirect, settings.blur_glossy = 0.0, 0.0
-    settings.pixel_filter_type, settings.filter_width = 'BOX', 1.0
-    settings.use_adaptive_sampling = False
+    """Cycles with the caustic's bounces (blender_scenes.cycles_caustics): (image, seconds)."""
     clock = time.perf_counter()
-    image = scenes.rendered_pixels(folder)[..., :3]
+    image = scenes.cycles_caustics(folder, samples, seed)
     return image, time.perf_counter() - clock
-
-
-def figures(image: np.ndarray, seconds: float, reference: np.ndarray, caustic: np.ndarray) -> dict:
-    return {"seconds": seconds, "mean_ratio": float(image.mean() / reference.mean()),
-            "relative_l2": float(np.linalg.norm(image - reference) / np.linalg.norm(reference)),
-            "caustic_relative_l2": float(np.linalg.norm((image - reference)[caustic])
-                                         / np.linalg.norm(reference[caustic]))}
 
 
 def main() -> None:
@@ -100,23 +77,19 @@ def main() -> None:
         second, _ = cycles(args.cycles_samples, 1, folder)
         swept = {samples: figures(*cycles(samples, 2, folder), reference, caustic) for samples in CYCLES_SAMPLES}
     results = {name: figures(image, seconds, reference, caustic) for name, (image, _, seconds) in renders.items()}
-    noise = float(np.linalg.norm(reference - second) / np.linalg.norm(reference) / np.sqrt(2.0))
-    caustic_noise = float(np.linalg.norm((reference - second)[caustic]) / np.linalg.norm(reference[caustic])
-                          / np.sqrt(2.0))
     path = record.write("emitters", {
         "scene": f"glass ball (radius 0.5) on a white floor under a 1 m emitting plane of strength 12, black world, "
                  f"{PIXX}x{PIXY}",
         "caustic_pixels": int(caustic.sum()),
-        "cycles_reference": {"samples": args.cycles_samples, "seconds": reference_s, "relative_l2_noise": noise,
-                             "caustic_relative_l2_noise": caustic_noise},
+        "cycles_reference": {"samples": args.cycles_samples, "seconds": reference_s,
+                             **reference_noise(reference, second, caustic)},
         "ours": results, "cycles": {str(s): f for s, f in swept.items()}})
     print(f"wrote {path}")
     for name, f in {**results, **{f"Cycles {s}": f for s, f in swept.items()}}.items():
         print(f"{name}: mean x{f['mean_ratio']:.3f}, L2 {f['relative_l2']:.1%}, "
               f"caustic L2 {f['caustic_relative_l2']:.1%}, {f['seconds']:.2f} s")
     if args.side_by_side:
-        pair = np.concatenate([renders["defaults (4 samples)"][0], reference], axis=1)
-        write_image(args.side_by_side, np.concatenate([pair, np.ones(pair.shape[:2] + (1,))], axis=2))
+        write_pair(args.side_by_side, renders["defaults (4 samples)"][0], reference)
 
 
 if __name__ == "__main__":

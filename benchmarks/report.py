@@ -299,6 +299,22 @@ def emitters(d: dict) -> Table:
             f"over the caustic ({d['caustic_pixels']} pixels)", "time"], rows
 
 
+def liquid_glass(d: dict) -> Table:
+    reference = d["cycles_reference"]
+
+    def row(name: str, f: dict) -> list[str]:
+        return [name, f"x{f['mean_ratio']:.3f}", percent(f["relative_l2"]), f"x{f['caustic_mean_ratio']:.3f}",
+                percent(f["caustic_relative_l2"]), seconds(f["seconds"])]
+
+    rows = [row(f"the add-on, {name}", f) for name, f in d["ours"].items()]
+    rows += [row(f"Cycles, {name}", f) for name, f in d["cycles"].items()]
+    rows.append([f"Cycles, {reference['samples']} samples (the reference; its own noise)", "x1",
+                 percent(reference["relative_l2_noise"]), "x1", percent(reference["caustic_relative_l2_noise"]),
+                 seconds(reference["seconds"])])
+    return ["render", "image mean against the reference", "relative L2 error",
+            f"caustic's mean ({d['caustic_pixels']} pixels)", "its relative L2 error", "time"], rows
+
+
 def allocator(d: dict) -> Table:
     names = {"default": "glibc's default", "engine": "the engine's setting"}
     rows = [[blender, names.get(setting, setting), seconds(f["seconds_per_frame"]), seconds(f["cpu_seconds_per_frame"]),
@@ -433,7 +449,7 @@ FORMATTERS: dict[str, Callable[[dict], Table]] = {
     "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass, "through_glass": through_glass,
     "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "world_paths": world_paths,
     "flicker": flicker, "gallery": gallery, "glints": glints, "glossy_floor": glossy_floor,
-    "emitters": emitters,
+    "emitters": emitters, "liquid_glass": liquid_glass,
 }
 
 # (group, [(results name, title)]), in the README's order
@@ -462,6 +478,7 @@ SECTIONS = [
         ("glints", "Glints: a lamp seen in glass, against Cycles"),
         ("glossy_floor", "A glossy floor under a large light, against Cycles"),
         ("emitters", "A softbox built as an emitting mesh, against Cycles"),
+        ("liquid_glass", "Water in a glass tumbler, against Cycles"),
         ("rough_glass", "Rough glass, against Cycles"),
         ("through_glass", "The caustic seen through glass"),
         ("dispersion", "Dispersion and coloured glass"),

@@ -36,9 +36,8 @@ from ..optics.specular import basic_irradiance_scale, fresnel_dielectric1, radia
 from ..sampling.hash import hash_uniform1
 from ..sampling.warps import concentric_disc1, orthonormal_basis1
 from ..scene.material_table import MATERIAL_TYPES, Materials
-from ..tracing.accelerator import (GEOMETRY_TYPES, REFLECTED, REFRACTED, Accelerator, inside1, offset1,
-                                   shading_normal1)
-from ..tracing.hits import HIT_TYPES, MISS, Hits
+from ..tracing.accelerator import GEOMETRY_TYPES, REFLECTED, REFRACTED, Accelerator, offset1, shading_normal1
+from ..tracing.hits import HIT_TYPES, MISS, Hits, inside1
 from ..util.jit import inline, kernel, named_kernel
 from ..util.rows import contiguous, partition, take_rows
 from ..util.vectors import dot1, max_channel1, normalize1, row, scale1, set_row
@@ -76,49 +75,126 @@ def reflectance1(reflector, reflects, cos_i, eta):
     return fresnel_dielectric1(cos_i, eta) if reflects else 0.0
 
 
+@inline
+def index_of1(ior, medium, band):
+    """The index of refraction of `medium` (an object, MISS: air, 1) in
+    wavelength band `band`, from `ior (m,K)`."""
+    n = ior[max(medium, 0), band]
+    return 1.0 if medium == MISS else n
+
+
+@inline
+def crossing1(medium, outer, obj, toward, closed, body):
+    """(entered, beyond, beneath, real) of a ray inside `medium` over
+    `outer` (Paths) that meets a surface of object `obj`, `toward` its
+    front (against its outward normal).
+
+    Closed objects nest (Schmidt and Budge 2002, "Simple nested dielectrics
+    in ray traced images", without priorities): a ray enters `obj` unless it
+    is inside its body already, and is then in `obj` over `medium`; leaving
+    `medium` it is back in `outer`. Leaving `outer` while inside `medium`
+    (a tumbler's wall met inside the whisky that overlaps it) changes no
+    medium's light, so the crossing is not `real`: it neither bends nor
+    reflects. An open mesh's side is its normal's."""
+    in_medium, in_outer, solid = inside1(medium, obj, body), inside1(outer, obj, body), closed[obj]
+    if not solid:
+        if toward:
+            return True, obj, medium, True
+        return False, (outer if in_medium else MISS), MISS, True
+    if in_medium:
+        return False, outer, MISS, True
+    if in_outer:
+        return False, medium, MISS, False
+    return True, obj, medium, True
+
+
 @named_kernel("void", PATH_TYPES, HIT_TYPES, INTERFACE_TYPES, MATERIAL_TYPES, GEOMETRY_TYPES,
-              {"ior": "f8[:, ::1]", "reflects": "b1[::1]"})
-def _oriented(prim, u, v, obj, dirs, medium, band, face_normal, corner_normal, closed, body, ior, reflector,
-              reflects, facing, shading, entering, eta, fresnel):
+              {"ior": "f8[:, ::1]", "reflects": "b1[::1]", "roughness": "f8[::1]"})
+def _oriented(prim, u, v, obj, dirs, medium, outer, band, face_normal, corner_normal, closed, body, ior, reflector,
+              reflects, roughness, facing, shading, entering, eta, fresnel, alpha, beyond, beneath):
     """orient's rows: `ior (m,K)` per object and band, `band (n,)` each
-    row's; `reflects (m,)` False where an object's Fresnel is none."""
+    row's; `reflects (m,)` False where an object's Fresnel is none;
+    `roughness (m,)` each object's GGX alpha. eta is the index of the
+    medium the ray is in over that of the one beyond (index_of1); a
+    crossing that is not real has eta 1, no Fresnel and no roughness."""
     for i in range(len(prim)):
-        d, o, face = row(dirs, i), obj[i], row(face_normal, prim[i])
-        entered = (not inside1(medium[i], o, body)) if closed[o] else dot1(d, face) < 0.0
+        d, o = row(dirs, i), obj[i]
+        face = row(face_normal, prim[i])
+        entered, over, under, real = crossing1(medium[i], outer[i], o, dot1(d, face) < 0.0, closed, body)
         f, s = oriented1(d, face, shading_normal1(corner_normal, face_normal, prim[i], u[i], v[i]))
-        e = 1.0 / ior[o, band[i]] if entered else ior[o, band[i]]
+        e = index_of1(ior, medium[i] if entered else o, band[i]) / index_of1(ior, over if not entered else o,
+                                                                          band[i])
         set_row(facing, i, f)
         set_row(shading, i, s)
-        entering[i], eta[i] = entered, e
-        fresnel[i] = reflectance1(reflector[o], reflects[o], -dot1(d, s), e)
+        entering[i], beyond[i], beneath[i] = entered, over, under
+        eta[i] = e if real else 1.0
+        alpha[i] = roughness[o] if real else 0.0
+        fresnel[i] = reflectance1(reflector[o], reflects[o], -dot1(d, s), eta[i]) if real else 0.0
 
 
 def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, materials: Materials, medium: np.ndarray,
-           band=None) -> Interface:
+           outer: np.ndarray, band=None) -> Interface:
     """Orient the hits' normals against `dirs (n,3)` and evaluate Fresnel
     (reflectance1: 1 at reflectors, which reflect everything). Dielectrics refract with
     their IOR in wavelength band `band` ((n,) per ray), or at 587.6 nm (n_d)
-    when it is None.
+    when it is None, over that of the medium on the ray's side.
 
-    Entering or leaving: for a closed mesh, the ray's own state `medium (n,)`
-    (the object it is inside, or MISS; any object of the same body counts)
-    decides, since a hit at an edge or a grazing hit can land on a face
-    whose normal says otherwise; for an open mesh, the outward geometric
-    normal does (dot(d, n) < 0 means entering). The normals: oriented1.
-    """
+    Entering or leaving: for a closed mesh, the ray's own state `medium,
+    outer (n,)` (the objects it is inside, or MISS; any object of the same
+    body counts) decides, since a hit at an edge or a grazing hit can land
+    on a face whose normal says otherwise (crossing1); for an open mesh, the
+    outward geometric normal does (dot(d, n) < 0 means entering). The
+    normals: oriented1.
+
+    A ray that leaves closed glass for the air and enters other closed
+    glass or water at once (their surfaces coincide, or lie a hair apart:
+    tracing/joins.py) crosses one interface, of the ratio of their indices,
+    as light does where a liquid wets its glass."""
     n = len(hits.prim)
     facing, shading = np.empty((n, 3)), np.empty((n, 3))
-    entering, eta, fresnel = np.empty(n, dtype=bool), np.empty(n), np.empty(n)
+    entering, eta, fresnel, alpha = np.empty(n, dtype=bool), np.empty(n), np.empty(n), np.empty(n)
+    beyond, beneath = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
     ior = materials.ior[:, None] if band is None else materials.ior_bands
+    band = np.zeros(n, dtype=np.int64) if band is None else contiguous(band, np.int64)
     _oriented(prim=contiguous(hits.prim, np.int64), u=contiguous(hits.u, np.float64), v=contiguous(hits.v, np.float64),
               obj=contiguous(hits.obj, np.int64), dirs=contiguous(dirs, np.float64),
-              medium=contiguous(medium, np.int64),
-              band=np.zeros(n, dtype=np.int64) if band is None else contiguous(band, np.int64),
+              medium=contiguous(medium, np.int64), outer=contiguous(outer, np.int64), band=band,
               face_normal=accel.face_normal, corner_normal=accel.corner_normal, closed=accel.closed, body=accel.body,
               ior=contiguous(ior, np.float64), reflector=materials.reflector, reflects=materials.fresnel,
-              facing=facing, shading=shading, entering=entering, eta=eta, fresnel=fresnel)
-    return Interface(hits.points, facing, shading, entering, eta, fresnel, np.take(materials.alpha, hits.obj),
-                     shading)
+              roughness=contiguous(materials.alpha, np.float64), facing=facing, shading=shading, entering=entering,
+              eta=eta, fresnel=fresnel, alpha=alpha, beyond=beyond, beneath=beneath)
+    joined = np.full(n, MISS, dtype=np.int64)
+    if accel.joins.partners:
+        _join(accel, hits, contiguous(dirs, np.float64), materials, ior, band, entering, beyond, eta, fresnel,
+              shading, joined)
+    return Interface(hits.points, facing, shading, entering, eta, fresnel, alpha, shading, beyond, beneath, joined)
+
+
+def _join(accel: Accelerator, hits: Hits, dirs: np.ndarray, materials: Materials, ior: np.ndarray, band: np.ndarray,
+          entering: np.ndarray, beyond: np.ndarray, eta: np.ndarray, fresnel: np.ndarray, shading: np.ndarray,
+          joined: np.ndarray) -> None:
+    """orient's rows that leave closed glass for the air where other glass
+    or water lies against it (Accelerator.joins): they go into that one,
+    their eta and Fresnel those of the two indices. Changes the arrays in place."""
+    rows = np.flatnonzero(~entering & (beyond == MISS) & accel.joins.has_partners[hits.obj])
+    if len(rows) == 0:
+        return
+    found = accel.joins.entered(np.take(hits.obj, rows), np.take(hits.prim, rows), np.take(hits.points, rows, axis=0),
+                               np.take(dirs, rows, axis=0))
+    rows, found = rows[found != MISS], found[found != MISS]
+    _joined(rows, found, contiguous(hits.obj, np.int64), dirs, contiguous(ior, np.float64), band, shading,
+            materials.reflector, materials.fresnel, beyond, eta, fresnel, joined)
+
+
+@kernel("void(i8[::1], i8[::1], i8[::1], f8[:, ::1], f8[:, ::1], i8[::1], f8[:, ::1], b1[::1], b1[::1], i8[::1], "
+        "f8[::1], f8[::1], i8[::1])")
+def _joined(rows, found, obj, dirs, ior, band, shading, reflector, reflects, beyond, eta, fresnel, joined):
+    """_join's rows `rows (k,)`, each going into object `found (k,)`."""
+    for j in range(len(rows)):
+        i, o, w = rows[j], obj[rows[j]], found[j]
+        beyond[i], joined[i] = w, w
+        eta[i] = ior[o, band[i]] / ior[w, band[i]]
+        fresnel[i] = reflectance1(reflector[o], reflects[o], -dot1(row(dirs, i), row(shading, i)), eta[i])
 
 
 def facets(surface: Interface, dirs: np.ndarray, materials: Materials, obj: np.ndarray,
@@ -136,8 +212,7 @@ def facets(surface: Interface, dirs: np.ndarray, materials: Materials, obj: np.n
     _facets(rough, contiguous(dirs, np.float64), contiguous(surface.shading, np.float64), contiguous(uv, np.float64),
             contiguous(surface.alpha, np.float64), contiguous(surface.eta, np.float64), materials.reflector,
             materials.fresnel, contiguous(obj, np.int64), scattering, fresnel)
-    return Interface(surface.points, surface.facing, surface.shading, surface.entering, surface.eta, fresnel,
-                     surface.alpha, scattering)
+    return replace(surface, fresnel=fresnel, scattering=scattering)
 
 
 @kernel("void(i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], b1[::1], b1[::1], i8[::1], f8[:, ::1], "
@@ -261,12 +336,22 @@ def scatter(surface: Interface, dirs: np.ndarray,
 
 
 @inline
-def crossed_medium1(crossed, entering, obj, medium):
-    """The medium after a bounce at object `obj`: `obj` if the path crossed
-    into it, MISS if it crossed out, `medium` if it did not cross."""
-    if not crossed:
-        return medium
-    return obj if entering else MISS
+def crossed_media1(crossed, beyond, beneath, medium, outer):
+    """(medium, outer) of a path after a bounce: those beyond the surface
+    (Interface.beyond, beneath) if it crossed, its own if it did not."""
+    if crossed:
+        return beyond, beneath
+    return medium, outer
+
+
+@inline
+def transmission1(transmission_tint, obj, joined):
+    """The transmission tint (3-tuple) of a crossing at object `obj`, times
+    that of the object `joined` against it (MISS: none)."""
+    c, t = row(transmission_tint, obj), row(transmission_tint, max(joined, 0))
+    if joined == MISS:
+        return c
+    return c[0] * t[0], c[1] * t[1], c[2] * t[2]
 
 
 @inline
@@ -291,11 +376,11 @@ def _own_families(surface: Interface) -> np.ndarray:
 @named_kernel("i8", PATH_TYPES, HIT_TYPES, INTERFACE_TYPES, MATERIAL_TYPES, GEOMETRY_TYPES,
               {"own": "b1[::1]", "factor": "f8[:, ::1]", "radiance": "b1", "roulette": "f8", "draws": "i8[::1]",
                "strata": "i8", "key": "u8", "source": "i8[::1]", "with_pdf": "b1"})
-def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
-              points, facing, shading, scattering, entering, eta, fresnel, alpha, own,
+def _branches(dirs, weight, medium, outer, floor, family, ids, obj, prim,
+              points, facing, shading, scattering, eta, fresnel, alpha, beyond, beneath, joined, own,
               reflection_tint, transmission_tint, dielectric, surface_of, factor, radiance, epsilon, roulette, draws,
-              strata, key, with_pdf, out_origins, out_dirs, out_weight, out_medium, out_family, out_kind, out_surface,
-              out_pdf, source):
+              strata, key, with_pdf, out_origins, out_dirs, out_weight, out_medium, out_outer, out_family, out_kind,
+              out_surface, out_pdf, source):
     """split's branches, all reflected ones, then all refracted ones, into
     the out_ arrays (2n rows); returns how many there are. `source` is the
     path each comes from; `factor (2n,3)` the multiscatter factors of the
@@ -314,7 +399,7 @@ def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
             if not (mirror or dielectric[o]):
                 continue
             d = row(dirs, i)
-            c = row(reflection_tint, o) if mirror else row(transmission_tint, o)
+            c = row(reflection_tint, o) if mirror else transmission1(transmission_tint, o, joined[i])
             out, crossed, kept = scatter1(d, row(scattering, i), row(facing, i), row(shading, i), eta[i], alpha[i],
                                           mirror)
             share = fresnel[i] if mirror else (1.0 - fresnel[i] if crossed else 0.0)
@@ -336,7 +421,7 @@ def _branches(dirs, weight, medium, floor, family, ids, obj, prim,
             set_row(out_origins, count, offset1(row(points, i), row(facing, i), out, epsilon))
             set_row(out_dirs, count, out)
             set_row(out_weight, count, w)
-            out_medium[count] = crossed_medium1(crossed, entering[i], o, medium[i])
+            out_medium[count], out_outer[count] = crossed_media1(crossed, beyond[i], beneath[i], medium[i], outer[i])
             if len(family):
                 out_family[count] = next_family1(family[i], surface_of[o], event, ids[i], own[i])
             out_kind[count] = REFRACTED if crossed else REFLECTED
@@ -398,18 +483,20 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
             surface, paths.dirs, np.full(n, mirror))[:2], carries_light) for mirror in (True, False)])
     family = np.zeros(0, dtype=np.uint64) if paths.family is None else contiguous(paths.family, np.uint64)
     out = dict(out_origins=np.empty((2 * n, 3)), out_dirs=np.empty((2 * n, 3)), out_weight=np.empty((2 * n, 3)),
-               out_medium=np.empty(2 * n, dtype=np.int64),
+               out_medium=np.empty(2 * n, dtype=np.int64), out_outer=np.empty(2 * n, dtype=np.int64),
                out_family=np.empty(2 * n if len(family) else 0, dtype=np.uint64),
                out_kind=np.empty(2 * n, dtype=np.int8), out_surface=np.empty(2 * n, dtype=np.int64),
                out_pdf=np.empty(2 * n), source=np.empty(2 * n, dtype=np.int64))
     f8, i8 = np.float64, np.int64
     count = _branches(
         dirs=contiguous(paths.dirs, f8), weight=contiguous(paths.weight, f8), medium=contiguous(paths.medium, i8),
-        floor=contiguous(paths.floor, f8), family=family, ids=contiguous(paths.ids, i8),
-        obj=contiguous(hits.obj, i8), prim=contiguous(hits.prim, i8), points=contiguous(surface.points, f8),
-        facing=contiguous(surface.facing, f8), shading=contiguous(surface.shading, f8),
-        scattering=contiguous(surface.scattering, f8), entering=contiguous(surface.entering, bool),
+        outer=contiguous(paths.outer, i8), floor=contiguous(paths.floor, f8), family=family,
+        ids=contiguous(paths.ids, i8), obj=contiguous(hits.obj, i8), prim=contiguous(hits.prim, i8),
+        points=contiguous(surface.points, f8), facing=contiguous(surface.facing, f8),
+        shading=contiguous(surface.shading, f8), scattering=contiguous(surface.scattering, f8),
         eta=contiguous(surface.eta, f8), fresnel=contiguous(surface.fresnel, f8), alpha=contiguous(surface.alpha, f8),
+        beyond=contiguous(surface.beyond, i8), beneath=contiguous(surface.beneath, i8),
+        joined=contiguous(surface.joined, i8),
         own=contiguous(_own_families(surface), bool), reflection_tint=materials.reflection_tint,
         transmission_tint=materials.transmission_tint, dielectric=materials.dielectric, surface_of=accel.surface,
         factor=factor, radiance=not carries_light, epsilon=accel.epsilon,
@@ -418,11 +505,11 @@ def split(accel: Accelerator, materials: Materials, paths: Paths, hits: Hits, su
         strata=1 if roulette is None else roulette.strata, key=np.uint64(0 if roulette is None else roulette.key),
         with_pdf=paths.pdf is not None,
         **out)
-    origins, dirs, weight, medium, family, kind, prim, pdf, source = (out[name][:count] for name in out)
+    origins, dirs, weight, medium, outer, family, kind, prim, pdf, source = (out[name][:count] for name in out)
     d_origins = d_dirs = None
     if paths.d_origins is not None:
         d_origins, d_dirs = branch_differentials(accel, paths, hits, surface, source, kind, dirs)
-    return Paths(origins, dirs, weight, medium, np.take(paths.ids, source), np.take(paths.floor, source),
+    return Paths(origins, dirs, weight, medium, outer, np.take(paths.ids, source), np.take(paths.floor, source),
                  np.ones(count, dtype=bool), None if paths.band is None else np.take(paths.band, source),
                  None if paths.family is None else family, None if paths.kind is None else kind, prim,
                  d_origins, d_dirs, None if paths.pdf is None else pdf)
@@ -464,7 +551,7 @@ def trace(accel: Accelerator, materials: Materials, paths: Paths, max_depth: int
         n = len(paths)
         if n == 0:
             return
-        hits = accel.intersect(paths.origins, paths.dirs, paths.medium, paths.kind, paths.surface)
+        hits = accel.intersect(paths.origins, paths.dirs, paths.medium, paths.outer, paths.kind, paths.surface)
         weight, fate = np.empty((n, 3)), np.empty(n, dtype=np.int8)
         _arrivals(contiguous(paths.weight, np.float64), contiguous(paths.medium, np.int64), hits.t, hits.obj,
                   materials.absorption, materials.specular_surface, weight, fate)
@@ -481,7 +568,7 @@ def trace(accel: Accelerator, materials: Materials, paths: Paths, max_depth: int
         paths, hits = paths.span(arrived, n), hits.span(arrived - escaped, n - escaped)
         if len(paths) == 0:
             return
-        surface = orient(accel, hits, paths.dirs, materials, paths.medium, paths.band)
+        surface = orient(accel, hits, paths.dirs, materials, paths.medium, paths.outer, paths.band)
         paths = tracer.scattered(paths, hits, surface, depth)
 
 

@@ -24,6 +24,12 @@ class Interface:
     alpha       (n,) GGX width; 0 where the surface is smooth
     scattering  (n,3) the normal the ray scatters about: the shading normal,
                 or where rough a microfacet normal drawn by `facets`
+    beyond      (n,) the closed object (MISS: air) a ray that crosses is in
+                next, and `beneath` (n,) the one it is also in beneath
+                that (Paths.medium and Paths.outer)
+    joined      (n,) the object whose surface lies against this one where
+                the ray crosses, glass into water (bounce.orient): its
+                transmission tint applies too; MISS where none
     """
 
     points: np.ndarray
@@ -34,6 +40,9 @@ class Interface:
     fresnel: np.ndarray
     alpha: np.ndarray
     scattering: np.ndarray
+    beyond: np.ndarray
+    beneath: np.ndarray
+    joined: np.ndarray
 
     @property
     def rough(self) -> np.ndarray:
@@ -42,10 +51,12 @@ class Interface:
 
     def select(self, mask: np.ndarray) -> "Interface":
         return Interface(*take_rows(mask, self.points, self.facing, self.shading, self.entering, self.eta,
-                                    self.fresnel, self.alpha, self.scattering))
+                                    self.fresnel, self.alpha, self.scattering, self.beyond, self.beneath,
+                                    self.joined))
 
 
 # The numba type of each field, for the kernels that take them by name
 # (util.jit.named_kernel).
 INTERFACE_TYPES = {"points": "f8[:, ::1]", "facing": "f8[:, ::1]", "shading": "f8[:, ::1]", "entering": "b1[::1]",
-                   "eta": "f8[::1]", "fresnel": "f8[::1]", "alpha": "f8[::1]", "scattering": "f8[:, ::1]"}
+                   "eta": "f8[::1]", "fresnel": "f8[::1]", "alpha": "f8[::1]", "scattering": "f8[:, ::1]",
+                   "beyond": "i8[::1]", "beneath": "i8[::1]", "joined": "i8[::1]"}

@@ -25,7 +25,12 @@ class Paths:
     origins   (n,3) world
     dirs      (n,3) unit, world
     weight    (n,3) flux, W (photons), or throughput (beam vertices, eye rays)
-    medium    (n,) int64 the closed object each path is inside, MISS in air
+    medium    (n,) int64 the closed object each path is inside, MISS in air;
+              where closed objects nest or overlap (a marble in water,
+              whisky in a tumbler), the one entered last
+    outer     (n,) int64 the closed object of another body that the path
+              is also inside, beneath `medium`: the one it is back in when
+              it leaves `medium`; MISS where none (bounce.orient)
     ids       (n,) int64 the photon's id (it seeds the photon's random
               numbers), the beam vertex's grid key, or the eye ray's pixel
     floor     (n,) the weight (max channel) below which a branch stops
@@ -55,6 +60,7 @@ class Paths:
     dirs: np.ndarray
     weight: np.ndarray
     medium: np.ndarray
+    outer: np.ndarray
     ids: np.ndarray
     floor: np.ndarray
     specular: np.ndarray
@@ -76,7 +82,8 @@ class Paths:
         """Paths leaving a lamp or, as CAMERA rays if `camera`, the camera,
         from inside object `medium` (MISS: in air), with no specular event yet."""
         n = len(ids)
-        return Paths(origins, dirs, weight, np.full(n, medium, dtype=np.int64), ids, floor,
+        return Paths(origins, dirs, weight, np.full(n, medium, dtype=np.int64), np.full(n, MISS, dtype=np.int64),
+                     ids, floor,
                      np.zeros(n, dtype=bool), band, np.zeros(n, dtype=np.uint64) if family else None,
                      np.full(n, CAMERA, dtype=np.int8) if camera else None, np.full(n, MISS, dtype=np.int64),
                      pdf=np.full(n, np.inf) if camera else None)
@@ -112,6 +119,7 @@ def relative_floor(weight: np.ndarray) -> np.ndarray:
 # The numba type of each field, for the kernels that take path arrays by
 # name (util.jit.named_kernel).
 PATH_TYPES = {"origins": "f8[:, ::1]", "dirs": "f8[:, ::1]", "weight": "f8[:, ::1]", "medium": "i8[::1]",
+              "outer": "i8[::1]",
               "ids": "i8[::1]", "floor": "f8[::1]", "specular": "b1[::1]", "band": "i8[::1]", "family": "u8[::1]",
               "kind": "i1[::1]", "surface": "i8[::1]", "d_origins": "f4[:, :, ::1]", "d_dirs": "f4[:, :, ::1]",
               "pdf": "f8[::1]"}

@@ -42,7 +42,7 @@ from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.jit import inline, kernel, named_kernel
 from ..util.rows import contiguous, take
 from ..util.vectors import DIVISION_FLOOR, max_channel, max_channel1, row, set_row
-from .bounce import crossed_medium1, facets, multiscatter, on_maps, scatter, scatter1, trace
+from .bounce import crossed_media1, facets, multiscatter, on_maps, scatter, scatter1, trace, transmission1
 from .interface import INTERFACE_TYPES, Interface
 from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
 from .paths import PATH_TYPES, Paths
@@ -100,19 +100,20 @@ def one_branch(accel: Accelerator, materials: Materials, paths: Paths, hits: Hit
         factor = multiscatter(surface, materials, hits.obj, paths.dirs, dirs, crossed, carries_light)
     n, f8, i8 = len(paths), np.float64, np.int64
     out = dict(out_origins=np.empty((n, 3)), out_dirs=np.empty((n, 3)), out_weight=np.empty((n, 3)),
-               out_medium=np.empty(n, dtype=i8), source=np.empty(n, dtype=i8))
+               out_medium=np.empty(n, dtype=i8), out_outer=np.empty(n, dtype=i8), source=np.empty(n, dtype=i8))
     count = _photon_bounces(
         dirs=contiguous(paths.dirs, f8), weight=contiguous(paths.weight, f8), medium=contiguous(paths.medium, i8),
-        floor=contiguous(paths.floor, f8), draws=contiguous(draws, i8), obj=contiguous(hits.obj, i8),
-        points=contiguous(surface.points, f8), facing=contiguous(surface.facing, f8),
+        outer=contiguous(paths.outer, i8), floor=contiguous(paths.floor, f8), draws=contiguous(draws, i8),
+        obj=contiguous(hits.obj, i8), points=contiguous(surface.points, f8), facing=contiguous(surface.facing, f8),
         shading=contiguous(surface.shading, f8), scattering=contiguous(surface.scattering, f8),
-        entering=contiguous(surface.entering, bool), eta=contiguous(surface.eta, f8),
-        fresnel=contiguous(surface.fresnel, f8), alpha=contiguous(surface.alpha, f8),
+        eta=contiguous(surface.eta, f8), fresnel=contiguous(surface.fresnel, f8), alpha=contiguous(surface.alpha, f8),
+        beyond=contiguous(surface.beyond, i8), beneath=contiguous(surface.beneath, i8),
+        joined=contiguous(surface.joined, i8),
         reflection_tint=materials.reflection_tint, transmission_tint=materials.transmission_tint,
         factor=contiguous(factor, f8), radiance=not carries_light, epsilon=accel.epsilon, reflect_key=reflect_key,
         roulette_key=roulette_key, **out)
-    origins, dirs, weight, medium, source = (out[name][:count] for name in out)
-    return Paths(origins, dirs, weight, medium, take(paths.ids, source), take(paths.floor, source),
+    origins, dirs, weight, medium, outer, source = (out[name][:count] for name in out)
+    return Paths(origins, dirs, weight, medium, outer, take(paths.ids, source), take(paths.floor, source),
                  np.ones(count, dtype=bool), None if paths.band is None else take(paths.band, source),
                  kind=None if paths.kind is None else take(paths.kind, source), surface=take(hits.prim, source))
 
@@ -134,9 +135,10 @@ def roulette1(peak, threshold, xi):
 @named_kernel("i8", PATH_TYPES, HIT_TYPES, INTERFACE_TYPES, MATERIAL_TYPES, GEOMETRY_TYPES,
               {"draws": "i8[::1]", "factor": "f8[:, ::1]", "radiance": "b1", "reflect_key": "u8",
                "roulette_key": "u8", "source": "i8[::1]"})
-def _photon_bounces(dirs, weight, medium, floor, draws, obj, points, facing, shading, scattering, entering, eta,
-                    fresnel, alpha, reflection_tint, transmission_tint, factor, radiance, epsilon, reflect_key,
-                    roulette_key, out_origins, out_dirs, out_weight, out_medium, source):
+def _photon_bounces(dirs, weight, medium, outer, floor, draws, obj, points, facing, shading, scattering, eta,
+                    fresnel, alpha, beyond, beneath, joined, reflection_tint, transmission_tint, factor, radiance,
+                    epsilon, reflect_key, roulette_key, out_origins, out_dirs, out_weight, out_medium, out_outer,
+                    source):
     """one_branch's rows: each path reflects where
     hash_uniform1(draw, reflect_key) < its Fresnel reflectance, else refracts
     (bounce.scatter1), its weight times the surface's tint for what it did,
@@ -151,7 +153,7 @@ def _photon_bounces(dirs, weight, medium, floor, draws, obj, points, facing, sha
         mirror = hash_uniform1(draws[i], reflect_key) < fresnel[i]
         out, crossed, kept = scatter1(d, row(scattering, i), row(facing, i), row(shading, i), eta[i], alpha[i],
                                       mirror)
-        c = row(transmission_tint, o) if crossed else row(reflection_tint, o)
+        c = transmission1(transmission_tint, o, joined[i]) if crossed else row(reflection_tint, o)
         s = radiance_scale1(eta[i]) if radiance and crossed else 1.0
         w = (weight[i, 0] * (c[0] * s), weight[i, 1] * (c[1] * s), weight[i, 2] * (c[2] * s))
         if len(factor):
@@ -162,7 +164,7 @@ def _photon_bounces(dirs, weight, medium, floor, draws, obj, points, facing, sha
         set_row(out_origins, count, offset1(row(points, i), row(facing, i), out, epsilon))
         set_row(out_dirs, count, out)
         set_row(out_weight, count, (w[0] / divisor, w[1] / divisor, w[2] / divisor))
-        out_medium[count] = crossed_medium1(crossed, entering[i], o, medium[i])
+        out_medium[count], out_outer[count] = crossed_media1(crossed, beyond[i], beneath[i], medium[i], outer[i])
         source[count] = i
         count += 1
     return count

@@ -21,7 +21,7 @@ import numpy as np
 from ..emission.environment import Environment
 from ..scene.material_table import Materials
 from ..tracing.accelerator import SHADOW, Accelerator
-from ..tracing.hits import Hits
+from ..tracing.hits import MISS, Hits
 from ..util.vectors import DIVISION_FLOOR, max_channel
 from .bounce import trace
 from .interface import Interface
@@ -98,7 +98,8 @@ class WorldThroughCasters:
         n = len(dirs)
         rays = _WorldRays(self.accel, self.materials, draws, self.seed)
         start = np.ones((n, 3))
-        paths = Paths(origins, dirs, start, np.ascontiguousarray(medium, dtype=np.int64), np.arange(n),
+        paths = Paths(origins, dirs, start, np.ascontiguousarray(medium, dtype=np.int64),
+                      np.full(n, MISS, dtype=np.int64), np.arange(n),
                       np.full(n, ROULETTE_FRACTION), np.zeros(n, dtype=bool), kind=np.full(n, SHADOW, dtype=np.int8),
                       surface=np.ascontiguousarray(surface, dtype=np.int64))
         trace(self.accel, self.materials, paths, self.max_depth, rays)

@@ -23,7 +23,8 @@ from ..util.vectors import dot1, float_rows, length, normalize, normalize1, row,
 from . import embree
 from .contact import Contacts
 from .embree import PACKET, intersect1, occluded8, packet_blocked, packet_record, ray_record, set_packet_ray
-from .hits import HIT_TYPES, MISS, Hits
+from .hits import HIT_TYPES, MISS, Hits, inside1
+from .joins import Joins
 from .prototypes import PROTOTYPES, Prototype
 from .topology import open_edges, signed_volume
 
@@ -172,6 +173,7 @@ class Accelerator:
         for body in np.unique(self.body[self.closed]):
             self._warn_if_thin(int(body))
         self.contacts = Contacts(self)
+        self.joins = Joins(self)
         self.rays_cast = 0  # counts the passes' rays, not the probes'
 
     def view_of(self, indices: np.ndarray) -> _View:
@@ -263,7 +265,8 @@ class Accelerator:
             future.result()
 
     def intersect(self, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray | None = None,
-                  kind: np.ndarray | None = None, leaving: np.ndarray | None = None) -> Hits:
+                  outer: np.ndarray | None = None, kind: np.ndarray | None = None,
+                  leaving: np.ndarray | None = None) -> Hits:
         """Closest hits of rays `origins (n,3)`, `dirs (n,3)` (unit), world space.
 
         With `kind (n,)`, CAMERA, REFLECTED, REFRACTED or SHADOW per ray,
@@ -271,9 +274,10 @@ class Accelerator:
         object.
 
         With `medium (n,)`, the closed object each ray is inside (MISS if
-        none), a face of a closed mesh met from the side the medium rules out
-        (entering the body the ray is in, or leaving one it is not in) is
-        passed: the ray goes on from just beyond it, and `t` adds up the legs.
+        none), and `outer (n,)` the one it is also inside beneath it (None:
+        none; passes/paths.Paths), a face of a closed mesh met from the side
+        these rule out (entering a body the ray is in, or leaving one it is
+        not in) is passed: the ray goes on from just beyond it, and `t` adds up the legs.
         Such hits are float32 artefacts: the neighbour of the face just
         crossed, met again at t ~ 0 past a shared edge; a face turned away
         from a ray that only touches a vertex; the far side of a crack in
@@ -286,8 +290,9 @@ class Accelerator:
         if medium is None:
             return hits
         medium = np.ascontiguousarray(medium, dtype=np.int64)
+        outer = np.full(len(dirs), MISS, dtype=np.int64) if outer is None else np.ascontiguousarray(outer, np.int64)
         for _ in range(_MAX_SKIPS):
-            skip = np.flatnonzero(self._contradicts(hits, dirs, medium))
+            skip = np.flatnonzero(self._contradicts(hits, dirs, medium, outer))
             if len(skip) == 0:
                 break
             face = np.take(self.face_normal, hits.prim[skip], axis=0)
@@ -296,7 +301,7 @@ class Accelerator:
             again.t += hits.t[skip] + length(start - hits.points[skip])
             hits.replace(skip, again)
         if self.contacts.boxes:
-            self.contacts.resolve(hits, origins, dirs, medium, leaving)
+            self.contacts.resolve(hits, origins, dirs, medium, outer, leaving)
         return hits
 
     def medium_at(self, points: np.ndarray) -> np.ndarray:
@@ -341,11 +346,11 @@ class Accelerator:
         objects = hits.obj.reshape(len(points), len(dirs))[np.arange(len(points)), first]
         return np.where(near.any(axis=1), objects, MISS)
 
-    def _contradicts(self, hits: Hits, dirs: np.ndarray, medium: np.ndarray) -> np.ndarray:
-        """(n,) bool: hits on closed meshes from the side the ray's medium
-        `medium (n,)` rules out, for rays `dirs (n,3)` (contiguous float64)."""
+    def _contradicts(self, hits: Hits, dirs: np.ndarray, medium: np.ndarray, outer: np.ndarray) -> np.ndarray:
+        """(n,) bool: hits on closed meshes from the side the ray's media
+        `medium, outer (n,)` rule out, for rays `dirs (n,3)` (contiguous float64)."""
         out = np.empty(len(dirs), dtype=bool)
-        _contradicting(hits.obj, hits.prim, dirs, medium, self.closed, self.body, self.face_normal, out)
+        _contradicting(hits.obj, hits.prim, dirs, medium, outer, self.closed, self.body, self.face_normal, out)
         return out
 
     def _closest_by_kind(self, origins: np.ndarray, dirs: np.ndarray, kind: np.ndarray | None) -> Hits:
@@ -458,17 +463,6 @@ def _first_copy(obj: Object) -> Mesh:
         return obj.mesh
     local = obj.instances.mesh
     return Mesh(obj.mesh.vertices[:len(local.vertices)], obj.mesh.triangles[:len(local.triangles)])
-
-
-@inline
-def inside1(medium, obj, body):
-    """Is a ray in `medium` (an object, or MISS in air) inside the body of
-    object `obj`? `body (m,)` per object, the first object of its body.
-    Both are looked up whatever `medium` is: read under a branch, `body`
-    took an atomic reference count a call, which the two threads' calls
-    fought over (util.jit.inline); the bounce's `_oriented` spent 5% of the
-    pool's frame there."""
-    return (medium != MISS) & (body[max(medium, 0)] == body[obj])
 
 
 @inline
@@ -589,17 +583,17 @@ def _occlusions(scene, origins, dirs, dists, out):
             out[start + k] = packet_blocked(floats, k)
 
 
-@kernel("void(i8[::1], i8[::1], f8[:, ::1], i8[::1], b1[::1], i8[::1], f8[:, ::1], b1[::1])")
-def _contradicting(obj, prim, dirs, medium, closed, body, face_normal, out):
+@kernel("void(i8[::1], i8[::1], f8[:, ::1], i8[::1], i8[::1], b1[::1], i8[::1], f8[:, ::1], b1[::1])")
+def _contradicting(obj, prim, dirs, medium, outer, closed, body, face_normal, out):
     """out (n,): the hit is on a closed mesh, from the side the ray's
-    medium rules out: toward its front (entering) while inside it, or from
+    media rule out: toward its front (entering) while inside it, or from
     behind while outside."""
     for i in range(len(obj)):
         if obj[i] == MISS or not closed[obj[i]]:
             out[i] = False
         else:
             toward = dot1(row(dirs, i), row(face_normal, prim[i])) < 0.0
-            out[i] = toward == inside1(medium[i], obj[i], body)
+            out[i] = toward == (inside1(medium[i], obj[i], body) | inside1(outer[i], obj[i], body))
 
 
 @kernel("void(i8[::1], f8[::1], f8[::1], f8[:, :, ::1], f8[:, ::1], f8[:, ::1])")

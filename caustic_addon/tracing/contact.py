@@ -36,7 +36,7 @@ import numpy as np
 from ..util.jit import inline, kernel
 from ..util.rows import contiguous, take, take_rows, true_rows
 from ..util.vectors import dot, dot1, row, set_row, sum1
-from .hits import MISS, Hits
+from .hits import MISS, Hits, inside1
 
 # Faces closer than this many epsilons touch.
 CONTACT_EPSILONS = 2.0
@@ -144,10 +144,10 @@ class Contacts:
                 found.replace(true_rows(mine), scene.closest(*take_rows(mine, start, dirs, 2.0 * half)))
         return found, found.t - half
 
-    def resolve(self, hits: Hits, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray,
+    def resolve(self, hits: Hits, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray, outer: np.ndarray,
                 leaving: Optional[np.ndarray]) -> None:
         """Apply the two rules (module docstring) to `hits` of rays
-        `origins, dirs (n,3)` inside `medium (n,)`, which scattered at the
+        `origins, dirs (n,3)` inside `medium` over `outer (n,)`, which scattered at the
         faces `leaving (n,)` (MISS: they started at a lamp or the camera).
         Changes `hits` in place."""
         accel, n, f8, i8 = self.accel, len(hits.t), np.float64, np.int64
@@ -160,7 +160,8 @@ class Contacts:
             rows, owner, points, normal = rows[:count], owner[:count], points[:count], normal[:count]
             d = take(dirs, rows)
             found, _ = self._recast(owner, points, d, normal)
-            meets = true_rows(_meeting(found.obj, found.prim, owner, d, normal, accel.face_normal, accel.closed))
+            meets = true_rows(_meeting(found.obj, found.prim, owner, d, take(medium, rows), take(outer, rows), normal,
+                                       accel.face_normal, accel.closed, accel.body))
             rows, found = take(rows, meets), found.take(meets)
             found.t[:] = 0.0
             hits.replace(rows, found)
@@ -243,15 +244,20 @@ def meets1(d, found_normal, left_normal, found_closed, left_closed):
     return (dot1(d, left_normal) > 0.0) == (dot1(left_normal, found_normal) < 0.0)
 
 
-@kernel("b1[::1](i8[::1], i8[::1], i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1])")
-def _meeting(found_obj, found_prim, left, dirs, left_normal, face_normal, closed):
-    """(n,) bool: the re-cast found a surface that the ray leaving object `left (n,)` meets (meets1)."""
+@kernel("b1[::1](i8[::1], i8[::1], i8[::1], f8[:, ::1], i8[::1], i8[::1], f8[:, ::1], f8[:, ::1], b1[::1], "
+        "i8[::1])")
+def _meeting(found_obj, found_prim, left, dirs, medium, outer, left_normal, face_normal, closed, body):
+    """(n,) bool: the re-cast found a surface that the ray leaving object
+    `left (n,)` meets (meets1), and not closed glass that its media
+    `medium, outer (n,)` say it is in already (glass it crossed into
+    through a joined surface, tracing/joins.py)."""
     out = np.zeros(len(left), dtype=np.bool_)
     for i in range(len(left)):
         o = found_obj[i]
         if o != MISS:
+            inside = inside1(medium[i], o, body) | inside1(outer[i], o, body)
             out[i] = meets1(row(dirs, i), row(face_normal, found_prim[i]), row(left_normal, i), closed[o],
-                            closed[left[i]])
+                            closed[left[i]]) and not (closed[o] and inside)
     return out
 
 

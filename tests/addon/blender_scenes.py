@@ -1,6 +1,7 @@
 """Test scenes built with bpy: a diffuse plane, a smooth glass sphere, lamps and a camera."""
 
 import os
+import time
 
 import bpy
 import numpy as np
@@ -229,6 +230,17 @@ def pixels_of(name):
     return pixels.reshape(h, w, 4)[::-1]
 
 
+def warm_caustic_render() -> tuple[np.ndarray, np.ndarray, float]:
+    """(image, caustic pass (h,w,3) float64, seconds) of Render run twice:
+    the second, with kernels and BVH warm, is timed."""
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    clock = time.perf_counter()
+    assert bpy.ops.caustic.render() == {'FINISHED'}
+    seconds = time.perf_counter() - clock
+    return (pixels_of("Caustic Render")[..., :3].astype(np.float64),
+            pixels_of("Caustic Render Caustic")[..., :3].astype(np.float64), seconds)
+
+
 def cycles_render(folder, samples=512, specular_bounces=0) -> np.ndarray:
     """(h, w, 4) float64 RGBA, row 0 at the top: the scene rendered by Cycles
     on the CPU with no diffuse bounces (direct light only, what a Whitted eye
@@ -244,6 +256,25 @@ def cycles_render(folder, samples=512, specular_bounces=0) -> np.ndarray:
     if hasattr(cycles, "use_adaptive_sampling"):
         cycles.use_adaptive_sampling = False
     return rendered_pixels(folder)
+
+
+def cycles_caustics(folder, samples: int, seed: int) -> np.ndarray:
+    """(h, w, 3) float64 RGB, row 0 at the top: the scene rendered by Cycles
+    on the CPU with what a caustic needs, one diffuse bounce (the floor's
+    light through glass), 8 glossy and transmission bounces, refractive and
+    reflective caustics on and no clamp, box-filtered over each pixel,
+    neither denoised nor adaptive."""
+    scene = bpy.context.scene
+    scene.render.engine = 'CYCLES'
+    settings = scene.cycles
+    settings.device, settings.samples, settings.seed, settings.use_denoising = 'CPU', samples, seed, False
+    settings.max_bounces, settings.diffuse_bounces = 9, 1
+    settings.glossy_bounces = settings.transmission_bounces = 8
+    settings.caustics_refractive = settings.caustics_reflective = True
+    settings.sample_clamp_indirect, settings.blur_glossy = 0.0, 0.0
+    settings.pixel_filter_type, settings.filter_width = 'BOX', 1.0
+    settings.use_adaptive_sampling = False
+    return rendered_pixels(folder)[..., :3]
 
 
 def rendered_pixels(folder) -> np.ndarray:

@@ -221,7 +221,7 @@ def follow(accel: Accelerator, materials: Materials, origins: np.ndarray, dirs: 
         paths.fate[alive[~glass]] = "landed"
         alive, points, dirs, hits = alive[glass], points[glass], dirs[glass], hits.select(glass)
 
-        surface = orient(accel, hits, dirs, materials, paths.medium[alive])
+        surface = orient(accel, hits, dirs, materials, paths.medium[alive], np.full(len(alive), MISS))
         dirs, crossed, _ = scatter(surface, dirs, hash_uniform(alive + 1, 2 * depth, seed) < surface.fresnel)
         inside = paths.medium[alive] != MISS
         paths.double_entries[alive] += surface.entering & inside
@@ -380,7 +380,7 @@ def test_scatter_with_shading_normals_tilted_against_the_geometry(tilt, azimuth,
 
     points = np.stack([-1 + 2 * u + v, -1 + 2 * v, np.zeros(m)], axis=1)  # anywhere on the sheet
     hits = Hits(np.ones(m), np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64), u, v, points)
-    surface = orient(accel, hits, d, materials, np.full(m, MISS))
+    surface = orient(accel, hits, d, materials, np.full(m, MISS), np.full(m, MISS))
     assert np.all(dot(d, surface.facing) < 0.0)
     assert np.all(dot(d, surface.shading) < 0.0)
     assert np.all((surface.fresnel >= 0.0) & (surface.fresnel <= 1.0))
