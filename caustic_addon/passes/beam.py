@@ -70,7 +70,7 @@ from .beam_grid import Cells, LandingIndex, coherent_triangles, crack_free_trian
 from .bounce import facets, on_maps, split, trace
 from .interface import Interface
 from .differentials import landing_differentials
-from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
+from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_media
 from .paths import MIN_BRANCH_WEIGHT, Paths, relative_floor
 from .photon import FACET_STREAM, photon_jobs
 
@@ -207,17 +207,17 @@ def _throughputs(weight, floor, out):
 
 def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, IlluminationMap], origins: np.ndarray,
                 dirs: np.ndarray, weight: np.ndarray, vertex: np.ndarray, bands: np.ndarray, max_depth: int,
-                start_medium: int = MISS, seed: int = 0,
+                start_media: tuple[int, int] = (MISS, MISS), seed: int = 0,
                 differentials: Optional[tuple[np.ndarray, np.ndarray]] = None) -> Landings:
     """Follow every branch of the vertex paths `vertex (n,)`, starting
-    inside object `start_medium` (MISS: in air), until it lands on a
+    inside the objects `start_media` (Paths.start), until it lands on a
     receiver (after at least one specular event), leaves, or fades below
     MIN_BRANCH_WEIGHT. Dielectrics refract with their IOR in each path's
     wavelength band `bands (n,)`; rough surfaces scatter by random numbers of `seed`. The paths
     carry `differentials` (d_origins, d_dirs (n,2,3)) through their bounces
     where given (their landings' d_xy)."""
     tracer = BeamTracer(accel, materials, maps, seed)
-    paths = Paths.start(origins, dirs, weight, vertex, start_medium, relative_floor(weight), bands, family=True)
+    paths = Paths.start(origins, dirs, weight, vertex, start_media, relative_floor(weight), bands, family=True)
     if differentials is not None:
         paths = replace(paths, d_origins=differentials[0].astype(np.float32),
                         d_dirs=differentials[1].astype(np.float32))
@@ -226,12 +226,12 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
 
 
 def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: Accelerator, materials: Materials,
-               maps: dict[int, IlluminationMap], max_depth: int, start_medium: int, levels: int,
+               maps: dict[int, IlluminationMap], max_depth: int, start_media: tuple[int, int], levels: int,
                bands: np.ndarray, seed: int) -> JobResult:
     """Trace grid rows [first_row, end_row) of `sources`, grids of one size
     traced as one batch (the points of a lamp with a size, say, and each
     point's grid once per wavelength band), `sources[k]` in wavelength band
-    `bands[k]`, whose paths start inside object `start_medium`,
+    `bands[k]`, whose paths start inside the objects `start_media`,
     splitting cells where their paths diverge (`levels` times at most), and
     turn the landed paths into beams (coherent triangles) and fallback
     photons. The lamp rays are the grid points (the last row is the next
@@ -255,7 +255,7 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
         differentials = None if not spreading else tuple(np.concatenate(parts) for parts in zip(*(
             source.differentials(d) for source, (_, d, _) in zip(sources, rays))))
         landed = trace_paths(accel, materials, maps, origins, dirs, weight, vertex[order], band, max_depth,
-                             start_medium, seed, differentials)
+                             start_media, seed, differentials)
         if spreading and landed.d_xy is not None:
             # per unit along the cell's axes, to each of its corners
             landed.d_xy = np.einsum("nkj,njc->nkc", np.take(cell_corners, landed.vertex // keys, axis=0),
@@ -619,11 +619,11 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
     lamps, phases, cells = beam_lamps(beamed, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
                                       min(imap.cell for imap in maps.values()), band_rays)
     sources = beam_sources(lamps, targets, scene_sphere, settings.energy, band_rays, phases, cells)
-    stacks: dict[tuple[int, int], list[BeamSource]] = {}
+    stacks: dict[tuple[int, tuple[int, int]], list[BeamSource]] = {}
     for source in sources:
-        stacks.setdefault((source.grid, lamp_medium(accel, source.light)), []).append(source)
+        stacks.setdefault((source.grid, lamp_media(accel, source.light)), []).append(source)
     jobs = []
-    for (grid, medium), stack in stacks.items():
+    for (grid, media), stack in stacks.items():
         bands = np.repeat(np.arange(count), len(stack))
         stack = stack * count
         # GRID_BANDS bands of rows, of at most chunk_size / BAND_SHARE points
@@ -634,7 +634,7 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
         # size are traced together
         rows = max(1, min(settings.chunk_size // (BAND_SHARE * grid * len(stack)), -(-(grid - 1) // GRID_BANDS)))
         jobs += [partial(band_beams, stack, first, min(first + rows + 1, grid), accel, materials, maps,
-                         settings.max_depth, medium, settings.beam_refinement, bands, settings.seed)
+                         settings.max_depth, media, settings.beam_refinement, bands, settings.seed)
                  for first in range(0, grid - 1, rows)]
     # bands of rows spread over the grids, both ends first, in any first part
     # of the jobs: the maps lay their layers out from the first beams they get

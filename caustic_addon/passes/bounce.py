@@ -122,8 +122,7 @@ def _oriented(prim, u, v, obj, dirs, medium, outer, band, face_normal, corner_no
         face = row(face_normal, prim[i])
         entered, over, under, real = crossing1(medium[i], outer[i], o, dot1(d, face) < 0.0, closed, body)
         f, s = oriented1(d, face, shading_normal1(corner_normal, face_normal, prim[i], u[i], v[i]))
-        e = index_of1(ior, medium[i] if entered else o, band[i]) / index_of1(ior, over if not entered else o,
-                                                                          band[i])
+        e = index_of1(ior, medium[i] if entered else o, band[i]) / index_of1(ior, over, band[i])
         set_row(facing, i, f)
         set_row(shading, i, s)
         entering[i], beyond[i], beneath[i] = entered, over, under

@@ -393,8 +393,8 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     Returns the pass buffers and the holdout's, each (pixels, 3) float32."""
     cam = scene.camera
     pixels = cam.pixx * cam.pixy
-    camera_medium = int(accel.medium_at(cam.position[None])[0])
-    seen = camera_radiance_scale(materials, camera_medium)
+    camera_media = tuple(int(m[0]) for m in accel.media_at(cam.position[None]))
+    seen = camera_radiance_scale(materials, camera_media[0])
     environment = Environment(scene.world)
     sky_paths = None
     if materials.specular_surface.any() and not sky.is_black:
@@ -418,7 +418,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
             weight = np.full((len(sample), 3), seen / spp)
             tracer = EyeTracer(accel, scene, materials, maps, environment, sky_paths, settings, pixel_list[local],
                                spp, holdout, edge_pass)
-            trace(accel, materials, Paths.start(origins, dirs, weight, sample - first * spp, camera_medium,
+            trace(accel, materials, Paths.start(origins, dirs, weight, sample - first * spp, camera_media,
                                                 relative_floor(weight), camera=True), settings.max_depth, tracer)
             return first, tracer
 

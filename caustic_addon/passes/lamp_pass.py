@@ -52,12 +52,14 @@ def deliverer(maps: dict) -> tuple[LampPassStats, Callable[[JobResult], None]]:
     return stats, deliver
 
 
-def lamp_medium(accel: Accelerator, light: Light) -> int:
-    """The closed glass a lamp sits in, where its paths start; MISS for a
-    sun (its paths start far upstream) or a lamp in air."""
+def lamp_media(accel: Accelerator, light: Light) -> tuple[int, int]:
+    """(medium, outer): the closed glass a lamp sits in, where its paths
+    start, and the one around that (Accelerator.media_at); MISS for a sun
+    (its paths start far upstream) or a lamp in air."""
     if isinstance(light, SunLight):
-        return MISS
-    return int(accel.medium_at(light.position[None])[0])
+        return MISS, MISS
+    medium, outer = accel.media_at(light.position[None])
+    return int(medium[0]), int(outer[0])
 
 
 def lamps_in_glass(scene: Scene, accel: Accelerator) -> list[str]:
@@ -67,7 +69,7 @@ def lamps_in_glass(scene: Scene, accel: Accelerator) -> list[str]:
     for light in scene.lights:
         if isinstance(light, MeshLight):
             continue
-        medium = lamp_medium(accel, light)
+        medium, _ = lamp_media(accel, light)
         if medium != MISS and scene.objects[medium].is_transparent:
             warnings.append(f"light '{light.name}' is inside '{scene.objects[medium].body_name}': what is outside "
                             "gets its light only through the glass, as caustics")

@@ -76,13 +76,14 @@ class Paths:
         return len(self.ids)
 
     @staticmethod
-    def start(origins: np.ndarray, dirs: np.ndarray, weight: np.ndarray, ids: np.ndarray, medium: int,
+    def start(origins: np.ndarray, dirs: np.ndarray, weight: np.ndarray, ids: np.ndarray, media: tuple[int, int],
               floor: np.ndarray, band: Optional[np.ndarray] = None, family: bool = False,
               camera: bool = False) -> "Paths":
         """Paths leaving a lamp or, as CAMERA rays if `camera`, the camera,
-        from inside object `medium` (MISS: in air), with no specular event yet."""
+        from inside the objects `media` (medium, outer; MISS: in air), with
+        no specular event yet."""
         n = len(ids)
-        return Paths(origins, dirs, weight, np.full(n, medium, dtype=np.int64), np.full(n, MISS, dtype=np.int64),
+        return Paths(origins, dirs, weight, np.full(n, media[0], dtype=np.int64), np.full(n, media[1], dtype=np.int64),
                      ids, floor,
                      np.zeros(n, dtype=bool), band, np.zeros(n, dtype=np.uint64) if family else None,
                      np.full(n, CAMERA, dtype=np.int8) if camera else None, np.full(n, MISS, dtype=np.int64),

@@ -44,7 +44,7 @@ from ..util.rows import contiguous, take
 from ..util.vectors import DIVISION_FLOOR, max_channel, max_channel1, row, set_row
 from .bounce import crossed_media1, facets, multiscatter, on_maps, scatter, scatter1, trace, transmission1
 from .interface import INTERFACE_TYPES, Interface
-from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_medium
+from .lamp_pass import JobResult, LampPassStats, deliverer, lamp_media
 from .paths import PATH_TYPES, Paths
 
 # Below this fraction of its starting flux (max channel), a photon plays
@@ -171,15 +171,15 @@ def _photon_bounces(dirs, weight, medium, outer, floor, draws, obj, points, faci
 
 
 def trace_photons(accel: Accelerator, materials: Materials, maps: dict, photons: Photons, max_depth: int,
-                  seed: int, start_medium: int = MISS) -> JobResult:
-    """Trace one batch of photons, which start inside object `start_medium`
-    (MISS: in air), to where they land on `maps` (receiver object index ->
+                  seed: int, start_media: tuple[int, int] = (MISS, MISS)) -> JobResult:
+    """Trace one batch of photons, which start inside the objects
+    `start_media` (Paths.start), to where they land on `maps` (receiver object index ->
     map). Each carries its wavelength band's share of the flux, K times the
     band's weight."""
     band = photon_band(photons.ids, materials.band_count, seed)
     flux = photons.flux * (materials.band_count * materials.band_weights[band])
     tracer = PhotonTracer(accel, materials, maps, seed)
-    paths = Paths.start(photons.origins, photons.dirs, flux, photons.ids, start_medium,
+    paths = Paths.start(photons.origins, photons.dirs, flux, photons.ids, start_media,
                         ROULETTE_FRACTION * max_channel(flux), band)
     trace(accel, materials, paths, max_depth, tracer)
     deposits = tracer.deposits
@@ -191,15 +191,15 @@ def photon_jobs(emitters: list[Emitter], accel: Accelerator, materials: Material
     """Jobs for util.parallel.run_chunks that trace the emitters' photons,
     chunk by chunk, each from the medium its lamp is in."""
 
-    def job(emitter: Emitter, start: int, stop: int, medium: int) -> JobResult:
+    def job(emitter: Emitter, start: int, stop: int, media: tuple[int, int]) -> JobResult:
         return trace_photons(accel, materials, maps, emitter.emit(start, stop), settings.max_depth, settings.seed,
-                             medium)
+                             media)
 
     jobs = []
     for emitter in emitters:
         size = chunk_size(emitter.count, settings.chunk_size, settings.threads)
-        medium = lamp_medium(accel, emitter.light)
-        jobs += [partial(job, emitter, start, min(start + size, emitter.count), medium)
+        media = lamp_media(accel, emitter.light)
+        jobs += [partial(job, emitter, start, min(start + size, emitter.count), media)
                  for start in range(0, emitter.count, size)]
     return jobs
 

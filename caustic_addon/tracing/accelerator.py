@@ -304,11 +304,24 @@ class Accelerator:
             self.contacts.resolve(hits, origins, dirs, medium, outer, leaving)
         return hits
 
-    def medium_at(self, points: np.ndarray) -> np.ndarray:
+    def media_at(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(medium, outer) (n,) each: the innermost closed object each of
+        `points (n,3)` is inside (medium_at), and the innermost one of
+        another body around that (a lamp in a glass ball inside water),
+        MISS where none (passes/paths.Paths)."""
+        medium, outer = self.medium_at(points), np.full(len(points), MISS, dtype=np.int64)
+        for body in np.unique(np.take(self.body, medium[medium != MISS])):
+            rows = np.flatnonzero((medium != MISS) & (np.take(self.body, np.maximum(medium, 0)) == body))
+            others = self.view_of(np.flatnonzero(self.body != body))
+            outer[rows] = self.medium_at(points[rows], others)
+        return medium, outer
+
+    def medium_at(self, points: np.ndarray, view: _View | None = None) -> np.ndarray:
         """(n,) the closed object each of `points (n,3)` is inside, MISS if
         none: along each of three fixed directions, the first closed mesh
         met from behind (its inside) holds the point; the three vote by
-        body, so a ray through a crack between triangles cannot decide alone."""
+        body, so a ray through a crack between triangles cannot decide
+        alone. Among the objects of `view` (None: all)."""
         if not self.closed.any():
             return np.full(len(points), MISS, dtype=np.int64)
         votes = []
@@ -318,7 +331,7 @@ class Accelerator:
             found = np.full(len(points), MISS, dtype=np.int64)
             open_hit = np.arange(len(points))
             for _ in range(_MAX_SKIPS):
-                hits = self._closest(origins[open_hit], dirs[open_hit])
+                hits = self._closest(origins[open_hit], dirs[open_hit], view)
                 closed = hits.hit.copy()
                 closed[closed] = self.closed[hits.obj[closed]]
                 behind = np.einsum("ij,ij->i", dirs[open_hit], self.face_normal[np.maximum(hits.prim, 0)]) > 0.0

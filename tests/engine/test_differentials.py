@@ -47,8 +47,8 @@ def _arrivals(scene, pixels, offsets):
     origins, dirs = eye_rays(scene.camera, pixels, offsets)
     weight = np.ones((len(pixels), 3))
     tracer = _Arrivals(accel, materials, scene.camera)
-    paths = Paths.start(origins, dirs, weight, np.arange(len(pixels)), MISS, relative_floor(weight), family=True,
-                        camera=True)
+    paths = Paths.start(origins, dirs, weight, np.arange(len(pixels)), (MISS, MISS), relative_floor(weight),
+                        family=True, camera=True)
     trace(accel, materials, paths, 8, tracer)
     return tracer.found
 

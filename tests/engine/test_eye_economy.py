@@ -82,7 +82,7 @@ def test_a_pixels_faint_reflections_go_on_in_a_stratified_count():
     origins = np.column_stack([np.zeros((n, 2)), np.ones(n)])
     dirs = np.tile([0.0, 0.0, -1.0], (n, 1))
     weight = np.ones((n, 3))
-    paths = Paths.start(origins, dirs, weight, np.arange(n), MISS, relative_floor(weight), camera=True)
+    paths = Paths.start(origins, dirs, weight, np.arange(n), (MISS, MISS), relative_floor(weight), camera=True)
     hits = accel.intersect(paths.origins, paths.dirs, paths.medium, paths.outer, paths.kind, paths.surface)
     surface = orient(accel, hits, paths.dirs, materials, paths.medium, paths.outer)
     fresnel = ((1.5 - 1.0) / (1.5 + 1.0)) ** 2

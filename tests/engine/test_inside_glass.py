@@ -68,6 +68,31 @@ def test_a_lamp_inside_absorbing_glass_is_dimmed_by_the_radius_it_crosses(densit
             in dimmed.warnings)
 
 
+def facet_radii(radius: float, segments: int) -> tuple[float, float]:
+    """(nearest, farthest): the least distance of a face's plane from the
+    centre of a faceted sphere of `radius` and `segments`, and its vertices'."""
+    mesh = shapes.uv_sphere(radius, CENTER, segments, segments // 2)
+    normals, area = triangle_normals(mesh.corners)
+    return float(np.abs(np.einsum("ij,ij->i", normals, mesh.corners[:, 0] - CENTER))[area > 0].min()), radius
+
+
+def test_a_lamp_in_a_ball_inside_absorbing_glass_is_dimmed_by_the_glass_outside_the_ball():
+    """A clear, index-matched ball of radius 0.3 around the lamp, inside the
+    absorbing sphere: the photons leave the ball back into the sphere (the
+    media nest, Accelerator.media_at), which dims them by exp(-sigma (R -
+    r)). Before, they left the ball into the air and passed the sphere's
+    face as one already crossed: nothing dimmed them."""
+    camera = Camera.look_at((0.0, -6.0, 4.0), (0.0, 0.0, 0.0), pixx=8, pixy=8)
+    ball = Object("Ball", shapes.uv_sphere(0.3, CENTER, 32, 16), Dielectric(1.0))
+    clear = render(absorbing_sphere_scene(0.0, camera), quick(lamp_rays=50_000, density="splat"))
+    scene = absorbing_sphere_scene(SIGMA, camera)
+    dimmed = render(Scene(scene.objects + [ball], scene.lights, camera), quick(lamp_rays=50_000, density="splat"))
+    ratio = np.array(dimmed.stats["flux_landed_w"]) / np.array(clear.stats["flux_landed_w"])
+    (outer_near, outer_far), (inner_near, inner_far) = facet_radii(RADIUS, SEGMENTS), facet_radii(0.3, 32)
+    low, high = math.exp(-SIGMA * (outer_far - inner_near)), math.exp(-SIGMA * (outer_near - inner_far))
+    assert np.all((ratio > low) & (ratio < high)), (ratio, low, high)
+
+
 def test_a_camera_inside_absorbing_glass_sees_through_the_radius_it_crosses():
     """A camera at the centre of the same sphere, looking down at floor that
     a low lamp outside lights directly: each eye ray crosses r of glass
