@@ -68,11 +68,12 @@ SPECULAR_BOUNCES = 24
 SUN_ANGLE = 15.0
 
 
-def lathe(name: str, profile: list[tuple[float, float]], material) -> bpy.types.Object:
+def lathe(name: str, profile: list[tuple[float, float]], material, sharp_edges: bool = True) -> bpy.types.Object:
     """A mesh turned about Z from `profile` [(r, z)] (r 0: a pole), its
     faces' normals on the right of the profile's direction (a profile that
     runs counterclockwise round a solid in the (r, z) half-plane faces out),
-    smooth but for edges sharper than 30 degrees."""
+    shaded smooth, but for edges sharper than 30 degrees where
+    `sharp_edges`."""
     rings, verts = [], []
     for r, z in profile:
         if r == 0.0:
@@ -96,16 +97,17 @@ def lathe(name: str, profile: list[tuple[float, float]], material) -> bpy.types.
     mesh.from_pydata(verts, [], faces)
     mesh.materials.append(material)
     mesh.shade_smooth()
-    mesh.set_sharp_from_angle(angle=math.radians(30.0))
+    if sharp_edges:
+        mesh.set_sharp_from_angle(angle=math.radians(30.0))
     obj = bpy.data.objects.new(name, mesh)
     bpy.context.scene.collection.objects.link(obj)
     return obj
 
 
-def tumbler_scene(water: tuple[float, float] | None) -> None:
+def tumbler_scene(water: tuple[float, float] | None, empty: bool = False, sharp_edges: bool = True) -> None:
     """The floor, the sun and the camera; the tumbler and its water as
     closed meshes, the water's wall radius and bottom height `water`, or,
-    where None, Cycles' three surfaces."""
+    where None, Cycles' three surfaces; no water where `empty`."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scenes.add_plane(10.0, scenes.diffuse_material())
     if water is None:
@@ -116,9 +118,10 @@ def tumbler_scene(water: tuple[float, float] | None) -> None:
     else:
         radius, bottom = water
         lathe("Glass", [(0.0, 0.0), (OUTER, 0.0), (OUTER, HEIGHT), (INNER, HEIGHT), (INNER, BASE), (0.0, BASE)],
-              scenes.glass_material("Glass", GLASS))
-        lathe("Water", [(0.0, bottom), (radius, bottom), (radius, LEVEL), (0.0, LEVEL)],
-              scenes.glass_material("Water", WATER))
+              scenes.glass_material("Glass", GLASS), sharp_edges)
+        if not empty:
+            lathe("Water", [(0.0, bottom), (radius, bottom), (radius, LEVEL), (0.0, LEVEL)],
+                  scenes.glass_material("Water", WATER), sharp_edges)
     light = bpy.data.lights.new("Sun", 'SUN')
     light.energy, light.angle = 3.0, math.radians(SUN_ANGLE)
     sun = bpy.data.objects.new("Sun", light)

@@ -315,6 +315,13 @@ def liquid_glass(d: dict) -> Table:
             f"caustic's mean ({d['caustic_pixels']} pixels)", "its relative L2 error", "time"], rows
 
 
+def smooth_edges(d: dict) -> Table:
+    rows = [[name, f"x{f['glass_mean_ratio']:.3f}", percent(f["glass_relative_l2"]), seconds(f["seconds"]),
+             seconds(f["cycles_seconds"])] for name, f in d["shadings"].items()]
+    return ["the tumbler's shading", "the add-on's mean over the glass against Cycles'", "relative L2 error there",
+            "the add-on's time", f"Cycles' ({d['cycles_samples']} samples)"], rows
+
+
 def allocator(d: dict) -> Table:
     names = {"default": "glibc's default", "engine": "the engine's setting"}
     rows = [[blender, names.get(setting, setting), seconds(f["seconds_per_frame"]), seconds(f["cpu_seconds_per_frame"]),
@@ -449,7 +456,7 @@ FORMATTERS: dict[str, Callable[[dict], Table]] = {
     "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass, "through_glass": through_glass,
     "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "world_paths": world_paths,
     "flicker": flicker, "gallery": gallery, "glints": glints, "glossy_floor": glossy_floor,
-    "emitters": emitters, "liquid_glass": liquid_glass,
+    "emitters": emitters, "liquid_glass": liquid_glass, "smooth_edges": smooth_edges,
 }
 
 # (group, [(results name, title)]), in the README's order
@@ -479,6 +486,7 @@ SECTIONS = [
         ("glossy_floor", "A glossy floor under a large light, against Cycles"),
         ("emitters", "A softbox built as an emitting mesh, against Cycles"),
         ("liquid_glass", "Water in a glass tumbler, against Cycles"),
+        ("smooth_edges", "Glass shaded smooth across its edges, against Cycles"),
         ("rough_glass", "Rough glass, against Cycles"),
         ("through_glass", "The caustic seen through glass"),
         ("dispersion", "Dispersion and coloured glass"),

@@ -16,13 +16,41 @@ import math
 import numpy as np
 
 from ..util.jit import inline, kernel
-from ..util.vectors import dot1, float_rows, row, set_row, sum1
+from ..util.vectors import dot1, float_rows, row, scale1, set_row, sum1
 
 
 @inline
 def reflect1(d, n):
     """Mirror reflection r = d - 2 (d.n) n (the paper's eq. 3, after De Greve 2006)."""
     return sum1(1.0, d, -2.0 * dot1(d, n), n)
+
+
+@inline
+def valid_reflection_normal1(ng, i, n):
+    """The shading normal `n` raised toward the geometric normal `ng` just
+    enough that the mirror reflection of `i` (unit, toward where the ray
+    came from, i.ng >= 0) about it leaves the surface at least min(0.9
+    i.ng, 0.01) above it; `n` itself where it already does. Cycles'
+    ensure_valid_specular_reflection (kernel/closure/bsdf_util.h), which it
+    applies to a glass's, a mirror's and a metal's normal under the
+    material's Bump Map Correction (on by default): in the frame of ng and
+    the part of n across it, N' = (x, 0, z) with 2 (N'.i) z - i.z = t gives
+    4 a z^4 - 2 b z^2 + c = 0, a = i.x^2 + i.z^2, b = 2 (a + i.z t),
+    c = (i.z + t)^2, of which one root solves the unsquared equation."""
+    iz = dot1(i, ng)
+    threshold = min(0.9 * iz, 0.01)
+    if dot1(ng, sum1(2.0 * dot1(n, i), n, -1.0, i)) >= threshold:
+        return n
+    across = sum1(1.0, n, -dot1(n, ng), ng)
+    length = math.sqrt(dot1(across, across))
+    x_axis = scale1(1.0 / length, across) if length > 0.0 else n
+    ix = dot1(i, x_axis)
+    a = ix * ix + iz * iz
+    b = 2.0 * (a + iz * threshold)
+    c = (threshold + iz) * (threshold + iz)
+    root = math.sqrt(max(b * b - 4.0 * a * c, 0.0))
+    nz2 = 0.25 * (b + root) / a if ix < 0.0 else 0.25 * (b - root) / a
+    return sum1(math.sqrt(max(1.0 - nz2, 0.0)), x_axis, math.sqrt(max(nz2, 0.0)), ng)
 
 
 @inline

@@ -32,7 +32,8 @@ import numpy as np
 from ..optics.media import beer_lambert1
 from ..optics.microfacet import branch_pdf1, shadowing_weight1, visible_normal_about1
 from ..optics.multiscatter import albedo_at1, multiscatter_factor1
-from ..optics.specular import basic_irradiance_scale, fresnel_dielectric1, radiance_scale1, reflect1, refract1
+from ..optics.specular import (basic_irradiance_scale, fresnel_dielectric1, radiance_scale1, reflect1, refract1,
+                               valid_reflection_normal1)
 from ..sampling.hash import hash_uniform1
 from ..sampling.warps import concentric_disc1, orthonormal_basis1
 from ..scene.material_table import MATERIAL_TYPES, Materials
@@ -58,12 +59,14 @@ _ESCAPED, _ARRIVED, _SPECULAR = 0, 1, 2
 @inline
 def oriented1(d, face, shading):
     """(facing, shading): the geometric normal `face` turned against the
-    ray `d`, and the shading normal put on its side; where interpolation
-    tips it past the ray (d.n_s >= 0), the geometric normal instead."""
+    ray `d`, and the shading normal put on its side and raised toward it
+    where its mirror reflection of the ray would not leave the surface
+    (optics.specular.valid_reflection_normal1), as Cycles sets up a glass's,
+    a mirror's or a metal's normal."""
     facing = face if dot1(d, face) < 0.0 else scale1(-1.0, face)
     if dot1(shading, facing) < 0.0:
         shading = scale1(-1.0, shading)
-    return facing, (facing if dot1(d, shading) >= 0.0 else shading)
+    return facing, valid_reflection_normal1(facing, scale1(-1.0, d), shading)
 
 
 @inline
@@ -288,25 +291,19 @@ def scatter1(d, scattering, facing, shading, eta, alpha, mirror):
     reflection if `mirror`, else Snell refraction (total internal
     reflection reflects), about the `scattering` normal; `out` unit.
 
-    A smooth surface (alpha 0) keeps all the weight. A shading normal can
-    send a reflected ray into the surface or a refracted one back out (the
-    wrong side of the geometric normal `facing`); those rays are redone
-    about the geometric normal, which cannot. A rough surface keeps G2/G1
+    A smooth surface (alpha 0) keeps all the weight, a rough one G2/G1
     (optics.microfacet.shadowing_weight1; the multiscatter factor is the
-    caller's), and nothing where the ray leaves on the wrong side of the
-    geometric or the shading normal: Cycles ends those paths."""
+    caller's). A ray that leaves on the wrong side of the geometric normal
+    `facing` or of the shading normal keeps nothing: a shading normal can
+    send a refracted ray back out, or a reflection into the surface, and
+    Cycles ends those paths (bsdf_microfacet_sample). Smooth shading across
+    a glass's hard edges then darkens it as it does in Cycles."""
     out, mirror = turned1(d, scattering, eta, mirror)
-    side = dot1(out, facing)
-    wrong = side <= 0.0 if mirror else side >= 0.0
-    kept = 1.0
-    if alpha > 0.0:
-        macro = dot1(out, shading)
-        if wrong or (macro <= 0.0 if mirror else macro >= 0.0):
-            kept = 0.0
-        else:
-            kept = shadowing_weight1(-dot1(d, shading), abs(macro), alpha)
-    elif wrong:
-        out, mirror = turned1(d, facing, eta, mirror)
+    side, macro = dot1(out, facing), dot1(out, shading)
+    wrong = (side <= 0.0 or macro <= 0.0) if mirror else (side >= 0.0 or macro >= 0.0)
+    kept = 0.0 if wrong else 1.0
+    if alpha > 0.0 and not wrong:
+        kept = shadowing_weight1(-dot1(d, shading), abs(macro), alpha)
     return normalize1(out), not mirror, kept
 
 

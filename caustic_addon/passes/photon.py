@@ -153,6 +153,8 @@ def _photon_bounces(dirs, weight, medium, outer, floor, draws, obj, points, faci
         mirror = hash_uniform1(draws[i], reflect_key) < fresnel[i]
         out, crossed, kept = scatter1(d, row(scattering, i), row(facing, i), row(shading, i), eta[i], alpha[i],
                                       mirror)
+        if kept == 0.0:
+            continue
         c = transmission1(transmission_tint, o, joined[i]) if crossed else row(reflection_tint, o)
         s = radiance_scale1(eta[i]) if radiance and crossed else 1.0
         w = (weight[i, 0] * (c[0] * s), weight[i, 1] * (c[1] * s), weight[i, 2] * (c[2] * s))

@@ -258,17 +258,18 @@ def cycles_render(folder, samples=512, specular_bounces=0) -> np.ndarray:
     return rendered_pixels(folder)
 
 
-def cycles_caustics(folder, samples: int, seed: int, specular_bounces: int = 8) -> np.ndarray:
+def cycles_caustics(folder, samples: int, seed: int, specular_bounces: int = 8, diffuse_bounces: int = 1) -> np.ndarray:
     """(h, w, 3) float64 RGB, row 0 at the top: the scene rendered by Cycles
     on the CPU with what a caustic needs, one diffuse bounce (the floor's
-    light through glass), `specular_bounces` glossy and transmission
-    bounces, refractive and reflective caustics on and no clamp,
-    box-filtered over each pixel, neither denoised nor adaptive."""
+    light through glass; 0: direct light only, which Cycles converges on),
+    `specular_bounces` glossy and transmission bounces, refractive and
+    reflective caustics on and no clamp, box-filtered over each pixel,
+    neither denoised nor adaptive."""
     scene = bpy.context.scene
     scene.render.engine = 'CYCLES'
     settings = scene.cycles
     settings.device, settings.samples, settings.seed, settings.use_denoising = 'CPU', samples, seed, False
-    settings.max_bounces, settings.diffuse_bounces = specular_bounces + 1, 1
+    settings.max_bounces, settings.diffuse_bounces = specular_bounces + diffuse_bounces, diffuse_bounces
     settings.glossy_bounces = settings.transmission_bounces = specular_bounces
     settings.caustics_refractive = settings.caustics_reflective = True
     settings.sample_clamp_indirect, settings.blur_glossy = 0.0, 0.0

@@ -5,7 +5,8 @@ import math
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
-from caustic_addon.optics.specular import fresnel_dielectric, reflect, refract
+from caustic_addon.optics.specular import fresnel_dielectric, reflect, refract, valid_reflection_normal1
+from caustic_addon.passes.bounce import scatter1
 from caustic_addon.util.vectors import dot
 
 UP = np.array([[0.0, 0.0, 1.0]])
@@ -82,3 +83,48 @@ def test_fresnel_is_a_probability_and_symmetric(cos_i, eta):
         cos_t = math.sqrt(1.0 - sin2_t)
         back = fresnel_dielectric(np.array([cos_t]), 1.0 / eta)[0]
         assert abs(f - back) < 1e-9
+
+
+def unit(v) -> np.ndarray:
+    v = np.asarray(v, dtype=np.float64)
+    return v / np.linalg.norm(v)
+
+
+@settings(max_examples=300, deadline=None)
+@given(theta=st.floats(0.01, math.pi / 2 - 0.01), phi=st.floats(0.0, 2 * math.pi),
+       tilt=st.floats(0.0, 1.4), azimuth=st.floats(0.0, 2 * math.pi))
+def test_a_raised_normal_reflects_the_ray_off_the_surface_as_cycles_requires(theta, phi, tilt, azimuth):
+    """valid_reflection_normal1 against its definition (Cycles'
+    ensure_valid_specular_reflection): the mirror reflection of the ray
+    about the normal it returns leaves the surface at least min(0.9 cos,
+    0.01) above it; the normal is the shading one where that already holds,
+    and otherwise lies between it and the geometric normal."""
+    ng = np.array([0.0, 0.0, 1.0])
+    i = -incoming(theta, phi)[0]
+    n = np.array([math.sin(tilt) * math.cos(azimuth), math.sin(tilt) * math.sin(azimuth), math.cos(tilt)])
+    raised = np.array(valid_reflection_normal1(tuple(ng), tuple(i), tuple(n)))
+    threshold = min(0.9 * i[2], 0.01)
+    assert abs(np.linalg.norm(raised) - 1.0) < 1e-9
+    reflected = 2.0 * raised.dot(i) * raised - i
+    assert reflected[2] >= threshold - 1e-7
+    if (2.0 * n.dot(i) * n - i)[2] >= threshold:
+        np.testing.assert_array_equal(raised, n)
+    else:
+        assert abs(np.linalg.det(np.stack([raised, n, ng]))) < 1e-9
+        assert raised[2] >= n[2] - 1e-12
+
+
+def test_a_ray_the_shading_normal_sends_to_the_wrong_side_ends():
+    """A ray inside smooth glass meets its face at 3 degrees, where the
+    shading normal leans 61 degrees off the face's: refracted out about it,
+    it turns back into the glass. Cycles ends such a path
+    (bsdf_microfacet_sample); scatter1 keeps nothing of it, and all of a
+    ray that the shading normal sends out."""
+    facing, eta = (0.0, 0.0, 1.0), 1.5
+    shading = (-math.sin(math.radians(61)), 0.0, math.cos(math.radians(61)))
+    grazing = (math.cos(math.radians(3)), 0.0, -math.sin(math.radians(3)))
+    out, crossed, kept = scatter1(grazing, shading, facing, shading, eta, 0.0, False)
+    assert crossed and out[2] > 0.0 and kept == 0.0
+    steep = (math.sin(math.radians(20)), 0.0, -math.cos(math.radians(20)))
+    out, crossed, kept = scatter1(steep, facing, facing, facing, eta, 0.0, False)
+    assert crossed and out[2] < 0.0 and kept == 1.0
