@@ -20,7 +20,7 @@ import weakref
 import numpy as np
 
 from ..util.rows import take
-from .contact import CONTACT_EPSILONS, _MIN_COSINE, _Subscene
+from .contact import CONTACT_EPSILONS, _recast_rays, _Subscene
 from .hits import MISS
 
 # The widest gap between two closed dielectrics that counts as none: this
@@ -67,10 +67,10 @@ class Joins:
             rows = np.flatnonzero(obj == index)
             if len(rows) == 0:
                 continue
-            d = take(dirs, rows)
-            across = np.abs(np.einsum("ij,ij->i", d, take(accel.face_normal, take(prim, rows))))
-            back = CONTACT_EPSILONS * accel.epsilon / np.maximum(across, _MIN_COSINE)
-            hits = scene.closest(take(points, rows) - back[:, None] * d, d, back + self.gap[index])
+            d, back, start = take(dirs, rows), np.empty(len(rows)), np.empty((len(rows), 3))
+            _recast_rays(take(points, rows), d, take(accel.face_normal, take(prim, rows)),
+                         CONTACT_EPSILONS * accel.epsilon, back, start)
+            hits = scene.closest(start, d, back + self.gap[index])
             front = hits.hit.copy()
             front[front] = np.einsum("ij,ij->i", d[front], take(accel.face_normal, hits.prim[front])) < 0.0
             found[rows[front]] = hits.obj[front]
