@@ -13,7 +13,8 @@ VENV := .venv
 python_of = $(if $(filter $(NEWEST),$(1)),$(PY313),$(PY311))
 venv_of = $(if $(filter $(NEWEST),$(1)),$(VENV),.venv-$(1))
 
-.PHONY: all venv demo test test-engine bench bench-mitsuba bench-report clean package $(addprefix test-,$(NEWEST) $(OLDER))
+.PHONY: all venv demo test test-engine bench bench-mitsuba bench-report clean package $(addprefix test-,$(NEWEST) $(OLDER)) \
+	$(foreach part,addon engine numpy,$(foreach v,$(NEWEST) $(OLDER),test-$(v)-$(part)))
 
 all: test
 
@@ -44,22 +45,35 @@ test-engine: venv
 
 # The engine's suite runs with the newest and the oldest Python and numpy
 # (5.3, 4.2); 4.5 shares 4.2's Python, so it runs the add-on's suite and the
-# engine's check of the numpy it ships. The slowest suite, 4.2's, starts first.
-test: venv package test-4.2 test-$(NEWEST) test-4.5
+# engine's check of the numpy it ships. Each Blender's suites run as parts
+# of their own, two at a time, each part's output kept whole (a part keeps
+# about 1.4 of the 2 cores busy); the longest parts start first, so that
+# both cores stay busy to the end.
+PARTS := 4.2-addon $(NEWEST)-addon 4.5-addon 4.2-engine $(NEWEST)-engine 4.5-numpy
+test: venv package $(addprefix test-,$(PARTS))
 
-# `make test` runs the Blenders' suites two at a time, each suite's output
-# kept whole: a suite keeps about 1.4 of the 2 cores busy.
 ifeq ($(MAKECMDGOALS),test)
 MAKEFLAGS += --jobs=2 --output-sync=target
 endif
 
 pytest_of = $(call venv_of,$(1))/bin/python -m pytest -c tests/pytest.ini
 
-# 4.5's two parts run in two pytest runs: the engine's tests and the
-# add-on's have helper modules of the same names.
-$(addprefix test-,$(NEWEST) $(OLDER)): test-%: venv package
-	@echo "== Blender $* =="
-	$(if $(filter 4.5,$*),$(call pytest_of,$*) tests/addon && $(call pytest_of,$*) tests/engine/test_shipped_numpy_api.py,$(call pytest_of,$*) tests)
+test-4.2 test-$(NEWEST): test-%: test-%-addon test-%-engine
+test-4.5: test-4.5-addon test-4.5-numpy
+
+# The engine's tests and the add-on's have helper modules of the same
+# names: each part is a pytest run of its own.
+$(foreach v,$(NEWEST) $(OLDER),test-$(v)-addon): test-%-addon: venv package
+	@echo "== Blender $*: the add-on =="
+	$(call pytest_of,$*) tests/addon
+
+$(foreach v,$(NEWEST) $(OLDER),test-$(v)-engine): test-%-engine: venv package
+	@echo "== Blender $*: the engine =="
+	$(call pytest_of,$*) tests/engine
+
+$(foreach v,$(NEWEST) $(OLDER),test-$(v)-numpy): test-%-numpy: venv package
+	@echo "== Blender $*: the engine on the numpy it ships =="
+	$(call pytest_of,$*) tests/engine/test_shipped_numpy_api.py
 
 # The extension: one zip per platform in dist/, each with the embreex, numba
 # and llvmlite wheels for Blender 4.2-5.0 (Python 3.11) and 5.1+ (Python 3.13).
@@ -75,7 +89,8 @@ BLENDER_EXT = $(VENV)/bin/python $(firstword $(wildcard $(VENV)/lib/python3.13/s
 
 package: venv
 	mkdir -p wheels dist
-	$(foreach python,$(VENV)/bin/python $(call venv_of,$(firstword $(OLDER)))/bin/python,$(python) packaging/ship_kernels.py compile kernels &&) true
+	$(VENV)/bin/python packaging/ship_kernels.py compile kernels & newest=$$!; \
+	  $(call venv_of,$(firstword $(OLDER)))/bin/python packaging/ship_kernels.py compile kernels && wait $$newest
 	for wheel in $(WHEELS); do test -f $$wheel || { \
 	  tags=$${wheel%.whl}; python=$$(echo $$tags | cut -d- -f3); platform=$${tags##*-}; \
 	  $(VENV)/bin/python -m pip download -q $$(basename $$wheel | cut -d- -f1)==$$(basename $$wheel | cut -d- -f2) \
