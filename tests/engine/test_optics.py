@@ -110,7 +110,7 @@ def test_a_raised_normal_reflects_the_ray_off_the_surface_as_cycles_requires(the
     if (2.0 * n.dot(i) * n - i)[2] >= threshold:
         np.testing.assert_array_equal(raised, n)
     else:
-        assert abs(np.linalg.det(np.stack([raised, n, ng]))) < 1e-9
+        assert abs(np.dot(raised, np.cross(n, ng))) < 1e-9
         assert raised[2] >= n[2] - 1e-12
 
 
