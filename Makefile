@@ -14,7 +14,7 @@ python_of = $(if $(filter $(NEWEST),$(1)),$(PY313),$(PY311))
 venv_of = $(if $(filter $(NEWEST),$(1)),$(VENV),.venv-$(1))
 
 .PHONY: all venv demo test test-engine bench bench-mitsuba bench-report clean package $(addprefix test-,$(NEWEST) $(OLDER)) \
-	$(foreach part,addon engine numpy,$(foreach v,$(NEWEST) $(OLDER),test-$(v)-$(part)))
+	$(foreach part,addon engine-a engine-b numpy,$(foreach v,$(NEWEST) $(OLDER),test-$(v)-$(part)))
 
 all: test
 
@@ -45,11 +45,15 @@ test-engine: venv
 
 # The engine's suite runs with the newest and the oldest Python and numpy
 # (5.3, 4.2); 4.5 shares 4.2's Python, so it runs the add-on's suite and the
-# engine's check of the numpy it ships. Each Blender's suites run as parts
-# of their own, two at a time, each part's output kept whole (a part keeps
-# about 1.4 of the 2 cores busy); the longest parts start first, so that
-# both cores stay busy to the end.
-PARTS := 4.2-addon $(NEWEST)-addon 4.5-addon 4.2-engine $(NEWEST)-engine 4.5-numpy
+# engine's check of the numpy it ships. The suites run as parts of about
+# five to ten minutes, two at a time, each part's output kept whole (a part
+# keeps about 1.4 of the 2 cores busy), the longest first, so that both
+# cores stay busy to the end: each Blender's add-on suite, and the engine's
+# in two halves of its test files.
+PARTS := 4.2-addon $(NEWEST)-addon 4.5-addon 4.2-engine-a 4.2-engine-b $(NEWEST)-engine-a $(NEWEST)-engine-b \
+	4.5-numpy
+ENGINE_A := $(sort $(wildcard tests/engine/test_[a-k]*.py))
+ENGINE_B := $(filter-out $(ENGINE_A),$(sort $(wildcard tests/engine/test_*.py)))
 test: venv package $(addprefix test-,$(PARTS))
 
 ifeq ($(MAKECMDGOALS),test)
@@ -57,21 +61,26 @@ MAKEFLAGS += --jobs=2 --output-sync=target
 endif
 
 pytest_of = $(call venv_of,$(1))/bin/python -m pytest -c tests/pytest.ini
+versions_of = $(foreach v,$(NEWEST) $(OLDER),test-$(v)-$(1))
 
-test-4.2 test-$(NEWEST): test-%: test-%-addon test-%-engine
+test-4.2 test-$(NEWEST): test-%: test-%-addon test-%-engine-a test-%-engine-b
 test-4.5: test-4.5-addon test-4.5-numpy
 
 # The engine's tests and the add-on's have helper modules of the same
 # names: each part is a pytest run of its own.
-$(foreach v,$(NEWEST) $(OLDER),test-$(v)-addon): test-%-addon: venv package
+$(call versions_of,addon): test-%-addon: venv package
 	@echo "== Blender $*: the add-on =="
 	$(call pytest_of,$*) tests/addon
 
-$(foreach v,$(NEWEST) $(OLDER),test-$(v)-engine): test-%-engine: venv package
-	@echo "== Blender $*: the engine =="
-	$(call pytest_of,$*) tests/engine
+$(call versions_of,engine-a): test-%-engine-a: venv package
+	@echo "== Blender $*: the engine, $(notdir $(firstword $(ENGINE_A))) to $(notdir $(lastword $(ENGINE_A))) =="
+	$(call pytest_of,$*) $(ENGINE_A)
 
-$(foreach v,$(NEWEST) $(OLDER),test-$(v)-numpy): test-%-numpy: venv package
+$(call versions_of,engine-b): test-%-engine-b: venv package
+	@echo "== Blender $*: the engine, $(notdir $(firstword $(ENGINE_B))) to $(notdir $(lastword $(ENGINE_B))) =="
+	$(call pytest_of,$*) $(ENGINE_B)
+
+$(call versions_of,numpy): test-%-numpy: venv package
 	@echo "== Blender $*: the engine on the numpy it ships =="
 	$(call pytest_of,$*) tests/engine/test_shipped_numpy_api.py
 
