@@ -27,7 +27,6 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -57,9 +56,7 @@ def ours(spp: int) -> tuple[np.ndarray, np.ndarray, float]:
 
 def cycles(samples: int, seed: int, folder: str) -> tuple[np.ndarray, float]:
     """Cycles with the caustic's bounces (blender_scenes.cycles_caustics): (image, seconds)."""
-    clock = time.perf_counter()
-    image = scenes.cycles_caustics(folder, samples, seed)
-    return image, time.perf_counter() - clock
+    return scenes.timed_cycles_caustics(folder, samples, seed)
 
 
 def main() -> None:

@@ -39,7 +39,6 @@ import argparse
 import math
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -135,15 +134,7 @@ def tumbler_scene(water: tuple[float, float] | None, empty: bool = False, sharp_
 def tumbler_pixels() -> np.ndarray:
     """(PIXY, PIXX) bool: the pixels whose view ray meets the tumbler's
     bounding cylinder, radius OUTER and height HEIGHT, 1 cm wider."""
-    scene = bpy.context.scene
-    camera = scene.camera
-    top_right, bottom_right, bottom_left, top_left = (np.array(c) for c in camera.data.view_frame(scene=scene))
-    u = ((np.arange(PIXX) + 0.5) / PIXX)[None, :, None]
-    v = ((np.arange(PIXY) + 0.5) / PIXY)[:, None, None]
-    local = (1 - v) * ((1 - u) * top_left + u * top_right) + v * ((1 - u) * bottom_left + u * bottom_right)
-    matrix = np.array(camera.matrix_world)
-    dirs = local @ matrix[:3, :3].T
-    origin = matrix[:3, 3]
+    origin, dirs = scenes.pixel_rays(PIXX, PIXY)
     a = dirs[..., 0] ** 2 + dirs[..., 1] ** 2
     b = 2 * (origin[0] * dirs[..., 0] + origin[1] * dirs[..., 1])
     c = origin[0] ** 2 + origin[1] ** 2 - (OUTER + 0.01) ** 2
@@ -168,9 +159,7 @@ def cycles(water: tuple[float, float] | None, samples: int, seed: int, folder: s
     """Cycles with the caustic's bounces (blender_scenes.cycles_caustics) on
     the scene of `water` (tumbler_scene): (image, seconds)."""
     tumbler_scene(water)
-    clock = time.perf_counter()
-    image = scenes.cycles_caustics(folder, samples, seed, SPECULAR_BOUNCES)
-    return image, time.perf_counter() - clock
+    return scenes.timed_cycles_caustics(folder, samples, seed, SPECULAR_BOUNCES)
 
 
 def main() -> None:

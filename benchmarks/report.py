@@ -315,6 +315,19 @@ def liquid_glass(d: dict) -> Table:
             f"caustic's mean ({d['caustic_pixels']} pixels)", "its relative L2 error", "time"], rows
 
 
+def coated_floor(d: dict) -> Table:
+    rows = []
+    for name, r in d["floors"].items():
+        f, c = r["ours"], r["cycles"]
+        caustic = f"x{f['caustic_mean_ratio']:.3f} ({r['caustic_pixels']} pixels)"
+        rows.append([name, f"x{f['mean_ratio']:.3f}", percent(f["relative_l2"]), caustic,
+                     percent(f["caustic_relative_l2"]), percent(c["caustic_relative_l2_noise"]),
+                     seconds(f["seconds"]), seconds(c["seconds"])])
+    samples = next(iter(d["floors"].values()))["cycles"]["samples"]
+    return ["the floor", "image mean against Cycles", "relative L2 error", "caustic's mean", "its relative L2 error",
+            "Cycles' own noise there", "the add-on's time", f"Cycles' ({samples} samples)"], rows
+
+
 def smooth_edges(d: dict) -> Table:
     rows = [[name, f"x{f['glass_mean_ratio']:.3f}", percent(f["glass_relative_l2"]), seconds(f["seconds"]),
              seconds(f["cycles_seconds"])] for name, f in d["shadings"].items()]
@@ -456,7 +469,7 @@ FORMATTERS: dict[str, Callable[[dict], Table]] = {
     "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass, "through_glass": through_glass,
     "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "world_paths": world_paths,
     "flicker": flicker, "gallery": gallery, "glints": glints, "glossy_floor": glossy_floor,
-    "emitters": emitters, "liquid_glass": liquid_glass, "smooth_edges": smooth_edges,
+    "emitters": emitters, "liquid_glass": liquid_glass, "smooth_edges": smooth_edges, "coated_floor": coated_floor,
 }
 
 # (group, [(results name, title)]), in the README's order
@@ -487,6 +500,7 @@ SECTIONS = [
         ("emitters", "A softbox built as an emitting mesh, against Cycles"),
         ("liquid_glass", "Water in a glass tumbler, against Cycles"),
         ("smooth_edges", "Glass shaded smooth across its edges, against Cycles"),
+        ("coated_floor", "A caustic on coated and metallic floors, against Cycles"),
         ("rough_glass", "Rough glass, against Cycles"),
         ("through_glass", "The caustic seen through glass"),
         ("dispersion", "Dispersion and coloured glass"),

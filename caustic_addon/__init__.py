@@ -24,12 +24,13 @@ from .maps.illumination_map import IlluminationMap
 from .memory import refusal as memory_refusal
 from .optics.media import absorption_from_color, volume_absorption
 from .renderer import RenderResult, render
-from .scene import (AreaLight, Camera, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector, RenderSettings,
-                    Scene, Specular, SpotLight, SunLight, Visibility, World, paper, shapes, textures)
+from .scene import (AreaLight, Camera, Coat, Dielectric, Diffuse, Mesh, Object, PointLight, Reflector,
+                    RenderSettings, Scene, Specular, SpotLight, SunLight, Visibility, World, paper, shapes, textures)
 from .util.jit import compile_kernels, use_kernel_cache
 
 __all__ = [
-    "AreaLight", "Camera", "Cancelled", "Dielectric", "Diffuse", "IlluminationMap", "ImageFrame", "MapCache", "Mesh", "Object", "PointLight", "Reflector",
+    "AreaLight", "Camera", "Cancelled", "Coat", "Dielectric", "Diffuse", "IlluminationMap", "ImageFrame", "MapCache",
+    "Mesh", "Object", "PointLight", "Reflector",
     "RenderResult", "RenderSettings", "Scene", "SceneError", "Specular", "SpotLight", "SunLight", "Visibility", "World",
     "WriteError",
     "absorption_from_color", "compile_kernels", "memory_refusal",

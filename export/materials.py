@@ -27,7 +27,8 @@ from typing import Optional
 import bpy
 import numpy as np
 
-from ..caustic_addon import Dielectric, Diffuse, Reflector, Specular, absorption_from_color, volume_absorption
+from ..caustic_addon import (Coat, Dielectric, Diffuse, Reflector, Specular, absorption_from_color,
+                             volume_absorption)
 from ..caustic_addon import textures as nodes
 from .textures import Recipe, color_recipe
 
@@ -39,13 +40,19 @@ GLASS_NODES = {'ShaderNodeBsdfGlass', 'ShaderNodeBsdfRefraction'}
 GLOSSY_NODES = {'ShaderNodeBsdfGlossy', 'ShaderNodeBsdfAnisotropic'}
 # A Principled receiver's inputs the engine does not render, with the value
 # that leaves them out (Blender's default).
-UNRENDERED = {"Coat Weight": 0.0, "Sheen Weight": 0.0, "Subsurface Weight": 0.0, "Anisotropic": 0.0,
-              "Thin Film Thickness": 0.0, "Diffuse Roughness": 0.0, "Metallic": 0.0, "Transmission Weight": 0.0,
-              "Alpha": 1.0}
+UNRENDERED = {"Sheen Weight": 0.0, "Subsurface Weight": 0.0, "Anisotropic": 0.0, "Thin Film Thickness": 0.0,
+              "Diffuse Roughness": 0.0, "Transmission Weight": 0.0, "Alpha": 1.0}
+# A Principled BSDF's inputs the engine does not render on a metal, which
+# it renders as a mirror of its Base Color (Metallic above 0.5).
+UNRENDERED_ON_METAL = {"Coat Weight": 0.0, "Sheen Weight": 0.0, "Thin Film Thickness": 0.0}
 # The engine's microfacets are GGX; these distributions are read as GGX, with a warning.
 OTHER_DISTRIBUTIONS = {'BECKMANN': "Beckmann", 'ASHIKHMIN_SHIRLEY': "Ashikhmin-Shirley"}
 # Inputs that make a microfacet lobe anisotropic, which the engine's is not.
 ANISOTROPY_INPUTS = ("Anisotropy", "Anisotropic")
+# The Blenders whose Principled layering the engine follows
+# (optics/layers.py), by the first version taken to layer so (checked in
+# 4.2, 4.5 and 5.3; 5.0 to 5.2 are taken to layer as 5.3).
+LAYERINGS = {(5, 0, 0): "5.3", (4, 5, 0): "4.5", (0, 0, 0): "4.2"}
 # A Principled BSDF's dispersion (Blender 5.3 on): OpenPBR's scale and Abbe number.
 DISPERSION_SCALE, DISPERSION_ABBE = "Transmission Dispersion Scale", "Transmission Dispersion Abbe Number"
 
@@ -157,6 +164,7 @@ def read_surface(material) -> Surface:
     if kind in GLOSSY_NODES:
         return _mirror(shader, "Color", what, warnings)
     if kind == 'ShaderNodeBsdfPrincipled' and _value(shader, "Metallic", what, warnings) > 0.5:
+        _warn_unrendered(shader, UNRENDERED_ON_METAL, "it is rendered as a mirror of its Base Color", what, warnings)
         return _mirror(shader, "Base Color", what, warnings)
     if kind == 'ShaderNodeBsdfPrincipled':
         emission = _value(shader, "Emission Color", what, warnings) * _value(shader, "Emission Strength", what,
@@ -204,18 +212,43 @@ def _glass_tints(shader, what: str, warnings: list[str]) -> tuple[np.ndarray, np
 
 
 def _specular_layer(shader, what: str, warnings: list[str]) -> Specular:
-    """A Principled BSDF's specular layer, its inputs clamped as Cycles clamps
-    them (svm/closure.h); a warning names the inputs left out of the render."""
-    unrendered = [name for name, off in UNRENDERED.items()
-                  if name in shader.inputs and _value(shader, name, what, warnings) != off]
-    if unrendered:
-        warnings.append(f"{what}: its {', '.join(unrendered)} are not rendered; it is rendered as a diffuse base "
-                        "under a specular layer")
+    """A Principled BSDF's layers over its diffuse base, their inputs
+    clamped as Cycles clamps them (svm/closure.h): the specular layer, the
+    metal of its Metallic (at most 0.5 here) and its coat; a warning names
+    the inputs left out of the render."""
+    _warn_unrendered(shader, UNRENDERED, "it is rendered as a diffuse base under its specular layer, metal and coat",
+                     what, warnings)
     return Specular(roughness=min(max(_value(shader, "Roughness", what, warnings), 0.0), 1.0),
                     ior=max(_value(shader, "IOR", what, warnings), 1e-5),
                     level=max(_value(shader, "Specular IOR Level", what, warnings), 0.0),
                     tint=np.maximum(_value(shader, "Specular Tint", what, warnings), 0.0),
-                    multiscatter=shader.distribution == 'MULTI_GGX')
+                    multiscatter=shader.distribution == 'MULTI_GGX',
+                    metallic=min(max(_value(shader, "Metallic", what, warnings), 0.0), 1.0),
+                    coat=_coat(shader, what, warnings),
+                    layering=next(name for since, name in LAYERINGS.items() if bpy.app.version >= since))
+
+
+def _coat(shader, what: str, warnings: list[str]) -> Coat | None:
+    """A Principled BSDF's coat, None where its Coat Weight is 0."""
+    weight = max(_value(shader, "Coat Weight", what, warnings), 0.0)
+    if weight == 0.0:
+        return None
+    return Coat(weight=weight, roughness=min(max(_value(shader, "Coat Roughness", what, warnings), 0.0), 1.0),
+                ior=max(_value(shader, "Coat IOR", what, warnings), 1.0),
+                tint=np.maximum(_value(shader, "Coat Tint", what, warnings), 0.0))
+
+
+def _warn_unrendered(shader, unrendered: dict[str, float], rendered_as: str, what: str, warnings: list[str]) -> None:
+    """One warning naming the inputs of `unrendered` (name: the value that
+    leaves it out) that the Principled BSDF `shader` sets, and a linked
+    Coat Normal, and how it is rendered instead."""
+    names = [name for name, off in unrendered.items()
+             if name in shader.inputs and _value(shader, name, what, warnings) != off]
+    if "Coat Weight" not in unrendered and shader.inputs["Coat Normal"].is_linked:
+        names.append("Coat Normal")
+    if names:
+        warnings.append(f"{what}: its {', '.join(names)} {'are' if len(names) > 1 else 'is'} not rendered; "
+                        f"{rendered_as}")
 
 
 def _mirror(shader, color_input: str, what: str, warnings: list[str]) -> Surface:

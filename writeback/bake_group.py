@@ -2,8 +2,8 @@
 looked up at the shading point and added to the material's own shader as
 emission of radiance E * albedo / pi, the albedo from the material's own
 colour nodes where it has them, so EEVEE and the Cycles viewport show the
-caustic. Under a Principled BSDF's specular layer the albedo is times the
-share of the diffuse base the layer leaves toward the eye, as the eye pass
+caustic. Under a Principled BSDF's layers the albedo is times the share
+of the diffuse base they leave toward the eye, as the eye pass
 shades it: a Color Ramp of it over Layer Weight's Facing, 1 - |cos|, which
 the ramp interpolates linearly between SHARE_STOPS view cosines. `unwire`
 takes out exactly what `wire` put in."""
@@ -50,7 +50,7 @@ def _chart_coordinates(nodes, links, frame: ImageFrame, uv_layer: str):
 
 
 def _view_share(nodes, links, share):
-    """A Color Ramp node giving the diffuse share `share(cos_v (k,)) -> (k,)`
+    """A Color Ramp node giving the diffuse share `share(cos_v (k,)) -> (k,3)`
     at each shading point, from Layer Weight's Facing (blend 0.5: 1 - |cos_v|,
     Cycles' svm_node_layer_weight)."""
     facing = nodes.new('ShaderNodeLayerWeight')
@@ -64,7 +64,7 @@ def _view_share(nodes, links, share):
     for position in positions[1:-1]:
         elements.new(float(position))
     for element, value in zip(sorted(elements, key=lambda e: e.position), values):
-        element.color = (float(value), float(value), float(value), 1.0)
+        element.color = (*(float(c) for c in value), 1.0)
     links.new(facing.outputs['Facing'], ramp.inputs['Fac'])
     return facing, ramp
 
@@ -84,8 +84,8 @@ def make_group(name: str, image, imap, albedo: np.ndarray, uv_layer: str, share=
     """A shader node group: Shader and Albedo in, Shader out = in + emission
     of the map `image` (irradiance, W/m^2) times Albedo / pi; Albedo is
     `albedo (3,)` unless `wire` links the material's own colour to it, and
-    is times `share(cos_v (k,)) -> (k,)` toward the eye if given (a
-    Principled BSDF's diffuse share under its specular layer). With a
+    is times `share(cos_v (k,)) -> (k,3)` toward the eye if given (a
+    Principled BSDF's diffuse share under its layers). With a
     `selector` (custom property, number) the emission shows only on the
     objects whose property is that number."""
     group = bpy.data.node_groups.new(name, 'ShaderNodeTree')

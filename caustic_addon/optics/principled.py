@@ -40,11 +40,11 @@ from functools import lru_cache
 import numpy as np
 
 from . import microfacet
+from .metal import f82_fresnel1
 from ..sampling.warps import concentric_disc
 from ..util.jit import inline, kernel
 from ..util.rows import contiguous
-from ..util.vectors import (DIVISION_FLOOR, dot, dot1, float_rows, max_channel1, normalize1, row, set_row,
-                            sum1)
+from ..util.vectors import DIVISION_FLOOR, dot, dot1, float_rows, normalize1, row, set_row, sum1
 from .specular import fresnel_dielectric1
 
 E_NODES = 32
@@ -111,16 +111,21 @@ def fresnel1(cos_hv, eta, f0):
 
 
 @inline
-def lobe_weight1(normal, view, light, f0, eta, alpha, gain):
-    """(3-tuple) f cos(theta_l) of a specular layer: its BRDF toward the eye
-    `view` for light from the unit direction `light`, times the cosine at
-    `normal`: F(h.v) D G2 / (4 cos_v) gain, h = normalize(v + l)
-    (bsdf_microfacet_eval x energy_scale x the darkening in the closure's
-    weight; microfacet.reflection1, fresnel1)."""
+def lobe_weight1(normal, view, light, f0, eta, alpha, gain, metal, base, b):
+    """(3-tuple) f cos(theta_l) of a Principled BSDF's GGX lobe: its BRDF
+    toward the eye `view` for light from the unit direction `light`, times
+    the cosine at `normal`: (gain F(h.v) + metal F_82(h.v)) D G2 / (4 cos_v),
+    h = normalize(v + l), the specular layer's Fresnel (fresnel1) and the
+    metal's (metal.f82_fresnel1 of reflectance `base` and factor `b`), each
+    times its weight toward the eye (bsdf_microfacet_eval x energy_scale x
+    the darkening in the closure's weight; microfacet.reflection1). The
+    metal and the layer share the Roughness, so one lobe serves both."""
     half = normalize1(sum1(1.0, view, 1.0, light))
     lobe = microfacet.reflection1(dot1(normal, view), dot1(normal, light), dot1(normal, half), alpha)
-    f = fresnel1(dot1(half, view), eta, f0)
-    return (f[0] * gain[0] * lobe, f[1] * gain[1] * lobe, f[2] * gain[2] * lobe)
+    cos_hv = dot1(half, view)
+    f, m = fresnel1(cos_hv, eta, f0), f82_fresnel1(cos_hv, base, b)
+    return ((f[0] * gain[0] + m[0] * metal[0]) * lobe, (f[1] * gain[1] + m[1] * metal[1]) * lobe,
+            (f[2] * gain[2] + m[2] * metal[2]) * lobe)
 
 
 @inline
@@ -281,42 +286,43 @@ class Layer:
                      f0_tint + (1.0 - f0_tint) * s, e_curve, s_curve, e_avg)
 
     def toward(self, cos_v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(gain (n,3), diffuse (n,)) seen from cosines `cos_v (n,)`: toward1 of each."""
+        """(gain (n,3), diffuse (n,)) seen from cosines `cos_v (n,)`: toward1
+        of each, and the share of the diffuse base the layer leaves, 1 - the
+        max over channels of its albedo, clamped to 0..1."""
         n = len(cos_v)
-        gain, diffuse = np.empty((n, 3)), np.empty(n)
+        gain, shared = np.empty((n, 3)), np.empty((n, 3))
         _toward(contiguous(cos_v, np.float64), self.s_curve, self.e_curve, self.f0, self.fss, self.e_avg,
-                self.multiscatter, gain, diffuse)
-        return gain, diffuse
+                self.multiscatter, gain, shared)
+        return gain, np.clip(1.0 - shared.max(axis=1), 0.0, 1.0)
 
 
 @inline
-def _gain1(fss, e_avg, missing):
+def multiscatter_gain1(fss, e_avg, missing):
     """1 + F_ms missing, F_ms = F_ss E_avg / (1 - F_ss (1 - E_avg)), of one channel."""
     return 1.0 + fss * e_avg / (1.0 - fss * (1.0 - e_avg)) * missing
 
 
 @inline
 def toward1(mu, s, e, f0, fss, e_avg, multiscatter):
-    """(gain (3-tuple), diffuse) of a layer seen at `mu`, the cosine of
-    its view clamped to 0..1, where its curves read `s` and `e`: the
+    """(gain, shared) (3-tuples) of a layer seen at `mu`, the cosine of its
+    view clamped to 0..1, where its curves read `s` and `e`: the
     multiple-scattering gain 1 + F_ms (1 - E) / E of the lobe,
     F_ms = F_ss E_avg / (1 - F_ss (1 - E_avg)), (1 without `multiscatter`)
-    and the share of the diffuse base the layer leaves,
-    1 - max over channels of the layer's albedo F0 + (1 - F0) s times its
-    darkening gain / (1 + (1 - E) / E), clamped to 0..1
-    (closure_layering_weight), E floored at DIVISION_FLOOR. `f0`, `fss` 3-tuples."""
+    and the albedo the layer takes from the diffuse base, F0 + (1 - F0) s
+    times its darkening gain / (1 + (1 - E) / E) (closure_layering_weight's
+    layer albedo over the weight), E floored at DIVISION_FLOOR. `f0`, `fss` 3-tuples."""
     albedo = (f0[0] + (1.0 - f0[0]) * s, f0[1] + (1.0 - f0[1]) * s, f0[2] + (1.0 - f0[2]) * s)
     if not multiscatter:
-        return (1.0, 1.0, 1.0), min(max(1.0 - max_channel1(albedo), 0.0), 1.0)
+        return (1.0, 1.0, 1.0), albedo
     missing = (1.0 - e) / max(e, DIVISION_FLOOR)
-    gain = (_gain1(fss[0], e_avg, missing), _gain1(fss[1], e_avg, missing), _gain1(fss[2], e_avg, missing))
+    gain = (multiscatter_gain1(fss[0], e_avg, missing), multiscatter_gain1(fss[1], e_avg, missing),
+            multiscatter_gain1(fss[2], e_avg, missing))
     darkening = 1.0 + missing
-    shared = (gain[0] / darkening * albedo[0], gain[1] / darkening * albedo[1], gain[2] / darkening * albedo[2])
-    return gain, min(max(1.0 - max_channel1(shared), 0.0), 1.0)
+    return gain, (gain[0] / darkening * albedo[0], gain[1] / darkening * albedo[1], gain[2] / darkening * albedo[2])
 
 
-@kernel("void(f8[::1], f8[::1], f8[::1], f8[::1], f8[::1], f8, b1, f8[:, ::1], f8[::1])")
-def _toward(cos_v, s_curve, e_curve, f0, fss, e_avg, multiscatter, gain, diffuse):
+@kernel("void(f8[::1], f8[::1], f8[::1], f8[::1], f8[::1], f8, b1, f8[:, ::1], f8[:, ::1])")
+def _toward(cos_v, s_curve, e_curve, f0, fss, e_avg, multiscatter, gain, shared):
     f0_t, fss_t = (f0[0], f0[1], f0[2]), (fss[0], fss[1], fss[2])
     ks, ke = len(s_curve), len(e_curve)
     for i in range(len(cos_v)):
@@ -324,18 +330,24 @@ def _toward(cos_v, s_curve, e_curve, f0, fss, e_avg, multiscatter, gain, diffuse
         js, je = curve_node1(ks, mu), curve_node1(ke, mu)
         s = curve_at1(s_curve[js], s_curve[js + 1], js, ks, mu)
         e = curve_at1(e_curve[je], e_curve[je + 1], je, ke, mu)
-        g, diffuse[i] = toward1(mu, s, e, f0_t, fss_t, e_avg, multiscatter)
+        g, a = toward1(mu, s, e, f0_t, fss_t, e_avg, multiscatter)
         gain[i, 0], gain[i, 1], gain[i, 2] = g
+        shared[i, 0], shared[i, 1], shared[i, 2] = a
 
 
 @dataclass
 class Lobe:
-    """The specular layers at n shading points, seen from their eye rays.
+    """The GGX lobes at n shading points, seen from their eye rays: a
+    Principled BSDF's specular layer and metal, which share its Roughness,
+    or its coat (layers.Stack).
 
-    active (n,) bool   the point's surface has a layer; the others reflect nothing
-    f0 (n,3)           F0 tint;  eta (n,) the IOR of the Fresnel curve
+    active (n,) bool   the point's surface has the lobe; the others reflect nothing
+    f0 (n,3)           the layer's F0 tint;  eta (n,) the IOR of its Fresnel curve
     alpha (n,)         GGX alpha
-    gain (n,3)         multiple-scattering gain toward the eye (Layer.toward), 0 where inactive
+    gain (n,3)         the layer's weight toward the eye: its multiple-scattering
+                       gain (Layer.toward) times what the layers above leave; 0 where inactive
+    metal (n,3)        the metal's weight toward the eye, likewise (0: no metal)
+    base (n,3)         the metal's F0, its Base Color;  b (n,3) its F82-tint factor (metal.f82_b)
     """
 
     active: np.ndarray
@@ -343,11 +355,22 @@ class Lobe:
     eta: np.ndarray
     alpha: np.ndarray
     gain: np.ndarray
+    metal: np.ndarray | None = None
+    base: np.ndarray | None = None
+    b: np.ndarray | None = None
 
     def __post_init__(self):
         self.active = contiguous(self.active, bool)
-        self.f0, self.eta, self.alpha, self.gain = (contiguous(a, np.float64) for a in
-                                                    (self.f0, self.eta, self.alpha, self.gain))
+        self.metal, self.base, self.b = (np.zeros((len(self.active), 3)) if a is None else a
+                                         for a in (self.metal, self.base, self.b))
+        self.f0, self.eta, self.alpha, self.gain, self.metal, self.base, self.b = (
+            contiguous(a, np.float64) for a in (self.f0, self.eta, self.alpha, self.gain, self.metal, self.base,
+                                                self.b))
+
+    @property
+    def fields(self) -> tuple:
+        """(f0, eta, alpha, gain, metal, base, b), as kernels take them."""
+        return self.f0, self.eta, self.alpha, self.gain, self.metal, self.base, self.b
 
     @property
     def lamp_lit(self) -> np.ndarray:
@@ -356,13 +379,13 @@ class Lobe:
 
     def take(self, rows: np.ndarray) -> Lobe:
         """The layers at the points `rows (m,)`."""
-        return Lobe(*(np.take(a, rows, axis=0) for a in (self.active, self.f0, self.eta, self.alpha, self.gain)))
+        return Lobe(*(np.take(a, rows, axis=0) for a in (self.active, *self.fields)))
 
     def weight(self, normal: np.ndarray, view: np.ndarray, dirs: np.ndarray) -> np.ndarray:
         """(n,3) lobe_weight1 of each point: f cos(theta_l) toward the eye
         `view (n,3)` for light from unit `dirs (n,3)`, at `normal (n,3)`."""
         out = np.empty((len(normal), 3))
-        _lobe_weights(*float_rows(normal, view, dirs), self.f0, self.eta, self.alpha, self.gain, out)
+        _lobe_weights(*float_rows(normal, view, dirs), *self.fields, out)
         return out
 
     def pdf(self, normal: np.ndarray, view: np.ndarray, dirs: np.ndarray) -> np.ndarray:
@@ -382,11 +405,12 @@ class Lobe:
         return out
 
 
-@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[:, ::1], f8[:, ::1])")
-def _lobe_weights(normal, view, dirs, f0, eta, alpha, gain, out):
+@kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], "
+        "f8[:, ::1], f8[:, ::1])")
+def _lobe_weights(normal, view, dirs, f0, eta, alpha, gain, metal, base, b, out):
     for i in range(len(normal)):
         set_row(out, i, lobe_weight1(row(normal, i), row(view, i), row(dirs, i), row(f0, i), eta[i], alpha[i],
-                                     row(gain, i)))
+                                     row(gain, i), row(metal, i), row(base, i), row(b, i)))
 
 
 @kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[::1], f8[::1])")

@@ -7,8 +7,9 @@ irradiance E at normal incidence along the unit vector l:
     L = E cos(theta_l) diffuse / pi + E f_s(v, l) cos(theta_l)
 
 the Lambert term of the diffuse base (what a Cycles Diffuse BSDF returns;
-under a Principled BSDF's specular layer, its base colour times the share
-the layer leaves it) plus the layer's GGX lobe (optics/principled.py). A
+under a Principled BSDF's layers, its base colour times the share they
+leave it) plus the layers' GGX lobes: the specular layer's with the
+metal's, and the coat's (optics/principled.py, optics/layers.py). A
 lamp of size 0 takes one sample; a lamp with a size takes `samples`,
 stratified over a pixel: eye sample s of a pixel uses points s K .. s K +
 K - 1 of the R2 sequence, rotated by a hash of the pixel. A lamp that
@@ -18,7 +19,7 @@ points disagree (`direct_radiance`). A sample behind the surface gets no shadow 
 Dielectrics and reflectors block the lamps' shadow rays: the light they
 redirect arrives through the illumination maps.
 
-A rough specular layer takes a lamp's light by two strategies (Veach 1997,
+Each rough lobe takes a lamp's light by two strategies (Veach 1997,
 multiple importance sampling, as Cycles does): the lamp's samples, and as
 many rays drawn from the lobe by its visible normals (`lobe_drawn_lamps`),
 which meet the lamp itself (seen_lamps.py). Each weighs what it finds by
@@ -31,11 +32,11 @@ pass's bounce draws there, which meet the lamps themselves, by the same
 heuristic.
 
 The world lights a surface with E = int L(w) V(w) cos(theta) dw over the
-hemisphere, and its lobe with int L(w) V(w) f_s(v, w) cos(theta) dw, what
-Cycles computes with bounces at 0. Both are estimated from the same
+hemisphere, and its lobes with int L(w) V(w) f_s(v, w) cos(theta) dw, what
+Cycles computes with bounces at 0. All are estimated from the same
 directions, drawn by cos(theta) / pi (Malley), for an image by the world's
-radiance (environment.py), and where there is a lobe by its visible normals
-(Heitz 2018), weighted by the balance heuristic (Veach 1997). A direction
+radiance (environment.py), and by each lobe's visible normals (Heitz 2018),
+weighted by the balance heuristic (Veach 1997). A direction
 that meets a caster goes on through it to the sky (world_paths.py): that
 part of the world's light is kept apart, for the caustic pass."""
 
@@ -74,8 +75,10 @@ _LOBE_STREAM = 1 << 20
 # SHADOW_PROBES shadow rays a pixel first, the rest only where they disagree.
 SMALL_LAMP = math.radians(1.0)
 SHADOW_PROBES = 2
-# Draws of a pixel's world rays, per strategy: its strata of every eye sample.
+# Draws of a pixel's world rays, per strategy: its strata of every eye sample;
+# strategies: the cosine's, the image's and up to two lobes'.
 _WORLD_DRAWS = 1 << 20
+_WORLD_STRATEGIES = 4
 # Directions toward the world that met something, followed on through the
 # casters together.
 _WORLD_BATCH = 1 << 18
@@ -125,7 +128,7 @@ def shadow_rays(accel: Accelerator, points: np.ndarray, facing: np.ndarray, dirs
 
 def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,
                     shading: np.ndarray, facing: np.ndarray, view: np.ndarray, diffuse: np.ndarray,
-                    lobe: Lobe | None, far: float, pixel: np.ndarray, first_stratum: np.ndarray, samples: int,
+                    lobes: list[Lobe], far: float, pixel: np.ndarray, first_stratum: np.ndarray, samples: int,
                     seed: int, adaptive: bool = True, per_pixel: int = 1) -> np.ndarray:
     """Radiance (n,3) toward the eye from all lamps' direct light.
 
@@ -145,8 +148,8 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
     shading, facing   (n,3) shading and geometric normals, both on the eye's side
     view              (n,3) unit vectors from the points toward the eye
     diffuse           (n,3) the diffuse reflectance (under a layer, its share)
-    lobe              the points' specular layers, or None; a lamp hidden from
-                      glossy rays lights no specular layer (as Cycles)
+    lobes             the points' GGX lobes (material_table.layers_at); a lamp
+                      hidden from glossy rays lights none (as Cycles)
     pixel, first_stratum  (n,) the pixel each point is seen in, and the
                       index of its first stratum there
     """
@@ -154,7 +157,6 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
     out = np.zeros((n, 3))
     shading, facing = np.ascontiguousarray(shading, dtype=np.float64), np.ascontiguousarray(facing, dtype=np.float64)
     diffuse, view = np.ascontiguousarray(diffuse, dtype=np.float64), contiguous(view, np.float64)
-    lamp_lit = None if lobe is None else lobe.lamp_lit
 
     def lamp_sample(light: Light, number: int, k: int, count: int, rows: np.ndarray):
         """Sample k of `count` for the points `rows (m,)`: the rows lit from
@@ -164,9 +166,10 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
         lamp = sample_lamp(light, energy, np.take(points, rows, axis=0), uv, far)
         idx, radiance = _lambert_lit(rows, shading, facing, diffuse, lamp.dirs, lamp.irradiance, count)
         at, dirs = rows[idx], np.take(lamp.dirs, idx, axis=0)
-        if lobe is not None and light.visibility.glossy:
-            _add_glossy(radiance, at, dirs, np.take(lamp.irradiance, idx, axis=0), np.take(lamp.pdf, idx), shading,
-                        view, lamp_lit, lobe.f0, lobe.eta, lobe.alpha, lobe.gain, count)
+        if light.visibility.glossy and lobes:
+            per_sample, pdf = np.take(lamp.irradiance, idx, axis=0) / count, np.take(lamp.pdf, idx)
+            for lobe in lobes:
+                _add_glossy(radiance, at, dirs, per_sample, pdf, shading, view, lobe.lamp_lit, *lobe.fields)
         return at, dirs, np.take(lamp.dist, idx), radiance
 
     def clear(at: np.ndarray, dirs: np.ndarray, dist: np.ndarray, light: Light) -> np.ndarray:
@@ -197,21 +200,22 @@ def direct_radiance(accel: Accelerator, lights: list[Light], energy: float, poin
             test = np.flatnonzero(~visible)
             visible[test] = clear(at[test], np.take(dirs, test, axis=0), dist[test], light)
             _add_visible(out, at, visible, radiance)
-    if lobe is not None:
+    for number, lobe in enumerate(lobes):
         out += lobe_drawn_lamps(accel, lights, energy, points, shading, facing, view, lobe, pixel, first_stratum,
-                                samples, seed)
+                                samples, seed, number)
     return out
 
 
 def lobe_drawn_lamps(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,
                      shading: np.ndarray, facing: np.ndarray, view: np.ndarray, lobe: Lobe, pixel: np.ndarray,
-                     first_stratum: np.ndarray, samples: int, seed: int) -> np.ndarray:
+                     first_stratum: np.ndarray, samples: int, seed: int, number: int) -> np.ndarray:
     """Radiance (n,3) toward the eye of the lamps that rays drawn from the
-    points' lamp-lit lobes meet, `samples` rays a point stratified over its
+    points' lamp-lit `lobe` meet, `samples` rays a point stratified over its
     pixel as the lamps' are: L f cos / (p samples) of each lamp met in front
     of what the ray meets first, times its power heuristic weight
     (seen_lamps.lamps_met); the other strategy of `direct_radiance`'s
-    glossy term. Rays see the objects and lamps that glossy rays see."""
+    glossy term. Rays see the objects and lamps that glossy rays see; the
+    lobe `number` of a point draws them from a stream of its own."""
     out = np.zeros((len(points), 3))
     met = [light for light in lights if light.visibility.glossy and not radiometry.is_delta(light)
            and not isinstance(light, MeshLight)]
@@ -222,7 +226,8 @@ def lobe_drawn_lamps(accel: Accelerator, lights: list[Light], energy: float, poi
     layers, tangent, bitangent = lobe.take(rows), *frames(normal)
     ids, first = np.take(pixel, rows), np.take(first_stratum, rows)
     for k in range(samples):
-        dirs = layers.sample(normal, tangent, bitangent, eye, strata(ids, first * samples + k, _LOBE_STREAM, seed))
+        dirs = layers.sample(normal, tangent, bitangent, eye,
+                             strata(ids, first * samples + k, _LOBE_STREAM + 2 * number, seed))
         pdf = layers.pdf(normal, eye, dirs)
         up = np.flatnonzero((dot(dirs, normal) > 0.0) & (dot(dirs, above) > 0.0) & (pdf > 0.0))
         at, toward, density = np.take(rows, up), np.take(dirs, up, axis=0), np.take(pdf, up)
@@ -259,24 +264,25 @@ def _lambert_lit(rows, shading, facing, diffuse, dirs, irradiance, count):
 
 
 @kernel("void(f8[:, ::1], i8[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[:, ::1], b1[::1], f8[:, ::1], "
-        "f8[::1], f8[::1], f8[:, ::1], i8)")
-def _add_glossy(radiance, at, dirs, irradiance, pdf, shading, view, lamp_lit, f0, eta, alpha, gain, count):
-    """radiance[j] += (E_j / count) f cos(theta_l) of the specular layer at
-    point `at[j]` (principled.lobe_weight1) where its lobe is `lamp_lit`,
-    for the lamp samples `dirs, irradiance (l,3)` drawn with density
-    `pdf (l,)`, times the power heuristic's weight against p_lobe
-    (principled.lobe_pdf1; 1 for a density of inf, which no lobe's ray
-    meets); `shading, view, f0, gain (n,3)` and `eta, alpha (n,)` per point."""
+        "f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1])")
+def _add_glossy(radiance, at, dirs, irradiance, pdf, shading, view, lamp_lit, f0, eta, alpha, gain, metal, base, b):
+    """radiance[j] += E_j f cos(theta_l) of the lobe at point `at[j]`
+    (principled.lobe_weight1) where it is `lamp_lit`, for the lamp samples
+    `dirs (l,3)` drawn with density `pdf (l,)`, E_j their irradiance
+    `(l,3)` over the number of samples, times the power heuristic's weight
+    against p_lobe (principled.lobe_pdf1; 1 for a density of inf, which no
+    lobe's ray meets); the lobe's fields (principled.Lobe.fields) per point."""
     for j in range(len(at)):
         r = at[j]
         if not lamp_lit[r]:
             continue
-        w = lobe_weight1(row(shading, r), row(view, r), row(dirs, j), row(f0, r), eta[r], alpha[r], row(gain, r))
+        w = lobe_weight1(row(shading, r), row(view, r), row(dirs, j), row(f0, r), eta[r], alpha[r], row(gain, r),
+                         row(metal, r), row(base, r), row(b, r))
         share = 1.0
         if pdf[j] < math.inf:
             share = power_heuristic1(1.0, pdf[j], 1.0, lobe_pdf1(row(shading, r), row(view, r), row(dirs, j), alpha[r]))
         for c in range(3):
-            radiance[j, c] += irradiance[j, c] / count * (w[c] * share)
+            radiance[j, c] += irradiance[j, c] * (w[c] * share)
 
 
 @kernel("void(f8[:, ::1], i8[::1], b1[::1], f8[:, ::1])")
@@ -297,7 +303,7 @@ def _pixels_agree(pixel: np.ndarray, clear: np.ndarray, blocked: np.ndarray) -> 
 
 
 def world_light(accel: Accelerator, environment: Environment, points: np.ndarray, shading: np.ndarray,
-                facing: np.ndarray, view: np.ndarray, lobe: Lobe | None, far: float, pixel: np.ndarray,
+                facing: np.ndarray, view: np.ndarray, lobes: list[Lobe], far: float, pixel: np.ndarray,
                 first_stratum: np.ndarray, samples: int, seed: int, sky_paths: WorldThroughCasters | None = None,
                 medium: np.ndarray | None = None, surface: np.ndarray | None = None,
                 chance: np.ndarray | None = None) -> tuple[WorldLight, WorldLight]:
@@ -310,22 +316,27 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
     `chance[i]` (Russian roulette: what they bring is divided by it),
     _WORLD_BATCH or so at a time (one bounce.trace for them all: its calls
     cost more than its rays). `samples` directions of each strategy per
-    point: `_world_directions` weighs them, `_add_world` adds each part."""
+    point, the cosine's, the image's and each of the `lobes`' (material_table.layers_at):
+    `_world_directions` weighs them, `_add_world` adds what each brings to the
+    irradiance, and the lobes' weights to the glossy part."""
     n = len(points)
     parts = [WorldLight(np.zeros((n, 3)), np.zeros((n, 3))) for _ in range(2)]
     image = environment.world.environment is not None
     shading, facing = contiguous(shading, np.float64), contiguous(facing, np.float64)
     view = contiguous(view, np.float64)
-    if lobe is None:
-        none, flat = np.zeros(0, dtype=bool), np.zeros(0)
-        active, alpha, f0, eta, gain = none, flat, np.zeros((0, 3)), flat, np.zeros((0, 3))
-    else:
-        active, alpha, f0, eta, gain = lobe.active, lobe.alpha, lobe.f0, lobe.eta, lobe.gain
-        tangent, bitangent = frames(shading)
+    tangent, bitangent = frames(shading) if lobes else (None, None)
 
     def add(part: WorldLight, idx, seen, toward, light, density, cos) -> None:
-        _add_world(part.irradiance, part.glossy, idx, seen, toward, contiguous(light, np.float64), density, cos,
-                   samples, shading, view, f0, eta, alpha, gain)
+        light = contiguous(light, np.float64)
+        _add_world(part.irradiance, idx, seen, light, density, cos, samples)
+        if not lobes:
+            return
+        rows = np.flatnonzero(seen)
+        at, toward = np.take(idx, rows), np.take(toward, rows, axis=0)
+        radiance = light / (np.take(density, rows) * samples)[:, None]
+        normal, eye = np.take(shading, at, axis=0), np.take(view, at, axis=0)
+        for lobe in lobes:
+            np.add.at(part.glossy, at, radiance * lobe.take(at).weight(normal, eye, toward))
 
     blocked = []
 
@@ -347,19 +358,21 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
             density, cos)
         add(parts[1], at, met, toward, np.take(behind, np.flatnonzero(met), axis=0), density, cos)
 
+    nowhere = np.zeros(0, dtype=bool)
     for k in range(samples):
         index = first_stratum * samples + k
-        drawn = [(cosine_hemisphere(shading, strata(pixel, index, _WORLD_STREAM, seed)), False)]
+        drawn = [(cosine_hemisphere(shading, strata(pixel, index, _WORLD_STREAM, seed)), nowhere)]
         if image:
-            drawn.append((environment.sample(strata(pixel, index, _WORLD_STREAM + 2, seed))[0], False))
-        if lobe is not None:
-            drawn.append((lobe.sample(shading, tangent, bitangent, view, strata(pixel, index, _WORLD_STREAM + 4, seed)),
-                          True))
-        for strategy, (dirs, among_active) in enumerate(drawn):
+            drawn.append((environment.sample(strata(pixel, index, _WORLD_STREAM + 2, seed))[0], nowhere))
+        for number, lobe in enumerate(lobes):
+            uv = strata(pixel, index, _world_lobe_stream(number), seed)
+            drawn.append((lobe.sample(shading, tangent, bitangent, view, uv), lobe.active))
+        for strategy, (dirs, own) in enumerate(drawn):
             dirs = contiguous(dirs, np.float64)
-            env_density = contiguous(environment.density(dirs), np.float64) if image else np.zeros(0)
-            idx, density, cos = _world_directions(shading, facing, view, dirs, env_density, active, alpha,
-                                                  among_active)
+            others = contiguous(environment.density(dirs), np.float64) if image else np.zeros(n)
+            for lobe in lobes:
+                others = others + lobe.pdf(shading, view, dirs)
+            idx, density, cos = _world_directions(shading, facing, dirs, others, own)
             if len(idx) == 0:
                 continue
             toward = np.take(dirs, idx, axis=0)
@@ -370,7 +383,7 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
             if sky_paths is not None and not seen.all():
                 rows = np.flatnonzero(~seen)
                 at = np.take(idx, rows)
-                draws = (np.take(pixel, at) * _WORLD_DRAWS + np.take(index, at)) * 3 + strategy
+                draws = (np.take(pixel, at) * _WORLD_DRAWS + np.take(index, at)) * _WORLD_STRATEGIES + strategy
                 blocked.append((at, *(np.take(a, rows, axis=0) for a in (origins, toward, density, cos)), draws))
                 if sum(len(b[0]) for b in blocked) >= _WORLD_BATCH:
                     follow()
@@ -378,58 +391,48 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
     return parts[0], parts[1]
 
 
-@kernel("Tuple((i8[::1], f8[::1], f8[::1]))(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], b1[::1], "
-        "f8[::1], b1)")
-def _world_directions(shading, facing, view, dirs, env_density, active, alpha, among_active):
+def _world_lobe_stream(number: int) -> int:
+    """The hash streams of the world's directions drawn from lobe `number`."""
+    return _WORLD_STREAM + 4 if number == 0 else _WORLD_STREAM + 6 + 2 * number
+
+
+@kernel("Tuple((i8[::1], f8[::1], f8[::1]))(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], b1[::1])")
+def _world_directions(shading, facing, dirs, others, own):
     """The world's sample directions `dirs (n,3)` at the points that take
     them, idx (l,), with the density (l,) all strategies draw each by and
     its cosine (l,) at the shading normal: the balance heuristic's sum
-    (Veach 1997) of cos(theta) / pi, the image's `env_density (n,)` ((0,)
-    for a plain world) and where there is a lobe (`alpha (n,)`, (0,)
-    without) its visible normals' pdf (principled.lobe_pdf1) at the points
-    `active (n,)`. A direction counts above both normals with a density,
-    and with `among_active` at active points only (the lobe's own)."""
+    (Veach 1997) of cos(theta) / pi and the other strategies' densities
+    `others (n,)` (the image's, and each lobe's, principled.Lobe.pdf). A
+    direction counts above both normals with a density, and where drawn
+    from a lobe (`own (n,)`, (0,) otherwise) at the lobe's own points only."""
     n = len(dirs)
     idx, density, cos = np.empty(n, dtype=np.int64), np.empty(n), np.empty(n)
     lit = 0
     for i in range(n):
         d, normal = row(dirs, i), row(shading, i)
         c = dot1(normal, d)
-        p = max(c, 0.0) / math.pi + (env_density[i] if len(env_density) else 0.0)
-        if len(alpha):
-            p = p + (lobe_pdf1(normal, row(view, i), d, alpha[i]) if active[i] else 0.0)
-        if not (c > 0.0 and dot1(row(facing, i), d) > 0.0 and p > 0.0) or (among_active and not active[i]):
+        p = max(c, 0.0) / math.pi + others[i]
+        if not (c > 0.0 and dot1(row(facing, i), d) > 0.0 and p > 0.0) or (len(own) and not own[i]):
             continue
         idx[lit], density[lit], cos[lit] = i, p, c
         lit += 1
     return idx[:lit].copy(), density[:lit].copy(), cos[:lit].copy()
 
 
-@kernel("void(f8[:, ::1], f8[:, ::1], i8[::1], b1[::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], i8, f8[:, ::1], "
-        "f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[:, ::1])")
-def _add_world(irradiance, glossy, idx, seen, toward, light, density, cos, samples, shading, view, f0, eta, alpha,
-               gain):
-    """For each of the directions `toward (l,3)` at points `idx (l,)` that
-    the shadow rays found `seen`, the world's radiance `light (s,3)` (the
-    seen ones in order) over its `density (l,)` and the `samples`:
-    irradiance[i] += L cos / (p samples), and with a lobe (`alpha (n,)`,
-    (0,) without) glossy[i] += L f cos(theta_l) / (p samples)
-    (principled.lobe_weight1)."""
+@kernel("void(f8[:, ::1], i8[::1], b1[::1], f8[:, ::1], f8[::1], f8[::1], i8)")
+def _add_world(irradiance, idx, seen, light, density, cos, samples):
+    """For each of the directions at points `idx (l,)` that the shadow
+    rays found `seen`, the world's radiance `light (s,3)` (the seen ones in
+    order) over its `density (l,)` and the `samples`:
+    irradiance[i] += L cos / (p samples)."""
     m = 0
     for j in range(len(idx)):
         if not seen[j]:
             continue
         i = idx[j]
-        radiance = (light[m, 0] / (density[j] * samples), light[m, 1] / (density[j] * samples),
-                    light[m, 2] / (density[j] * samples))
-        m += 1
         for c in range(3):
-            irradiance[i, c] += radiance[c] * cos[j]
-        if len(alpha):
-            w = lobe_weight1(row(shading, i), row(view, i), row(toward, j), row(f0, i), eta[i], alpha[i],
-                             row(gain, i))
-            for c in range(3):
-                glossy[i, c] += radiance[c] * w[c]
+            irradiance[i, c] += light[m, c] / (density[j] * samples) * cos[j]
+        m += 1
 
 
 def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,

@@ -13,10 +13,10 @@ At an opaque surface: ambient * albedo, plus direct light from each lamp and
 from the world (direct_light.py), plus caustic irradiance E_c * albedo / pi
 read from the receiver's map and the world's light through the casters
 (world_paths.py), both in the caustic pass. Under a Principled BSDF's
-specular layer the albedo is the base colour times the share the layer
-leaves it toward the eye (optics/principled.py); the lobe itself reflects
-the lamps and the world, but not the caustic, whose directions the map
-does not keep.
+layers (coat, metal, specular layer) the albedo is the base colour times
+the share they leave it toward the eye, and its emission what the coat
+leaves (optics/layers.py); their lobes reflect the lamps and the world,
+but not the caustic, whose directions the map does not keep.
 
 At a dielectric: both the reflected ray (weight F) and the refracted ray
 (weight 1 - F) carry on, each times the glass's tint for what it did and
@@ -181,15 +181,15 @@ class EyeTracer:
         cos_view = _turn_toward(shading, view)
         triangle = hits.prim - np.take(accel.prim_offset, hits.obj)
         albedo = m.albedo_at(hits.obj, triangle, hits.u, hits.v, hits.points)
-        lobe, share = m.lobe_at(hits.obj, cos_view)
-        diffuse = albedo * share[:, None]
+        lobes, share, emitted = m.layers_at(hits.obj, cos_view, albedo)
+        diffuse = albedo * share
 
         points, settings = hits.points, self.settings
         _, pixel, stratum = self._samples(rays.ids)
         direct = direct_radiance(accel, self.scene.lights, self.energy, points, shading, facing, view, diffuse,
-                                 lobe, self.far, pixel, stratum, settings.lamp_samples, settings.seed,
+                                 lobes, self.far, pixel, stratum, settings.lamp_samples, settings.seed,
                                  self.adaptive_shadows, self.spp)
-        emission = np.take(m.emission, hits.obj, axis=0) * self._after_smooth(rays)[:, None]
+        emission = np.take(m.emission, hits.obj, axis=0) * emitted * self._after_smooth(rays)[:, None]
         self._add("direct", rays.ids, rays.weight, direct + emission)
         caustic = np.zeros((len(rays), 3))
         for index, imap in self.maps.items():
@@ -202,7 +202,7 @@ class EyeTracer:
         ambient = self.scene.ambient * diffuse
         if not self.dark_world:
             chance = None if self.sky_paths is None else self.sky_paths.chances(diffuse, direct + caustic)
-            seen, through = world_light(accel, self.environment, points, shading, facing, view, lobe, self.far,
+            seen, through = world_light(accel, self.environment, points, shading, facing, view, lobes, self.far,
                                         pixel, stratum, settings.world_samples, settings.seed, self.sky_paths,
                                         rays.medium, hits.prim, chance)
             ambient = ambient + seen.irradiance * diffuse / math.pi + seen.glossy

@@ -5,10 +5,10 @@ from . import paper, shapes, textures
 from .camera import Camera
 from .geometry import Mesh
 from .lights import AreaLight, Light, MeshLight, PointLight, SpotLight, SunLight, World
-from .materials import Dielectric, Diffuse, Material, Reflector, Specular
+from .materials import Coat, Dielectric, Diffuse, Material, Reflector, Specular
 from .scene import Instances, Object, Scene, Visibility
 from .settings import RenderSettings
 
-__all__ = ["AreaLight", "Camera", "Dielectric", "Diffuse", "Instances", "Light", "Material", "Mesh", "MeshLight",
-           "Object", "PointLight", "Reflector", "RenderSettings", "Scene", "Specular", "SpotLight", "SunLight",
-           "Visibility", "World", "paper", "shapes", "textures"]
+__all__ = ["AreaLight", "Camera", "Coat", "Dielectric", "Diffuse", "Instances", "Light", "Material", "Mesh",
+           "MeshLight", "Object", "PointLight", "Reflector", "RenderSettings", "Scene", "Specular", "SpotLight",
+           "SunLight", "Visibility", "World", "paper", "shapes", "textures"]

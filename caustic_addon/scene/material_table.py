@@ -10,7 +10,8 @@ import numpy as np
 from ..optics.dispersion import cauchy_ior
 from ..optics.microfacet import alpha_of
 from ..optics.multiscatter import ALBEDO_COSINES, average_albedo, single_scatter_albedo
-from ..optics.principled import Layer, Lobe
+from ..optics.layers import Stack
+from ..optics.principled import Lobe
 from ..optics.spectrum import bands
 from .materials import Diffuse
 from .scene import Object
@@ -35,7 +36,7 @@ class Materials:
     emission (m,3) radiance a surface gives off
     ior_bands (m,K)             IOR in each of the K wavelength bands
     band_weights (K,3)          each band's RGB share (spectrum.Bands)
-    layers                      object index -> its specular layer (principled.Layer)
+    stacks                      object index -> its Principled layers (optics.layers.Stack)
     alpha (m,)                  GGX width, roughness^2; 0 where smooth
     facet_albedo (m,2,k)        single-scattering albedo E at the k cosines
                                 of multiscatter.albedo_cosines, entering
@@ -63,7 +64,7 @@ class Materials:
     alpha: np.ndarray
     facet_albedo: np.ndarray
     facet_albedo_avg: np.ndarray
-    layers: dict[int, Layer] = field(default_factory=dict)
+    stacks: dict[int, Stack] = field(default_factory=dict)
     textures: dict[int, Node] = field(default_factory=dict)
 
     @property
@@ -107,7 +108,7 @@ class Materials:
             facet_albedo_avg=average_albedo(facet_albedo),
             textures={index: o.material.texture for index, o in enumerate(objects)
                       if getattr(o.material, "texture", None) is not None},
-            layers=_layers(objects),
+            stacks=_stacks(objects),
         )
 
     def albedo_at(self, obj: np.ndarray, triangle: np.ndarray, u: np.ndarray, v: np.ndarray,
@@ -124,24 +125,34 @@ class Materials:
                 albedo[rows] = as_color(texture.evaluate(at))
         return albedo
 
-    def lobe_at(self, obj: np.ndarray, cos_v: np.ndarray) -> tuple[Lobe | None, np.ndarray]:
-        """(lobe, diffuse (n,)) at points of objects `obj (n,)` seen at
-        cosines `cos_v (n,)` from their normals: the specular layers there
-        (None if no point has one), and the share of its diffuse base each
-        point keeps under its layer (1 without one)."""
+    def layers_at(self, obj: np.ndarray, cos_v: np.ndarray, base: np.ndarray) -> tuple[list[Lobe], np.ndarray,
+                                                                                       np.ndarray]:
+        """(lobes, diffuse (n,3), emission (n,3)) at points of objects
+        `obj (n,)` seen at cosines `cos_v (n,)` from their normals, over
+        their Base Colors `base (n,3)`: the GGX lobes of their Principled
+        layers there (the specular layer with the metal, and the coat where
+        a point has one; none without layers), the share of the diffuse
+        base they leave, and of the emission (layers.Stack.toward; 1 without)."""
         n = len(obj)
-        diffuse = np.ones(n)
-        if not self.layers or not np.isin(obj, list(self.layers)).any():
-            return None, diffuse
-        lobe = Lobe(np.zeros(n, dtype=bool), np.zeros((n, 3)), np.full(n, 1.5), np.ones(n), np.zeros((n, 3)))
-        for index, layer in self.layers.items():
-            rows = np.flatnonzero(obj == index)
-            if len(rows) == 0:
-                continue
-            gain, share = layer.toward(cos_v[rows])
-            lobe.active[rows], lobe.f0[rows], lobe.eta[rows], lobe.alpha[rows] = True, layer.f0, layer.eta, layer.alpha
-            lobe.gain[rows], diffuse[rows] = gain, share
-        return lobe, diffuse
+        diffuse, emission = np.ones((n, 3)), np.ones((n, 3))
+        here = {index: rows for index in self.stacks if len(rows := np.flatnonzero(obj == index))}
+        if not here:
+            return [], diffuse, emission
+        lobe, coat = (Lobe(np.zeros(n, dtype=bool), np.zeros((n, 3)), np.full(n, 1.5), np.ones(n), np.zeros((n, 3)))
+                      for _ in range(2))
+        for index, rows in here.items():
+            stack = self.stacks[index]
+            seen = stack.toward(cos_v[rows], np.take(base, rows, axis=0))
+            lobe.active[rows] = stack.layer is not None or stack.metallic > 0.0
+            lobe.alpha[rows], lobe.gain[rows] = stack.alpha, seen.layer
+            lobe.metal[rows], lobe.base[rows], lobe.b[rows] = seen.metal, np.clip(base[rows], 0.0, 1.0), seen.b
+            if stack.layer is not None:
+                lobe.f0[rows], lobe.eta[rows] = stack.layer.f0, stack.layer.eta
+            if stack.coat is not None:
+                coat.active[rows], coat.alpha[rows], coat.gain[rows] = True, stack.coat.alpha, seen.coat
+                coat.f0[rows], coat.eta[rows] = stack.coat.f0, stack.coat.eta
+            diffuse[rows], emission[rows] = seen.diffuse, seen.emission
+        return [part for part in (lobe, coat) if part.active.any()], diffuse, emission
 
     @property
     def specular_surface(self) -> np.ndarray:
@@ -159,16 +170,15 @@ MATERIAL_TYPES = {"dielectric": "b1[::1]", "reflector": "b1[::1]", "reflection_t
                   "transmission_tint": "f8[:, ::1]"}
 
 
-def _layers(objects: list[Object]) -> dict[int, Layer]:
-    """Object index -> the specular layer of each diffuse object that has one that reflects."""
-    layers = {}
+def _stacks(objects: list[Object]) -> dict[int, Stack]:
+    """Object index -> the Principled layers of each diffuse object whose layers reflect."""
+    stacks = {}
     for index, o in enumerate(objects):
-        spec = o.material.specular if isinstance(o.material, Diffuse) else None
-        if spec is not None:
-            layer = spec.layer()
-            if layer is not None:
-                layers[index] = layer
-    return layers
+        inputs = o.material.specular if isinstance(o.material, Diffuse) else None
+        stack = None if inputs is None else inputs.stack()
+        if stack is not None:
+            stacks[index] = stack
+    return stacks
 
 
 def _facet_albedo(obj: Object, alpha: float) -> np.ndarray:

@@ -9,7 +9,7 @@ from typing import Optional, Union
 import numpy as np
 
 from ..optics.microfacet import alpha_of
-from ..optics.principled import Layer
+from ..optics.layers import Stack
 from .color import RGB, rgb
 from .textures import Node
 
@@ -67,16 +67,40 @@ class Dielectric:
 
 
 @dataclass
+class Coat:
+    """The coat of a Principled BSDF: a clear GGX dielectric over the rest
+    (optics/layers.py).
+
+    weight        0..1, Coat Weight
+    roughness     0..1, Coat Roughness (alpha = roughness^2)
+    ior           >= 1, Coat IOR
+    tint          (3,) Coat Tint: the colour of what is seen through it, at normal incidence
+    """
+
+    weight: float = 1.0
+    roughness: float = 0.03
+    ior: float = 1.5
+    tint: RGB = field(default_factory=lambda: np.ones(3))
+
+    def __post_init__(self):
+        self.tint = rgb(self.tint)
+
+
+@dataclass
 class Specular:
-    """The specular layer of a Principled BSDF over a diffuse surface: a
-    GGX lobe with Cycles' Fresnel, energy compensation and layering
-    (optics/principled.py).
+    """The layers of a Principled BSDF over a diffuse surface: a GGX
+    specular layer with Cycles' Fresnel, energy compensation and layering
+    (optics/principled.py), a metal and a coat (optics/layers.py).
 
     roughness     0..1, the Principled BSDF's Roughness (alpha = roughness^2)
     ior           its IOR; 1 reflects nothing
     level         Specular IOR Level, 0.5 keeps the F0 of `ior`, 1 doubles it
-    tint          (3,) Specular Tint, multiplying F0
+    tint          (3,) Specular Tint, multiplying F0, and the metal's tint at 82 degrees
     multiscatter  the node's Multiscatter GGX (its default); False for GGX
+    metallic      0..1, Metallic: that share of the surface is a metal of its Base Color
+    coat          the coat over it all, or None
+    layering      the Blender whose Cycles layers them: "4.2", "4.5" or "5.3"
+                  (optics/layers.py; later ones layer as 5.3)
     """
 
     roughness: float = 0.5
@@ -84,19 +108,23 @@ class Specular:
     level: float = 0.5
     tint: RGB = field(default_factory=lambda: np.ones(3))
     multiscatter: bool = True
+    metallic: float = 0.0
+    coat: Coat | None = None
+    layering: str = "5.3"
 
     def __post_init__(self):
         self.tint = rgb(self.tint)
 
-    def layer(self) -> Layer | None:
-        """The layer ready to shade, or None where it reflects nothing."""
-        return Layer.of(self.roughness, self.ior, self.level, self.tint, self.multiscatter)
+    def stack(self) -> Stack | None:
+        """The layers ready to shade, or None where none reflects anything."""
+        return Stack.of(self)
 
     def diffuse_share(self, cos_v: np.ndarray) -> np.ndarray:
-        """(n,) the share of the diffuse base the layer leaves toward view
-        cosines `cos_v (n,)` (Layer.toward): what the caustic is times."""
-        layer = self.layer()
-        return np.ones(len(cos_v)) if layer is None else layer.toward(np.asarray(cos_v, dtype=np.float64))[1]
+        """(n,3) the share of the diffuse base the layers leave toward view
+        cosines `cos_v (n,)` (Stack.toward): what the caustic is times."""
+        cos_v = np.asarray(cos_v, dtype=np.float64)
+        stack = self.stack()
+        return np.ones((len(cos_v), 3)) if stack is None else stack.toward(cos_v, np.zeros((len(cos_v), 3))).diffuse
 
 
 @dataclass

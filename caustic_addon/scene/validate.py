@@ -9,6 +9,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..optics.dispersion import cauchy_ior
+from ..optics.layers import LAYERINGS
 from ..optics.spectrum import VISIBLE_NM
 from .lights import AreaLight, SpotLight, SunLight, World
 from .materials import Dielectric, Diffuse, Reflector
@@ -175,6 +176,18 @@ def _check_specular(name: str, spec) -> None:
         raise SceneError(f"{name}: specular IOR must be positive (got {spec.ior})")
     if spec.level < 0.0 or np.any(spec.tint < 0.0):
         raise SceneError(f"{name}: specular level and tint must not be negative")
+    _finite(name, "its Metallic", [spec.metallic])
+    if not 0.0 <= spec.metallic <= 1.0:
+        raise SceneError(f"{name}: Metallic must be in 0..1 (got {spec.metallic})")
+    if spec.layering not in LAYERINGS:
+        raise SceneError(f"{name}: layering must be one of {', '.join(LAYERINGS)} (got {spec.layering!r})")
+    coat = spec.coat
+    if coat is not None:
+        _finite(name, "its coat", [coat.weight, coat.roughness, coat.ior, *coat.tint])
+        if coat.weight < 0.0 or not 0.0 <= coat.roughness <= 1.0 or coat.ior < 1.0 or np.any(coat.tint < 0.0):
+            raise SceneError(f"{name}: the coat's weight and tint must not be negative, its roughness must be in "
+                             f"0..1 and its IOR at least 1 (got {coat.weight}, {coat.tint.tolist()}, "
+                             f"{coat.roughness}, {coat.ior})")
 
 
 def _check_lamp(light, extent: float) -> list[str]:

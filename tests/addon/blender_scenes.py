@@ -278,6 +278,26 @@ def cycles_caustics(folder, samples: int, seed: int, specular_bounces: int = 8, 
     return rendered_pixels(folder)[..., :3]
 
 
+def timed_cycles_caustics(folder, samples: int, seed: int, specular_bounces: int = 8) -> tuple[np.ndarray, float]:
+    """(cycles_caustics' image, the seconds it took)."""
+    clock = time.perf_counter()
+    image = cycles_caustics(folder, samples, seed, specular_bounces)
+    return image, time.perf_counter() - clock
+
+
+def pixel_rays(pixx: int, pixy: int) -> tuple[np.ndarray, np.ndarray]:
+    """(origin (3,), dirs (pixy, pixx, 3)) of the scene camera's rays
+    through each pixel's centre, row 0 at the top, dirs not normalized."""
+    scene = bpy.context.scene
+    camera = scene.camera
+    top_right, bottom_right, bottom_left, top_left = (np.array(c) for c in camera.data.view_frame(scene=scene))
+    u = ((np.arange(pixx) + 0.5) / pixx)[None, :, None]
+    v = ((np.arange(pixy) + 0.5) / pixy)[:, None, None]
+    local = (1 - v) * ((1 - u) * top_left + u * top_right) + v * ((1 - u) * bottom_left + u * bottom_right)
+    matrix = np.array(camera.matrix_world)
+    return matrix[:3, 3], local @ matrix[:3, :3].T
+
+
 def rendered_pixels(folder) -> np.ndarray:
     """(h, w, 4) float64 RGBA, row 0 at the top: the scene rendered as it is
     set up, through a float EXR in `folder`."""

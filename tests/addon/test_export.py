@@ -141,23 +141,39 @@ def test_roles_from_materials_and_overrides(addon):
     assert result.materials["Water"] == "Water"
 
 
-def test_a_principled_receiver_keeps_its_specular_layer(addon):
-    """Roughness, IOR, Specular IOR Level, Specular Tint and the distribution
-    reach the engine; inputs it does not render are named; a Diffuse BSDF
-    has no layer."""
+def test_a_principled_receiver_keeps_its_layers(addon):
+    """Roughness, IOR, Specular IOR Level, Specular Tint, the distribution,
+    Metallic up to 0.5 and the coat reach the engine; inputs it does not
+    render are named, in one warning; a Diffuse BSDF has no layer."""
     floor, _ = lamp_scene()
     floor.data.materials[0] = principled("Varnish", **{
         "Roughness": 0.3, "IOR": 1.45, "Specular IOR Level": 0.8, "Specular Tint": (1.0, 0.5, 0.25, 1.0),
-        "Coat Weight": 0.5, "Sheen Weight": 0.2})
+        "Metallic": 0.3, "Coat Weight": 0.5, "Coat Roughness": 0.1, "Coat IOR": 1.6,
+        "Coat Tint": (0.9, 0.7, 0.5, 1.0), "Sheen Weight": 0.2, "Subsurface Weight": 0.1})
     floor.data.materials[0].node_tree.nodes["Principled BSDF"].distribution = 'GGX'
     scenes.add_sphere(0.3, (1.0, 0.0, 0.5), scenes.diffuse_material("Chalk"), name="Chalk", segments=8, rings=4)
     result = read(addon)
     layer = engine_object(result, "Floor").material.specular
-    assert (layer.roughness, layer.ior, layer.level) == pytest.approx((0.3, 1.45, 0.8))
+    assert (layer.roughness, layer.ior, layer.level, layer.metallic) == pytest.approx((0.3, 1.45, 0.8, 0.3))
     assert layer.tint == pytest.approx([1.0, 0.5, 0.25]) and not layer.multiscatter
+    assert (layer.coat.weight, layer.coat.roughness, layer.coat.ior) == pytest.approx((0.5, 0.1, 1.6))
+    assert layer.coat.tint == pytest.approx([0.9, 0.7, 0.5])
     assert engine_object(result, "Chalk").material.specular is None
     named = [w for w in result.warnings if "material 'Varnish'" in w]
-    assert len(named) == 1 and "Coat Weight, Sheen Weight are not rendered" in named[0]
+    assert named == ["material 'Varnish': its Sheen Weight, Subsurface Weight are not rendered; it is rendered as a "
+                     "diffuse base under its specular layer, metal and coat"]
+
+
+def test_a_metal_names_what_it_does_not_render(addon):
+    """Metallic above 0.5 renders as a mirror of its Base Color, which has
+    no coat."""
+    lamp_scene()
+    scenes.add_sphere(0.3, (1.0, 0.0, 0.5), principled("Lacquered gold", **{"Metallic": 1.0, "Coat Weight": 1.0}),
+                      name="Ring", segments=8, rings=4)
+    result = read(addon)
+    assert isinstance(engine_object(result, "Ring").material, addon.caustic_addon.Reflector)
+    assert [w for w in result.warnings if "Lacquered gold" in w] == [
+        "material 'Lacquered gold': its Coat Weight is not rendered; it is rendered as a mirror of its Base Color"]
 
 
 def test_mirrors_and_metals_read_as_reflectors(addon):

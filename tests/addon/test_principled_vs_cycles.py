@@ -29,10 +29,11 @@ SPP = 16
 
 
 def principled_floor(roughness, ior=1.5, level=0.5, tint=(1.0, 1.0, 1.0), distribution='MULTI_GGX',
-                     base=(0.3, 0.3, 0.3)):
+                     base=(0.3, 0.3, 0.3), metallic=0.0, coat=None):
     """A 20 m Principled floor, a camera 2 m up looking down across it
     and a point lamp beyond its mirror point, so the highlight lies in
-    the view's lower middle."""
+    the view's lower middle; `coat` the Coat inputs by their names after
+    "Coat " (Weight, Roughness, IOR, Tint)."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     material = bpy.data.materials.new("Floor")
     if material.node_tree is None:
@@ -44,6 +45,9 @@ def principled_floor(roughness, ior=1.5, level=0.5, tint=(1.0, 1.0, 1.0), distri
     shader.inputs["IOR"].default_value = ior
     shader.inputs["Specular IOR Level"].default_value = level
     shader.inputs["Specular Tint"].default_value = (*tint, 1.0)
+    shader.inputs["Metallic"].default_value = metallic
+    for name, value in (coat or {}).items():
+        shader.inputs[f"Coat {name}"].default_value = (*value, 1.0) if name == "Tint" else value
     scenes.add_plane(20.0, material)
     scenes.add_camera((0.0, -3.0, 2.0), target=(0.0, 0.5, 0.0), lens=30.0)
     scenes.set_resolution(WIDTH, HEIGHT)
@@ -147,6 +151,11 @@ INPUTS = {
     "IOR 1.33, GGX (no multiple scattering)": dict(ior=1.33, distribution='GGX'),
     "Specular IOR Level 0: no layer": dict(level=0.0),
     "a white base, Roughness 0.8": dict(roughness=0.8, base=(1.0, 1.0, 1.0)),
+    "Metallic 0.4 of a coloured base, a coloured Specular Tint": dict(metallic=0.4, base=(0.9, 0.6, 0.2),
+                                                                     tint=(1.0, 0.7, 0.5)),
+    "a clear coat, Coat Roughness 0.25": dict(coat={"Weight": 1.0, "Roughness": 0.25}),
+    "half a tinted coat of IOR 1.8 over Metallic 0.3": dict(metallic=0.3, coat={
+        "Weight": 0.5, "Roughness": 0.4, "IOR": 1.8, "Tint": (0.9, 0.6, 0.3)}),
 }
 
 
