@@ -318,7 +318,7 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
     cost more than its rays). `samples` directions of each strategy per
     point, the cosine's, the image's and each of the `lobes`' (material_table.layers_at):
     `_world_directions` weighs them, `_add_world` adds what each brings to the
-    irradiance, and the lobes' weights to the glossy part."""
+    irradiance, and `_add_lobe_light` to the glossy part through each lobe."""
     n = len(points)
     parts = [WorldLight(np.zeros((n, 3)), np.zeros((n, 3))) for _ in range(2)]
     image = environment.world.environment is not None
@@ -332,11 +332,10 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
         if not lobes:
             return
         rows = np.flatnonzero(seen)
-        at, toward = np.take(idx, rows), np.take(toward, rows, axis=0)
+        at, toward = np.take(idx, rows), contiguous(np.take(toward, rows, axis=0), np.float64)
         radiance = light / (np.take(density, rows) * samples)[:, None]
-        normal, eye = np.take(shading, at, axis=0), np.take(view, at, axis=0)
         for lobe in lobes:
-            np.add.at(part.glossy, at, radiance * lobe.take(at).weight(normal, eye, toward))
+            _add_lobe_light(part.glossy, at, toward, radiance, shading, view, *lobe.fields)
 
     blocked = []
 
@@ -433,6 +432,21 @@ def _add_world(irradiance, idx, seen, light, density, cos, samples):
         for c in range(3):
             irradiance[i, c] += light[m, c] / (density[j] * samples) * cos[j]
         m += 1
+
+
+@kernel("void(f8[:, ::1], i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], "
+        "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1])")
+def _add_lobe_light(glossy, at, toward, radiance, shading, view, f0, eta, alpha, gain, metal, base, b):
+    """glossy[at[j]] += L_j f cos(theta_l) of the lobe at point `at[j]`
+    (principled.lobe_weight1) for light `radiance (l,3)` (over its density
+    and the samples) from the unit directions `toward (l,3)`; the lobe's
+    fields (principled.Lobe.fields) per point."""
+    for j in range(len(at)):
+        i = at[j]
+        w = lobe_weight1(row(shading, i), row(view, i), row(toward, j), row(f0, i), eta[i], alpha[i], row(gain, i),
+                         row(metal, i), row(base, i), row(b, i))
+        for c in range(3):
+            glossy[i, c] += radiance[j, c] * w[c]
 
 
 def rough_specular_radiance(accel: Accelerator, lights: list[Light], energy: float, points: np.ndarray,

@@ -15,8 +15,9 @@ REPO = Path(__file__).resolve().parents[2]
 HERE = str(Path(__file__).resolve().parent)
 if HERE not in sys.path:
     sys.path.insert(0, HERE)
-# The name the add-on is imported under; an installed extension is bl_ext.<repo>.caustics.
-PACKAGE = "caustics_source"
+# The name the add-on is imported under, as examples/demo.py and the benchmarks import
+# it, so that all share its compiled kernels; an installed extension is bl_ext.<repo>.caustics.
+PACKAGE = "caustics"
 
 
 def load_addon():
