@@ -52,7 +52,7 @@ ANISOTROPY_INPUTS = ("Anisotropy", "Anisotropic")
 # The Blenders whose Principled layering the engine follows
 # (optics/layers.py), by the first version taken to layer so (checked in
 # 4.2, 4.5 and 5.3; 5.0 to 5.2 are taken to layer as 5.3).
-LAYERINGS = {(5, 0, 0): "5.3", (4, 5, 0): "4.5", (0, 0, 0): "4.2"}
+LAYERING_SINCE = {(5, 0, 0): "5.3", (4, 5, 0): "4.5", (0, 0, 0): "4.2"}
 # A Principled BSDF's dispersion (Blender 5.3 on): OpenPBR's scale and Abbe number.
 DISPERSION_SCALE, DISPERSION_ABBE = "Transmission Dispersion Scale", "Transmission Dispersion Abbe Number"
 
@@ -225,7 +225,7 @@ def _specular_layer(shader, what: str, warnings: list[str]) -> Specular:
                     multiscatter=shader.distribution == 'MULTI_GGX',
                     metallic=min(max(_value(shader, "Metallic", what, warnings), 0.0), 1.0),
                     coat=_coat(shader, what, warnings),
-                    layering=next(name for since, name in LAYERINGS.items() if bpy.app.version >= since))
+                    layering=next(name for since, name in LAYERING_SINCE.items() if bpy.app.version >= since))
 
 
 def _coat(shader, what: str, warnings: list[str]) -> Coat | None:

@@ -278,10 +278,11 @@ def cycles_caustics(folder, samples: int, seed: int, specular_bounces: int = 8, 
     return rendered_pixels(folder)[..., :3]
 
 
-def timed_cycles_caustics(folder, samples: int, seed: int, specular_bounces: int = 8) -> tuple[np.ndarray, float]:
+def timed_cycles_caustics(folder, samples: int, seed: int, specular_bounces: int = 8,
+                          diffuse_bounces: int = 1) -> tuple[np.ndarray, float]:
     """(cycles_caustics' image, the seconds it took)."""
     clock = time.perf_counter()
-    image = cycles_caustics(folder, samples, seed, specular_bounces)
+    image = cycles_caustics(folder, samples, seed, specular_bounces, diffuse_bounces)
     return image, time.perf_counter() - clock
 
 
