@@ -21,6 +21,7 @@ from .scene import RenderSettings, Scene
 
 _BASE = 200e6                  # numpy, Embree and the engine's own tables
 _PER_TRIANGLE = 400.0          # Embree's BVH and the accelerator's normals, owners and charts
+_PER_COPY = 600.0              # an instance: its transforms, Embree's and the accelerator's
 _PER_PIXEL = 200.0             # pass buffers (float64) and the image and passes (float32)
 _PER_CELL = 250.0              # a map's cells, their tables, and the beam layers over them
 _PER_FINE_CELL = 72.0          # the fine beam layer: 3 channels, buffer, values and tables
@@ -44,7 +45,9 @@ def needed_bytes(scene: Scene, settings: RenderSettings) -> dict[str, float]:
     lamp_chunk = min(settings.chunk_size // (BAND_SHARE if settings.density == "beam" else 1), settings.lamp_rays)
     eye_chunk = min(settings.chunk_size, pixels * settings.spp)
     parts = {
-        "the scene's triangles": _PER_TRIANGLE * sum(len(o.mesh.triangles) for o in scene.objects),
+        "the scene's triangles": sum(_PER_TRIANGLE * o.mesh.triangle_count if o.copies == 1 else
+                                     _PER_TRIANGLE * len(o.instances.mesh.triangles) + _PER_COPY * o.copies
+                                     for o in scene.objects),
         "the image": _PER_PIXEL * pixels,
         "the illumination maps": _PER_CELL * cells,
         "the rays in flight": max(_PER_LAMP_RAY_IN_FLIGHT * lamp_chunk, _PER_EYE_SAMPLE_IN_FLIGHT * eye_chunk)

@@ -127,7 +127,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
                 clock = time.perf_counter()
                 buffers = eye_pass(scene, settings, accel, materials, maps, sky, monitor, share)
                 seconds["eye"] = time.perf_counter() - clock
-            rays_eye_pass, triangles = accel.rays_cast - rays_lamp_pass, int(len(accel.owner))
+            rays_eye_pass, triangles = accel.rays_cast - rays_lamp_pass, int(accel.prim_offset[-1])
         finally:
             accel.close()
 

@@ -64,13 +64,13 @@ def _local_mesh(mesh) -> tuple[Optional[Mesh], np.ndarray, dict[str, np.ndarray]
                  uv_maps.get("")), material_index, uv_maps)
 
 
-def _material_parts(ob_eval, material_index: np.ndarray, name: str, warnings: list[str]) -> list:
+def _material_parts(slots: list, material_index: np.ndarray, name: str, warnings: list[str]) -> list:
     """[(material or None, triangle rows (k,) in mesh order, slot numbers
-    from 1)]: the object's triangles by the material of their slot, a slot
-    index past the last slot taking the last one, as Cycles does. Slots
-    holding the same material are one part. A warning names each empty
-    slot that faces use (EMPTY_SLOT: what the engine and Cycles render there)."""
-    slots = [slot.material for slot in ob_eval.material_slots]
+    from 1)]: the triangles by the material of their slot in `slots` (a
+    material or None each), a slot index past the last slot taking the last
+    one, as Cycles does. Slots holding the same material are one part. A
+    warning names each empty slot that faces use (EMPTY_SLOT: what the
+    engine and Cycles render there)."""
     if not slots:
         return [(None, np.arange(len(material_index)), [])]
     slot_of = np.clip(material_index, 0, len(slots) - 1)
@@ -107,25 +107,27 @@ def _surface(material, surfaces: dict, warnings: list[str]):
     return surfaces[key]
 
 
-def _warn_faceless(ob, name: str, surfaces: dict, warnings: list[str]) -> None:
+def _warn_faceless(original, slots: list, name: str, surfaces: dict, warnings: list[str]) -> None:
     """A warning for a mesh with no faces that would be a glass, a mirror
-    or a receiver it was made to be, by its first slot's material."""
-    material = next((slot.material for slot in ob.material_slots), None)
-    engine = engine_material(_surface(material, surfaces, warnings), ob.original.caustic)
+    or a receiver it was made to be, by its first slot's material (`slots`),
+    with the settings of object `original`."""
+    material = next(iter(slots), None)
+    engine = engine_material(_surface(material, surfaces, warnings), original.caustic)
     if isinstance(engine, (Dielectric, Reflector)):
         warnings.append(f"'{name}' has no faces, so it casts no caustics: it was left out")
-    elif ob.original.caustic.role == 'RECEIVER':
+    elif original.caustic.role == 'RECEIVER':
         warnings.append(f"'{name}' has no faces, so it receives no caustics: it was left out")
 
 
-def object_visibility(instance, view_layer) -> Visibility:
-    """The rays that see a depsgraph object instance, as Cycles reads them
+def object_visibility(ob, parent, view_layer) -> Visibility:
+    """The rays that see evaluated object `ob`, placed by instancer
+    `parent` (None: itself), as Cycles reads them
     (intern/cycles/blender/object.cpp): the object's ray visibility, and its
     instancer's too; holdout (the object's or its collection's) and Indirect
     Only (its collection's, which hides it from camera rays) from the
     instancer, if any, in `view_layer`."""
-    owners = [instance.object] + ([instance.parent] if instance.is_instance else [])
-    holder = (instance.parent if instance.is_instance else instance.object).original
+    owners = [ob] + ([parent] if parent is not None else [])
+    holder = (parent if parent is not None else ob).original
     holdout = holder.holdout_get(view_layer=view_layer)
     indirect_only = not holdout and holder.indirect_only_get(view_layer=view_layer)
 
@@ -166,22 +168,40 @@ def read_source(ob, name: str, surfaces: dict, warnings: list[str],
     changed (Live): a mesh found there, of the same object, is not read again."""
     uid = ob.original.session_uid
     kept = meshes.get(name) if meshes is not None else None
+    slots = [slot.material for slot in ob.material_slots]
     with evaluated_mesh(ob) if kept is None or kept[0] != uid else nullcontext() as mesh:
         local, material_index, uv_maps = _local_mesh(mesh) if mesh is not None else kept[1:]
         if meshes is not None:
             meshes[name] = (uid, local, material_index, uv_maps)
-        if local is None:
-            _warn_faceless(ob, name, surfaces, warnings)
-            return None
-        parts = _material_parts(ob, material_index, name, warnings)
+    return _source(name, ob.original, slots, ob.visible_diffuse, local, material_index, uv_maps, surfaces, warnings)
+
+
+def read_reference(holder, mesh, name: str, surfaces: dict, warnings: list[str]) -> Optional[MeshSource]:
+    """read_source of a mesh that Geometry Nodes on evaluated object
+    `holder` instance, that is no object of its own (an Ico Sphere node's,
+    an Object Info node's geometry), as Blender's depsgraph makes it an
+    object: the holder's settings and ray visibility, the mesh's materials."""
+    return _source(name, holder.original, list(mesh.materials), holder.visible_diffuse, *_local_mesh(mesh),
+                   surfaces, warnings)
+
+
+def _source(name: str, original, slots: list, visible_diffuse: bool, local: Optional[Mesh],
+            material_index: np.ndarray, uv_maps: dict, surfaces: dict, warnings: list[str]) -> Optional[MeshSource]:
+    """The MeshSource of mesh `local` (None: it has no faces, which a
+    warning names) with object `original`'s settings and the materials in
+    `slots`."""
+    if local is None:
+        _warn_faceless(original, slots, name, surfaces, warnings)
+        return None
+    parts = _material_parts(slots, material_index, name, warnings)
     named = []
     for material, rows, slots in parts:
         _surface(material, surfaces, warnings)
         named.append((material.original.name if material is not None else None, rows, slots))
-    engines = [engine_material(surfaces[key], ob.original.caustic) for key, _, _ in named]
+    engines = [engine_material(surfaces[key], original.caustic) for key, _, _ in named]
     one_by_one = (any(surfaces[key].texture is not None for key, _, _ in named)
                   or any(isinstance(engine, Diffuse) and engine.receiver for engine in engines))
-    return MeshSource(name, ob.original, local, material_index, uv_maps, named, one_by_one, ob.visible_diffuse)
+    return MeshSource(name, original, local, material_index, uv_maps, named, one_by_one, visible_diffuse)
 
 
 def mesh_objects(ob, name: str, matrix: np.ndarray, visibility: Visibility, surfaces: dict,

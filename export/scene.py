@@ -18,7 +18,8 @@ from .errors import InputError
 from .lamps import engine_light
 from .materials import Surface
 from .matrices import numpy_matrix
-from .meshes import MeshSource, mesh_objects, object_visibility, place, read_source
+from .instancers import Instancer, Reference, read_instancers
+from .meshes import MeshSource, mesh_objects, object_visibility, place, read_reference, read_source
 from .render_view import adaptive_subdivision, read_as_render, renderable_objects, viewport_differences
 from .world import engine_world
 
@@ -107,60 +108,140 @@ def _read_objects(scene, depsgraph, with_camera: bool, renderable: Optional[set[
     one engine object per material, named "Object [Instancer]" (Object.copies;
     "... #n" where one instancer places several meshes), or one per
     instance, "Object [Instancer #n]", where it is textured or a receiver
-    (meshes.MeshSource.one_by_one)."""
+    (meshes.MeshSource.one_by_one). Geometry Nodes' instances are read in
+    bulk where they can be (instancers.py), else the depsgraph's object
+    instances are walked one by one; n counts them in the walk's order."""
     camera = read_camera(scene, depsgraph) if with_camera else dummy_camera()
     warnings = camera_warnings(scene) if with_camera else []
-    read = SceneRead(Scene(objects=[], lights=[], camera=camera), warnings)
-    surfaces: dict[Optional[str], Surface] = {}
-    sources: dict[tuple, tuple[Optional[MeshSource], Visibility]] = {}
-    batches: dict[tuple, list[np.ndarray]] = {}
+    reader = _Reader(SceneRead(Scene(objects=[], lights=[], camera=camera), warnings), depsgraph.view_layer,
+                     renderable, meshes)
+    instancers = read_instancers(depsgraph)
+    if instancers is None:
+        reader.walk(depsgraph)
+    else:
+        reader.bulk(depsgraph, instancers)
+    reader.place_batches()
+    return reader.read
 
-    def add(objects, source_name: str, instanced: bool) -> None:
-        for obj, material in objects:
-            read.scene.objects.append(obj)
-            read.sources[obj.name], read.materials[obj.name] = source_name, material
-            if instanced:
-                read.instanced.add(obj.name)
 
-    for number, inst in enumerate(depsgraph.object_instances):
-        ob = inst.object
+class _Reader:
+    """_read_objects' reading: `read` what it has read so far, `surfaces`
+    each material's reading, `sources` each instanced mesh's (by instancer,
+    object and mesh: the MeshSource or None, and its Visibility), `batches`
+    the matrices (k,4,4) of the instances of each that are placed together."""
+
+    def __init__(self, read: SceneRead, view_layer, renderable: Optional[set[str]], meshes: Optional[dict]):
+        self.read, self.view_layer, self.renderable, self.meshes = read, view_layer, renderable, meshes
+        self.surfaces: dict[Optional[str], Surface] = {}
+        self.sources: dict[tuple, tuple[Optional[MeshSource], Visibility]] = {}
+        self.batches: dict[tuple, list[np.ndarray]] = {}
+
+    def walk(self, depsgraph) -> None:
+        """Every object instance of `depsgraph`, one by one."""
+        warnings = self.read.warnings
+        for number, inst in enumerate(depsgraph.object_instances):
+            ob = inst.object
+            if not inst.is_instance:
+                self.object(ob, lambda: numpy_matrix(inst.matrix_world))
+                continue
+            source, parent = ob.original, inst.parent
+            holder = parent.original.name
+            if self.renderable is not None and holder not in self.renderable:
+                continue
+            if ob.type == 'LIGHT':
+                self.lamp(ob, parent, _name(source.name, holder, number), numpy_matrix(inst.matrix_world))
+            elif ob.type in UNSUPPORTED_GEOMETRY:
+                warnings.append(f"'{_name(source.name, holder, number)}': {ob.type.lower()} objects are not "
+                                "supported; convert it to a mesh")
+            elif ob.type == 'MESH' and source.caustic.role != 'IGNORE':
+                name = f"{source.name} [{holder}]"
+                self.instances((holder, source.name, ob.data.as_pointer()), np.array([number]),
+                               numpy_matrix(inst.matrix_world)[None],
+                               lambda: (read_source(ob, name, self.surfaces, warnings),
+                                        object_visibility(ob, parent, self.view_layer)))
+
+    def bulk(self, depsgraph, instancers: dict[str, Instancer]) -> None:
+        """The objects of `depsgraph`, and the `instancers` of those whose
+        Geometry Nodes make instances (instancers.read_instancers)."""
+        number = 0
+        for ob in depsgraph.objects:
+            self.object(ob, lambda: numpy_matrix(ob.matrix_world))
+            instancer = instancers.get(ob.name)
+            if instancer is not None and (self.renderable is None or ob.original.name in self.renderable):
+                for ref in instancer.references:
+                    self._reference(ob, ref, number + 1 + ref.rows)
+            number += 1 + (instancer.count if instancer is not None else 0)
+
+    def _reference(self, holder, ref: Reference, numbers: np.ndarray) -> None:
+        """The instances `ref` of evaluated object `holder`, the walk's `numbers (k,)`."""
+        source = ref.ob.original if ref.ob is not None else holder.original
+        if source.caustic.role == 'IGNORE':
+            return
+        name = f"{source.name} [{holder.original.name}]"
+
+        def read_mesh():
+            mesh = (read_source(ref.ob, name, self.surfaces, self.read.warnings) if ref.ob is not None
+                    else read_reference(holder, ref.mesh, name, self.surfaces, self.read.warnings))
+            return mesh, object_visibility(ref.ob or holder, holder, self.view_layer)
+
+        self.instances((holder.original.name, source.name, ref.mesh.as_pointer()), numbers, ref.matrices, read_mesh)
+
+    def object(self, ob, matrix_of) -> None:
+        """Evaluated object `ob`, which no instancer places, at `matrix_of()`."""
         source = ob.original
-        parent = inst.parent.original.name if inst.is_instance else None
-        if renderable is not None and (parent or source.name) not in renderable:
-            continue
+        if self.renderable is not None and source.name not in self.renderable:
+            return
         if ob.type == 'LIGHT':
-            name = _name(source.name, parent, number)
-            lamp = engine_light(ob, numpy_matrix(inst.matrix_world), name, warnings)
-            seen = object_visibility(inst, depsgraph.view_layer)
-            lamp.visibility = Visibility(camera=seen.camera, glossy=seen.glossy, transmission=seen.transmission)
-            read.scene.lights.append(lamp)
-            read.sources[name] = source.name
+            self.lamp(ob, None, source.name, matrix_of())
         elif ob.type in UNSUPPORTED_GEOMETRY:
-            warnings.append(f"'{_name(source.name, parent, number)}': {ob.type.lower()} objects are not supported; "
-                            "convert it to a mesh")
-        elif ob.type != 'MESH' or source.caustic.role == 'IGNORE':
-            continue
-        elif parent is None:
-            visibility = object_visibility(inst, depsgraph.view_layer)
-            add(mesh_objects(ob, source.name, numpy_matrix(inst.matrix_world), visibility, surfaces, warnings, meshes),
-                source.name, False)
-        else:
-            key = (parent, source.name, ob.data.as_pointer())
-            if key not in sources:
-                sources[key] = (read_source(ob, f"{source.name} [{parent}]", surfaces, warnings),
-                                object_visibility(inst, depsgraph.view_layer))
-            mesh, visibility = sources[key]
-            if mesh is not None and mesh.one_by_one:
-                add(place(mesh, _name(source.name, parent, number), numpy_matrix(inst.matrix_world)[None], visibility,
-                          surfaces, warnings),
-                    source.name, True)
-            elif mesh is not None:
-                batches.setdefault(key, []).append(numpy_matrix(inst.matrix_world))
-    shared = collections.Counter(sources[key][0].name for key in batches)
-    numbered: collections.Counter = collections.Counter()
-    for key, matrices in batches.items():
-        mesh, visibility = sources[key]
-        numbered[mesh.name] += 1
-        name = mesh.name if shared[mesh.name] == 1 else f"{mesh.name} #{numbered[mesh.name]}"
-        add(place(mesh, name, np.stack(matrices), visibility, surfaces, warnings), mesh.original.name, True)
-    return read
+            self.read.warnings.append(f"'{source.name}': {ob.type.lower()} objects are not supported; convert it "
+                                      "to a mesh")
+        elif ob.type == 'MESH' and source.caustic.role != 'IGNORE':
+            self._add(mesh_objects(ob, source.name, matrix_of(), object_visibility(ob, None, self.view_layer),
+                                   self.surfaces, self.read.warnings, self.meshes),
+                      source.name, False)
+
+    def lamp(self, ob, parent, name: str, matrix: np.ndarray) -> None:
+        """Evaluated lamp object `ob`, placed by `parent` (None: itself), named `name`, at `matrix (4,4)`."""
+        lamp = engine_light(ob, matrix, name, self.read.warnings)
+        seen = object_visibility(ob, parent, self.view_layer)
+        lamp.visibility = Visibility(camera=seen.camera, glossy=seen.glossy, transmission=seen.transmission)
+        self.read.scene.lights.append(lamp)
+        self.read.sources[name] = ob.original.name
+
+    def instances(self, key: tuple, numbers: np.ndarray, matrices: np.ndarray, read_mesh) -> None:
+        """Instances of one mesh at `matrices (k,4,4)`, the walk's
+        `numbers (k,)`: `key` (instancer, object, mesh) names the mesh, read
+        by `read_mesh()` -> (MeshSource or None, Visibility) the first time
+        it is met."""
+        if key not in self.sources:
+            self.sources[key] = read_mesh()
+        mesh, visibility = self.sources[key]
+        if mesh is None:
+            return
+        if not mesh.one_by_one:
+            self.batches.setdefault(key, []).append(matrices)
+            return
+        parent, source_name, _ = key
+        for number, matrix in zip(numbers.tolist(), matrices):
+            self._add(place(mesh, _name(source_name, parent, number), matrix[None], visibility, self.surfaces,
+                            self.read.warnings),
+                      source_name, True)
+
+    def place_batches(self) -> None:
+        """Each mesh's batched instances as one object per material."""
+        shared = collections.Counter(self.sources[key][0].name for key in self.batches)
+        numbered: collections.Counter = collections.Counter()
+        for key, matrices in self.batches.items():
+            mesh, visibility = self.sources[key]
+            numbered[mesh.name] += 1
+            name = mesh.name if shared[mesh.name] == 1 else f"{mesh.name} #{numbered[mesh.name]}"
+            self._add(place(mesh, name, np.concatenate(matrices), visibility, self.surfaces, self.read.warnings),
+                      mesh.original.name, True)
+
+    def _add(self, objects, source_name: str, instanced: bool) -> None:
+        for obj, material in objects:
+            self.read.scene.objects.append(obj)
+            self.read.sources[obj.name], self.read.materials[obj.name] = source_name, material
+            if instanced:
+                self.read.instanced.add(obj.name)

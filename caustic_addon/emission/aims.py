@@ -49,8 +49,7 @@ class Sphere:
     def around_meshes(meshes: list[Mesh]) -> "Sphere":
         """Sphere.around all the vertices of `meshes`, with no copy of them."""
         center = 0.5 * (np.min([m.bounds[0] for m in meshes], axis=0) + np.max([m.bounds[1] for m in meshes], axis=0))
-        farthest = max(float(np.add.reduce(np.square(m.vertices - center), axis=1).max()) for m in meshes)
-        return Sphere(center, float(np.sqrt(farthest)))
+        return Sphere(center, max(m.farthest_from(center) for m in meshes))
 
 
 def casters_and_bounds(scene: Scene) -> tuple[list[Sphere], Sphere]:

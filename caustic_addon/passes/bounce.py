@@ -37,8 +37,9 @@ from ..optics.specular import (basic_irradiance_scale, fresnel_dielectric1, radi
 from ..sampling.hash import hash_uniform1
 from ..sampling.warps import concentric_disc1, orthonormal_basis1
 from ..scene.material_table import MATERIAL_TYPES, Materials
-from ..tracing.accelerator import GEOMETRY_TYPES, REFLECTED, REFRACTED, Accelerator, offset1, shading_normal1
+from ..tracing.accelerator import GEOMETRY_TYPES, REFLECTED, REFRACTED, Accelerator, offset1
 from ..tracing.hits import HIT_TYPES, MISS, Hits, inside1
+from ..tracing.triangles import normals1
 from ..util.jit import inline, kernel, named_kernel
 from ..util.rows import contiguous, partition, take_rows
 from ..util.vectors import dot1, max_channel1, normalize1, row, scale1, set_row
@@ -113,7 +114,7 @@ def crossing1(medium, outer, obj, toward, closed, body):
 
 @named_kernel("void", PATH_TYPES, HIT_TYPES, INTERFACE_TYPES, MATERIAL_TYPES, GEOMETRY_TYPES,
               {"ior": "f8[:, ::1]", "reflects": "b1[::1]", "roughness": "f8[::1]"})
-def _oriented(prim, u, v, obj, dirs, medium, outer, band, face_normal, corner_normal, closed, body, ior, reflector,
+def _oriented(prim, u, v, obj, dirs, medium, outer, band, triangles, closed, body, ior, reflector,
               reflects, roughness, facing, shading, entering, eta, fresnel, alpha, beyond, beneath):
     """orient's rows: `ior (m,K)` per object and band, `band (n,)` each
     row's; `reflects (m,)` False where an object's Fresnel is none;
@@ -122,9 +123,9 @@ def _oriented(prim, u, v, obj, dirs, medium, outer, band, face_normal, corner_no
     crossing that is not real has eta 1, no Fresnel and no roughness."""
     for i in range(len(prim)):
         d, o = row(dirs, i), obj[i]
-        face = row(face_normal, prim[i])
+        face, normal = normals1(triangles, o, prim[i], u[i], v[i])
         entered, over, under, real = crossing1(medium[i], outer[i], o, dot1(d, face) < 0.0, closed, body)
-        f, s = oriented1(d, face, shading_normal1(corner_normal, face_normal, prim[i], u[i], v[i]))
+        f, s = oriented1(d, face, normal)
         e = index_of1(ior, medium[i] if entered else o, band[i]) / index_of1(ior, over, band[i])
         set_row(facing, i, f)
         set_row(shading, i, s)
@@ -161,7 +162,7 @@ def orient(accel: Accelerator, hits: Hits, dirs: np.ndarray, materials: Material
     _oriented(prim=contiguous(hits.prim, np.int64), u=contiguous(hits.u, np.float64), v=contiguous(hits.v, np.float64),
               obj=contiguous(hits.obj, np.int64), dirs=contiguous(dirs, np.float64),
               medium=contiguous(medium, np.int64), outer=contiguous(outer, np.int64), band=band,
-              face_normal=accel.face_normal, corner_normal=accel.corner_normal, closed=accel.closed, body=accel.body,
+              triangles=accel.triangles, closed=accel.closed, body=accel.body,
               ior=contiguous(ior, np.float64), reflector=materials.reflector, reflects=materials.fresnel,
               roughness=contiguous(materials.alpha, np.float64), facing=facing, shading=shading, entering=entering,
               eta=eta, fresnel=fresnel, alpha=alpha, beyond=beyond, beneath=beneath)

@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from ..tracing.accelerator import GEOMETRY_TYPES, REFLECTED, REFRACTED
+from ..tracing.triangles import TRIANGLES_TYPE, corner_at1, corner_normal_at1, face_normal_at1, locate1
 from ..tracing.hits import HIT_TYPES
 from ..util.jit import inline, kernel, named_kernel
 from ..util.rows import contiguous
@@ -30,9 +31,9 @@ from .paths import PATH_TYPES
 
 
 @inline
-def normal_change1(corners, corner_normal, prim, u, v, shading, dp0, dp1):
+def normal_change1(triangles, obj, prim, u, v, shading, dp0, dp1):
     """(dn0, dn1): the change of the unit shading normal `shading` of
-    triangle `prim` (corners (N,3,3), corner normals (N,3,3)) at
+    global triangle `prim` of object `obj` (tracing/triangles.py) at
     barycentrics u, v when the point moves by `dp0`, `dp1` in its plane.
     The point's barycentric change solves dp = e1 du + e2 dv (least
     squares, e_k = p_k - p_0); the interpolant m = (1-u-v) n_0 + u n_1 +
@@ -40,11 +41,14 @@ def normal_change1(corners, corner_normal, prim, u, v, shading, dp0, dp1):
     normalised form by (dm - n (n.dm)) / |m|, with the sign that orients it
     as `shading`."""
     none = (0.0, 0.0, 0.0)
-    p0 = subrow(corners, prim, 0)
-    e1, e2 = sum1(1.0, subrow(corners, prim, 1), -1.0, p0), sum1(1.0, subrow(corners, prim, 2), -1.0, p0)
+    r, copy, placed = locate1(triangles, obj, prim)
+    p0 = corner_at1(triangles, r, copy, placed, 0)
+    e1 = sum1(1.0, corner_at1(triangles, r, copy, placed, 1), -1.0, p0)
+    e2 = sum1(1.0, corner_at1(triangles, r, copy, placed, 2), -1.0, p0)
     g11, g12, g22 = dot1(e1, e1), dot1(e1, e2), dot1(e2, e2)
     det = g11 * g22 - g12 * g12
-    n0, n1, n2 = subrow(corner_normal, prim, 0), subrow(corner_normal, prim, 1), subrow(corner_normal, prim, 2)
+    n0, n1, n2 = (corner_normal_at1(triangles, r, copy, placed, 0), corner_normal_at1(triangles, r, copy, placed, 1),
+                  corner_normal_at1(triangles, r, copy, placed, 2))
     m = sum1(1.0, sum1(1.0 - u - v, n0, u, n1), v, n2)
     size = math.sqrt(dot1(m, m))
     if not (det > 0.0 and size > 1e-12):
@@ -83,8 +87,8 @@ def refracted_change1(d, dd, n, dn, t, eta):
 
 @named_kernel("void", PATH_TYPES, HIT_TYPES, INTERFACE_TYPES, GEOMETRY_TYPES,
               {"reflected": "i8[::1]", "refracted": "i8[::1]"})
-def _branch_differentials(reflected, refracted, out_dirs, dirs, t, facing, scattering, eta, prim, u, v, corners,
-                          corner_normal, d_origins, d_dirs, out_d_origins, out_d_dirs):
+def _branch_differentials(reflected, refracted, out_dirs, dirs, t, facing, scattering, eta, obj, prim, u, v,
+                          triangles, d_origins, d_dirs, out_d_origins, out_d_dirs):
     """The differentials of the branches of each path i: its reflected
     branch is row `reflected[i]` of the out_ arrays, its refracted one row
     `refracted[i]` (-1: none). The transfer and the normal's change are the
@@ -96,7 +100,7 @@ def _branch_differentials(reflected, refracted, out_dirs, dirs, t, facing, scatt
         dd0, dd1 = subrow(d_dirs, i, 0), subrow(d_dirs, i, 1)
         dp0 = transferred1(subrow(d_origins, i, 0), dd0, d, t[i], row(facing, i))
         dp1 = transferred1(subrow(d_origins, i, 1), dd1, d, t[i], row(facing, i))
-        dn0, dn1 = normal_change1(corners, corner_normal, prim[i], u[i], v[i], normal, dp0, dp1)
+        dn0, dn1 = normal_change1(triangles, obj[i], prim[i], u[i], v[i], normal, dp0, dp1)
         k = reflected[i]
         if k >= 0:
             set_subrow(out_d_origins, k, 0, dp0)
@@ -128,23 +132,25 @@ def branch_differentials(accel, paths, hits, surface, source: np.ndarray, kind: 
                           out_dirs=contiguous(out_dirs, f8), dirs=contiguous(paths.dirs, f8),
                           t=contiguous(hits.t, f8), facing=contiguous(surface.facing, f8),
                           scattering=contiguous(surface.scattering, f8), eta=contiguous(surface.eta, f8),
-                          prim=contiguous(hits.prim, np.int64), u=contiguous(hits.u, f8), v=contiguous(hits.v, f8),
-                          corners=accel.corners, corner_normal=accel.corner_normal,
+                          obj=contiguous(hits.obj, np.int64), prim=contiguous(hits.prim, np.int64),
+                          u=contiguous(hits.u, f8), v=contiguous(hits.v, f8), triangles=accel.triangles,
                           d_origins=contiguous(paths.d_origins, np.float32),
                           d_dirs=contiguous(paths.d_dirs, np.float32), out_d_origins=out_d_origins,
                           out_d_dirs=out_d_dirs)
     return out_d_origins, out_d_dirs
 
 
-@kernel("void(f8[:, ::1], f8[::1], i8[::1], f8[:, ::1], f8[:, :, ::1], f4[:, :, ::1], f4[:, :, ::1], f8[:, :, ::1], "
-        "f8[:, :, ::1])")
-def _landing_differentials(dirs, t, prim, face_normal, corners, d_origins, d_dirs, dp, duv):
+@kernel(f"void(f8[:, ::1], f8[::1], i8[::1], i8[::1], {TRIANGLES_TYPE}, f4[:, :, ::1], f4[:, :, ::1], "
+        "f8[:, :, ::1], f8[:, :, ::1])")
+def _landing_differentials(dirs, t, obj, prim, triangles, d_origins, d_dirs, dp, duv):
     """`landing_differentials` of paths along `dirs (n,3)` that met
-    triangles `prim (n,)` (global) at distance `t (n,)`."""
+    triangles `prim (n,)` (global) of objects `obj (n,)` at distance `t (n,)`."""
     for i in range(len(t)):
-        d, normal = row(dirs, i), row(face_normal, prim[i])
-        p0 = subrow(corners, prim[i], 0)
-        e1, e2 = sum1(1.0, subrow(corners, prim[i], 1), -1.0, p0), sum1(1.0, subrow(corners, prim[i], 2), -1.0, p0)
+        r, copy, placed = locate1(triangles, obj[i], prim[i])
+        d, normal = row(dirs, i), face_normal_at1(triangles, r, copy, placed)
+        p0 = corner_at1(triangles, r, copy, placed, 0)
+        e1 = sum1(1.0, corner_at1(triangles, r, copy, placed, 1), -1.0, p0)
+        e2 = sum1(1.0, corner_at1(triangles, r, copy, placed, 2), -1.0, p0)
         g11, g12, g22 = dot1(e1, e1), dot1(e1, e2), dot1(e2, e2)
         det = g11 * g22 - g12 * g12
         for k in range(2):
@@ -164,7 +170,7 @@ def landing_differentials(accel, paths, hits) -> tuple[np.ndarray, np.ndarray]:
     n = len(paths)
     dp, duv = np.empty((n, 2, 3)), np.empty((n, 2, 2))
     f8 = np.float64
-    _landing_differentials(contiguous(paths.dirs, f8), contiguous(hits.t, f8), contiguous(hits.prim, np.int64),
-                           accel.face_normal, accel.corners, contiguous(paths.d_origins, np.float32),
+    _landing_differentials(contiguous(paths.dirs, f8), contiguous(hits.t, f8), contiguous(hits.obj, np.int64),
+                           contiguous(hits.prim, np.int64), accel.triangles, contiguous(paths.d_origins, np.float32),
                            contiguous(paths.d_dirs, np.float32), dp, duv)
     return dp, duv

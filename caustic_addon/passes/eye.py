@@ -149,7 +149,7 @@ class EyeTracer:
         """(n,) bool: the rays from the camera or a smooth surface, which see
         emitting faces; a rough surface's samples of a mesh light hold the
         light its rays would meet there."""
-        after = np.take(self.accel.owner, np.maximum(rays.surface, 0))
+        after = self.accel.owners(np.maximum(rays.surface, 0))
         return (rays.surface == MISS) | (np.take(self.materials.alpha, after) <= 0.0)
 
     def escaped(self, rays: Paths) -> None:
@@ -175,9 +175,9 @@ class EyeTracer:
             return
         m, accel = self.materials, self.accel
         view = -rays.dirs
-        facing = np.take(accel.face_normal, hits.prim, axis=0)
+        facing = accel.face_normals(hits.obj, hits.prim)
         _turn_toward(facing, view)
-        shading = np.ascontiguousarray(accel.shading_normal(hits.prim, hits.u, hits.v))
+        shading = np.ascontiguousarray(accel.shading_normal(hits.obj, hits.prim, hits.u, hits.v))
         cos_view = _turn_toward(shading, view)
         triangle = hits.prim - np.take(accel.prim_offset, hits.obj)
         albedo = m.albedo_at(hits.obj, triangle, hits.u, hits.v, hits.points)

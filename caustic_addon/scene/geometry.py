@@ -1,4 +1,4 @@
-"""Triangle meshes in world space."""
+"""Triangle meshes in world space, and an instancer's copies of one mesh."""
 
 from __future__ import annotations
 
@@ -45,6 +45,14 @@ class Mesh:
         return self.vertices.min(axis=0), self.vertices.max(axis=0)
 
     @property
+    def triangle_count(self) -> int:
+        return len(self.triangles)
+
+    def farthest_from(self, point: np.ndarray) -> float:
+        """The largest distance of a vertex from `point (3,)`."""
+        return float(np.sqrt(np.add.reduce(np.square(self.vertices - point), axis=1).max()))
+
+    @property
     def corners(self) -> np.ndarray:
         """(nt,3,3) world positions of each triangle's corners."""
         return np.take(self.vertices, self.triangles, axis=0)
@@ -87,7 +95,7 @@ class Mesh:
         normals = None
         if with_normals and self.corner_normals is not None:
             normals = np.empty((k * nt, 3, 3))
-            copy_normals(self.corner_normals, m, normals)
+            _copy_normals(self.corner_normals, m, normals)
         uvs = None
         if self.corner_uvs is not None:
             flip = np.linalg.det(m[:, :3, :3]) < 0.0
@@ -96,6 +104,82 @@ class Mesh:
             uvs[flip] = uvs[flip, :, ::-1]
             uvs = uvs.reshape(-1, 3, 2)
         return Mesh(verts, tris, normals, uvs)
+
+
+class Copies(Mesh):
+    """Mesh.instanced(transforms, with_normals=False) of `local`, made only
+    where something reads its vertices, triangles or UVs. A render reads an
+    instancer's copies through their one mesh and their transforms
+    (tracing/triangles.py), and their bounds, size and reach without making
+    them, so that its memory grows with the meshes, not with the copies."""
+
+    def __init__(self, local: Mesh, transforms: np.ndarray):
+        self.local, self.transforms = local, np.ascontiguousarray(transforms, dtype=np.float64).reshape(-1, 4, 4)
+
+    @cached_property
+    def _made(self) -> Mesh:
+        return self.local.instanced(self.transforms, with_normals=False)
+
+    @property
+    def vertices(self) -> np.ndarray:
+        return self._made.vertices
+
+    @property
+    def triangles(self) -> np.ndarray:
+        return self._made.triangles
+
+    @property
+    def corner_uvs(self) -> Optional[np.ndarray]:
+        return self._made.corner_uvs
+
+    @property
+    def triangle_count(self) -> int:
+        return len(self.local.triangles) * len(self.transforms)
+
+    @cached_property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        out = np.array([np.full(3, np.inf), np.full(3, -np.inf)])
+        if len(self.local.vertices):
+            _copies_bounds(self.local.vertices, self.transforms, out)
+        return out[0], out[1]
+
+    def farthest_from(self, point: np.ndarray) -> float:
+        return float(np.sqrt(_copies_farthest(self.local.vertices, self.transforms,
+                                              np.asarray(point, dtype=np.float64))))
+
+
+@inline
+def _placed1(m, vertices, v, row):
+    """Coordinate `row` of vertex v of `vertices (nv,3)` under the affine matrix `m (4,4)`."""
+    return m[row, 0] * vertices[v, 0] + m[row, 1] * vertices[v, 1] + m[row, 2] * vertices[v, 2] + m[row, 3]
+
+
+@kernel("void(f8[:, ::1], f8[:, :, ::1], f8[:, ::1])")
+def _copies_bounds(vertices, transforms, out):
+    """out (2,3): the lowest and highest coordinates of `vertices (nv,3)`
+    under each of `transforms (k,4,4)`, NaN where one is NaN."""
+    for i in range(len(transforms)):
+        for v in range(len(vertices)):
+            for row in range(3):
+                x = _placed1(transforms[i], vertices, v, row)
+                if x != x:
+                    out[0, row] = out[1, row] = x
+                elif out[0, row] == out[0, row]:
+                    out[0, row], out[1, row] = min(out[0, row], x), max(out[1, row], x)
+
+
+@kernel("f8(f8[:, ::1], f8[:, :, ::1], f8[::1])")
+def _copies_farthest(vertices, transforms, point):
+    """The largest squared distance from `point (3,)` of `vertices (nv,3)`
+    under any of `transforms (k,4,4)`."""
+    farthest = 0.0
+    for i in range(len(transforms)):
+        for v in range(len(vertices)):
+            d2 = 0.0
+            for row in range(3):
+                d2 += (_placed1(transforms[i], vertices, v, row) - point[row]) ** 2
+            farthest = max(farthest, d2)
+    return farthest
 
 
 @inline
@@ -114,8 +198,7 @@ def _copy_points(vertices, triangles, transforms, out_vertices, out_triangles):
         m = transforms[i]
         for v in range(nv):
             for row in range(3):
-                out_vertices[i * nv + v, row] = (m[row, 0] * vertices[v, 0] + m[row, 1] * vertices[v, 1]
-                                                 + m[row, 2] * vertices[v, 2] + m[row, 3])
+                out_vertices[i * nv + v, row] = _placed1(m, vertices, v, row)
         mirrored = _mirrors(m)
         for t in range(nt):
             for corner in range(3):
@@ -123,7 +206,7 @@ def _copy_points(vertices, triangles, transforms, out_vertices, out_triangles):
 
 
 @kernel("void(f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1])")
-def copy_normals(corner_normals, transforms, out):
+def _copy_normals(corner_normals, transforms, out):
     """Mesh.instanced's corner normals: `corner_normals (nt,3,3)` of copy i
     by transforms[i]'s cofactor matrix, signed by its determinant, as
     Mesh.transformed, in its triangles' corner order, into `out (k*nt,3,3)`."""

@@ -9,7 +9,7 @@ import numpy as np
 
 from .camera import Camera
 from .color import RGB, rgb
-from .geometry import Mesh
+from .geometry import Copies, Mesh
 from .lights import Light, World
 from .materials import Dielectric, Diffuse, Material, Reflector
 from .visibility import Visibility
@@ -21,8 +21,9 @@ class Instances:
     space, `transforms (k,4,4)` object to world. Embree keeps one BVH of the
     mesh for all of them (tracing.embree.Instances), and the first copy
     speaks for all where a body is analysed (holes, winding). The object's
-    own mesh, the copies in world space, holds no corner normals: the
-    accelerator makes them from `mesh`'s (geometry.copy_normals)."""
+    own mesh, the copies in world space, is made only where something reads
+    it (geometry.Copies): a render places the copies as it reads them
+    (tracing/triangles.py)."""
 
     mesh: Mesh
     transforms: np.ndarray
@@ -53,10 +54,13 @@ class Object:
     def instanced(cls, name: str, local: Mesh, transforms: np.ndarray, material: Material,
                   visibility: Visibility = Visibility(), body: Optional[str] = None) -> "Object":
         """The object whose mesh is `local` (object space) under each of
-        `transforms (k,4,4)` (Mesh.instanced); the copies of k > 1 keep no
-        corner normals, which the accelerator makes from `local`'s."""
-        return cls(name, local.instanced(transforms, with_normals=len(transforms) == 1), material, visibility, body,
-                   Instances(local, transforms))
+        `transforms (k,4,4)`: Mesh.instanced for k = 1, else its copies made
+        only where they are read (geometry.Copies), which hold no corner
+        normals."""
+        instances = Instances(local, transforms)
+        mesh = (local.instanced(instances.transforms) if len(instances.transforms) == 1
+                else Copies(local, instances.transforms))
+        return cls(name, mesh, material, visibility, body, instances)
 
     @property
     def copies(self) -> int:
@@ -117,7 +121,7 @@ class Scene:
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo (3,), hi (3,)) of all geometry."""
-        bounds = [o.mesh.bounds for o in self.objects if len(o.mesh.vertices)] or [(np.zeros(3), np.zeros(3))]
+        bounds = [o.mesh.bounds for o in self.objects if o.mesh.triangle_count] or [(np.zeros(3), np.zeros(3))]
         return np.min([lo for lo, _ in bounds], axis=0), np.max([hi for _, hi in bounds], axis=0)
 
     def extent(self) -> float:

@@ -117,7 +117,7 @@ def _check_scale(scene: Scene) -> list[str]:
     arithmetic; each names the object and its vertex. Warn where the rest's
     light moves by a percent or so."""
     for obj in scene.objects:
-        if len(obj.mesh.triangles) == 0:
+        if obj.mesh.triangle_count == 0:
             raise SceneError(f"{obj.name}: the mesh has no triangles")
         if not np.isfinite(obj.mesh.bounds).all():
             vertex = int((~np.isfinite(obj.mesh.vertices).all(axis=1)).argmax())

@@ -16,9 +16,9 @@ from dataclasses import fields
 import numpy as np
 
 from ..scene import Mesh, Object
-from ..scene.geometry import copy_normals
 from ..util.jit import inline, kernel, named_kernel
 from ..util.parallel import threads_here
+from ..util.rows import contiguous
 from ..util.vectors import dot1, float_rows, length, normalize, normalize1, row, set_row, sum1
 from . import embree
 from .contact import Contacts
@@ -27,6 +27,8 @@ from .hits import HIT_TYPES, MISS, Hits, inside1
 from .joins import Joins
 from .prototypes import PROTOTYPES, Prototype
 from .topology import open_edges, signed_volume
+from .triangles import TRIANGLES_TYPE, corner_points, face_normal1, face_normals, normal_transforms, normals1, \
+    surface_point1
 
 _MIN_SPLIT = 8192
 # Origins move this fraction of the scene's diagonal off a surface: well above
@@ -71,9 +73,8 @@ class _View:
 
 # The numba type of each of the Accelerator's tables, by the name kernels
 # give it (util.jit.named_kernel): `surface_of` is its `surface`.
-GEOMETRY_TYPES = {"body": "i8[::1]", "surface_of": "i8[::1]", "closed": "b1[::1]", "corners": "f8[:, :, ::1]",
-                  "face_normal": "f8[:, ::1]", "corner_normal": "f8[:, :, ::1]", "min_barycentric": "f8[:, ::1]",
-                  "prim_offset": "i8[::1]", "copy_size": "i8[::1]", "mirrored": "b1[::1]", "epsilon": "f8"}
+GEOMETRY_TYPES = {"body": "i8[::1]", "surface_of": "i8[::1]", "closed": "b1[::1]", "triangles": TRIANGLES_TYPE,
+                  "epsilon": "f8"}
 # The numba type of what a cast takes: the Embree scene's handle, the rays,
 # their lengths (none: unbounded), the objects its geometry ids stand for.
 CAST_TYPES = {"scene": "u8", "origins": "f8[:, ::1]", "dirs": "f8[:, ::1]", "dists": "f8[::1]",
@@ -81,7 +82,7 @@ CAST_TYPES = {"scene": "u8", "origins": "f8[:, ::1]", "dirs": "f8[:, ::1]", "dis
 
 
 class Accelerator:
-    """The scene's triangles in one Embree BVH, with per-triangle shading data.
+    """The scene's triangles in one Embree BVH, with their shading data.
 
     body (m,) int64 per object: the index of the first object of its body
     (scene.Object.body); surface (m,) int64: the first object of its body
@@ -89,16 +90,10 @@ class Accelerator:
     cannot tell apart; closed (m,) bool: a dielectric whose body has no
     holes, so that a ray's own state can track its inside.
 
-    Per global triangle index (all objects' triangles, in object order):
-      corners        (N,3,3) world positions of the corners
-      face_normal    (N,3) unit geometric normal, facing out of closed meshes
-      corner_normal  (N,3,3) unit shading normals at the corners, same side
-      min_barycentric (N,3) the barycentric coordinate, per corner, of a point
-                     epsilon from the opposite edge (at most 0.3)
-      owner          (N,) index of the object the triangle belongs to
-      mirrored       (N,) bool: the triangle is in a copy whose transform
-                     mirrors (scene.Instances), wound the other way round
-                     than the mesh Embree instances
+    triangles: the tables kernels read each triangle's corners and normals
+    from (tracing/triangles.py), by global index (all objects' triangles,
+    in object order, from prim_offset (m+1,)); an instancer's copies share
+    their mesh's rows.
 
     Each kind of ray (CAMERA, REFLECTED, REFRACTED, SHADOW) sees the objects
     whose scene.Visibility lets it; a kind that does not see them all gets an
@@ -124,23 +119,20 @@ class Accelerator:
         self.body = np.empty(len(objects), dtype=np.int64)
         self.surface = np.arange(len(objects), dtype=np.int64)
         self.closed = np.zeros(len(objects), dtype=bool)
-        offsets = np.cumsum([0] + [len(obj.mesh.triangles) for obj in objects], dtype=np.int64)
-        self.prim_offset = offsets
-        self.corners = np.empty((offsets[-1], 3, 3))
-        self.face_normal = np.empty((offsets[-1], 3))
-        self.corner_normal = np.empty((offsets[-1], 3, 3))
-        area = np.empty(offsets[-1])
-        for index, obj in enumerate(objects):
-            rows = slice(offsets[index], offsets[index + 1])
-            mesh = obj.mesh
+        copies = np.array([obj.copies for obj in objects], dtype=np.int64)
+        placed = copies > 1
+        rows_of = [obj.instances.mesh if placed[i] else obj.mesh for i, obj in enumerate(objects)]
+        sizes = np.array([len(mesh.triangles) for mesh in rows_of], dtype=np.int64)
+        self.prim_offset = np.concatenate([[0], np.cumsum(sizes * copies)]).astype(np.int64)
+        row_offset = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        corners, face_normal = np.empty((row_offset[-1], 3, 3)), np.empty((row_offset[-1], 3))
+        corner_normal, area = np.empty((row_offset[-1], 3, 3)), np.empty(row_offset[-1])
+        for index, mesh in enumerate(rows_of):
+            rows = slice(row_offset[index], row_offset[index + 1])
             _triangle_tables(mesh.vertices, mesh.triangles,
                              np.zeros((0, 3, 3)) if mesh.corner_normals is None else mesh.corner_normals,
-                             self.corners[rows], self.face_normal[rows], self.corner_normal[rows], area[rows])
-            local = obj.instances.mesh if obj.instances is not None else None
-            if mesh.corner_normals is None and local is not None and local.corner_normals is not None:
-                copy_normals(local.corner_normals, obj.instances.transforms, self.corner_normal[rows])
-        self.owner = np.repeat(np.arange(len(objects), dtype=np.int64), np.diff(offsets))
-        has_area = [bool(np.any(area[offsets[i]:offsets[i + 1]] > 0)) for i in range(len(objects))]
+                             corners[rows], face_normal[rows], corner_normal[rows], area[rows])
+        has_area = [bool(np.any(area[row_offset[i]:row_offset[i + 1]] > 0)) for i in range(len(objects))]
         for name, members in bodies.items():
             if any(objects[i].is_caster for i in members) and not any(has_area[i] for i in members):
                 self.warnings.append(f"'{name}' has no area (each of its faces is a line or a point): it casts "
@@ -155,16 +147,16 @@ class Accelerator:
                 closed, sign = self._body_orientation(members)
                 self.closed[glass] = closed
                 for i in glass if sign < 0 else ():
-                    self.face_normal[offsets[i]:offsets[i + 1]] *= -1.0
-                    self.corner_normal[offsets[i]:offsets[i + 1]] *= -1.0
-        self.min_barycentric = np.empty((offsets[-1], 3))
-        _min_barycentrics(self.corners, area, self.epsilon, self.min_barycentric)
-        self.copy_size = np.array([len(_first_copy(obj).triangles) for obj in objects], dtype=np.int64)
-        self.mirrored = np.zeros(offsets[-1], dtype=bool)
-        for index, obj in enumerate(objects):
-            if obj.instances is not None:
-                self.mirrored[offsets[index]:offsets[index + 1]] = np.repeat(
-                    np.linalg.det(obj.instances.transforms[:, :3, :3]) < 0.0, self.copy_size[index])
+                    face_normal[row_offset[i]:row_offset[i + 1]] *= -1.0
+                    corner_normal[row_offset[i]:row_offset[i + 1]] *= -1.0
+        min_barycentric = np.empty((row_offset[-1], 3))
+        _min_barycentrics(corners, area, self.epsilon, min_barycentric)
+        transforms = np.concatenate([np.eye(4)[None] if obj.instances is None else obj.instances.transforms
+                                     for obj in objects] or [np.zeros((0, 4, 4))])
+        self.triangles = (corners, face_normal, corner_normal, min_barycentric, self.prim_offset, row_offset[:-1],
+                          np.maximum(sizes, 1), np.concatenate([[0], np.cumsum(copies)[:-1]]).astype(np.int64),
+                          placed, np.ascontiguousarray(transforms[:, :3, :]), normal_transforms(transforms),
+                          np.linalg.det(transforms[:, :3, :3]) < 0.0)
         self._geometries = [embree.Geometry(obj.mesh.vertices, obj.mesh.triangles) if obj.instances is None else
                             embree.Instances(self._prototypes[i].scene, obj.instances.transforms)
                             for i, obj in enumerate(objects)]
@@ -233,11 +225,15 @@ class Accelerator:
         half an epsilon inside, along the inward normal; on a larger mesh a
         thin wall of only a few faces can go unprobed."""
         glass = np.flatnonzero(self.closed & (self.body == body))
-        prim = np.concatenate([np.arange(self.prim_offset[i], self.prim_offset[i + 1]) for i in glass])
-        prim = prim[np.unique(np.linspace(0, len(prim) - 1, min(len(prim), _THICKNESS_PROBES)).astype(np.int64))]
-        prim = prim[np.linalg.norm(self.face_normal[prim], axis=1) > 0.0]
-        inward = -self.face_normal[prim]
-        hits = self._closest(self.corners[prim].mean(axis=1) + 0.5 * self.epsilon * inward, inward)
+        ends = np.cumsum(np.diff(self.prim_offset)[glass])
+        spread = np.unique(np.linspace(0, ends[-1] - 1, min(ends[-1], _THICKNESS_PROBES)).astype(np.int64))
+        which = np.searchsorted(ends, spread, side="right")
+        obj = glass[which]
+        prim = self.prim_offset[obj] + spread - (ends - np.diff(self.prim_offset)[glass])[which]
+        inward = -self.face_normals(obj, prim)
+        keep = np.linalg.norm(inward, axis=1) > 0.0
+        obj, prim, inward = obj[keep], prim[keep], inward[keep]
+        hits = self._closest(self.corner_points(obj, prim).mean(axis=1) + 0.5 * self.epsilon * inward, inward)
         mine = hits.hit & (np.take(self.body, np.maximum(hits.obj, 0)) == body)
         if np.any(mine & (hits.t < 0.5 * self.epsilon)):
             self.warnings.append(
@@ -295,7 +291,7 @@ class Accelerator:
             skip = np.flatnonzero(self._contradicts(hits, dirs, medium, outer))
             if len(skip) == 0:
                 break
-            face = np.take(self.face_normal, hits.prim[skip], axis=0)
+            face = self.face_normals(hits.obj[skip], hits.prim[skip])
             start = self.offset(hits.points[skip], face, dirs[skip])
             again = self._closest_by_kind(start, dirs[skip], None if kind is None else kind[skip])
             again.t += hits.t[skip] + length(start - hits.points[skip])
@@ -334,10 +330,12 @@ class Accelerator:
                 hits = self._closest(origins[open_hit], dirs[open_hit], view)
                 closed = hits.hit.copy()
                 closed[closed] = self.closed[hits.obj[closed]]
-                behind = np.einsum("ij,ij->i", dirs[open_hit], self.face_normal[np.maximum(hits.prim, 0)]) > 0.0
+                normals = np.zeros((len(open_hit), 3))
+                normals[hits.hit] = self.face_normals(hits.obj[hits.hit], hits.prim[hits.hit])
+                behind = np.einsum("ij,ij->i", dirs[open_hit], normals) > 0.0
                 found[open_hit[closed & behind]] = hits.obj[closed & behind]
                 through = hits.hit & ~closed
-                origins[open_hit[through]] = self.offset(hits.points[through], np.take(self.face_normal, hits.prim[through], axis=0),
+                origins[open_hit[through]] = self.offset(hits.points[through], normals[through],
                                                          dirs[open_hit[through]])
                 open_hit = open_hit[through]
                 if len(open_hit) == 0:
@@ -363,7 +361,7 @@ class Accelerator:
         """(n,) bool: hits on closed meshes from the side the ray's media
         `medium, outer (n,)` rule out, for rays `dirs (n,3)` (contiguous float64)."""
         out = np.empty(len(dirs), dtype=bool)
-        _contradicting(hits.obj, hits.prim, dirs, medium, outer, self.closed, self.body, self.face_normal, out)
+        _contradicting(hits.obj, hits.prim, dirs, medium, outer, self.closed, self.body, self.triangles, out)
         return out
 
     def _closest_by_kind(self, origins: np.ndarray, dirs: np.ndarray, kind: np.ndarray | None) -> Hits:
@@ -397,8 +395,7 @@ class Accelerator:
 
         def part(a: int, b: int) -> None:
             _cast(scene=view.scene.handle, origins=origins[a:b], dirs=dirs[a:b], dists=dists[a:b],
-                  members=view.objects, prim_offset=self.prim_offset, copy_size=self.copy_size,
-                  mirrored=self.mirrored, corners=self.corners, min_barycentric=self.min_barycentric,
+                  members=view.objects, triangles=self.triangles, epsilon=self.epsilon,
                   **{f"out_{field}": getattr(hits, field)[a:b] for field in HIT_TYPES})
 
         self._split(len(origins), part)
@@ -418,11 +415,28 @@ class Accelerator:
                                                            out[a:b]))
         return out
 
-    def shading_normal(self, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """(n,3) shading_normal1 at triangles `prim (n,)`, barycentrics `u, v (n,)`."""
+    def shading_normal(self, obj: np.ndarray, prim: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """(n,3) the unit shading normals (triangles.normals1) at triangles `prim (n,)` of objects `obj (n,)`,
+        barycentrics `u, v (n,)`."""
         out = np.empty((len(prim), 3))
-        _shading_normals(np.array(prim, dtype=np.int64), *float_rows(u, v), self.corner_normal, self.face_normal, out)
+        _shading_normals(self.triangles, contiguous(obj, np.int64), contiguous(prim, np.int64), *float_rows(u, v), out)
         return out
+
+    def face_normals(self, obj: np.ndarray, prim: np.ndarray) -> np.ndarray:
+        """(n,3) the unit geometric normals of triangles `prim (n,)` of objects `obj (n,)`, in world space."""
+        out = np.empty((len(prim), 3))
+        face_normals(self.triangles, contiguous(obj, np.int64), contiguous(prim, np.int64), out)
+        return out
+
+    def corner_points(self, obj: np.ndarray, prim: np.ndarray) -> np.ndarray:
+        """(n,3,3) the world corners of triangles `prim (n,)` of objects `obj (n,)`."""
+        out = np.empty((len(prim), 3, 3))
+        corner_points(self.triangles, contiguous(obj, np.int64), contiguous(prim, np.int64), out)
+        return out
+
+    def owners(self, prim: np.ndarray) -> np.ndarray:
+        """(n,) the object each of global triangles `prim (n,)` belongs to."""
+        return np.searchsorted(self.prim_offset, prim, side="right") - 1
 
     def offset(self, points: np.ndarray, normals: np.ndarray, dirs: np.ndarray) -> np.ndarray:
         """(n,3) offset1 of each row: ray origins off the surface, away from the side `dirs` leave."""
@@ -472,27 +486,9 @@ def _min_barycentrics(corners, area, epsilon, out):
 
 def _first_copy(obj: Object) -> Mesh:
     """`obj`'s mesh, or the first of the copies it is made of (scene.Instances)."""
-    if obj.instances is None:
+    if obj.copies == 1:
         return obj.mesh
-    local = obj.instances.mesh
-    return Mesh(obj.mesh.vertices[:len(local.vertices)], obj.mesh.triangles[:len(local.triangles)])
-
-
-@inline
-def shading_normal1(corner_normal, face_normal, prim, u, v):
-    """Unit shading normal of triangle `prim` at Embree's barycentrics u, v:
-
-        n_s = normalize((1 - u - v) n_0 + u n_1 + v n_2)
-
-    from its corner normals (`corner_normal (N,3,3)`); its face normal
-    (`face_normal (N,3)`) where they cancel out (|n_s| <= 1e-12)."""
-    w = 1.0 - u - v
-    n = (w * corner_normal[prim, 0, 0] + u * corner_normal[prim, 1, 0] + v * corner_normal[prim, 2, 0],
-         w * corner_normal[prim, 0, 1] + u * corner_normal[prim, 1, 1] + v * corner_normal[prim, 2, 1],
-         w * corner_normal[prim, 0, 2] + u * corner_normal[prim, 1, 2] + v * corner_normal[prim, 2, 2])
-    if not dot1(n, n) > 1e-24:
-        return row(face_normal, prim)
-    return normalize1(n)
+    return obj.instances.mesh.instanced(obj.instances.transforms[:1], with_normals=False)
 
 
 @inline
@@ -504,65 +500,18 @@ def offset1(point, normal, d, epsilon):
     return sum1(1.0, point, -epsilon if dot1(normal, d) < 0.0 else epsilon, normal)
 
 
-@inline
-def _foot1(corners, prim, k):
-    """Where the altitude from corner k of triangle `prim` meets the line of
-    its opposite edge, as s along that edge from corner k+1 to corner k+2:
-    s = (c_k - c_i) . e / e . e, e = c_j - c_i."""
-    i, j = (k + 1) % 3, (k + 2) % 3
-    along, length2 = 0.0, 0.0
-    for a in range(3):
-        e = corners[prim, j, a] - corners[prim, i, a]
-        along += (corners[prim, k, a] - corners[prim, i, a]) * e
-        length2 += e * e
-    return along / length2 if length2 > 0.0 else 0.5
-
-
-@inline
-def surface_point1(corners, min_barycentric, prim, u, v):
-    """The float64 point of triangle `prim` at Embree's barycentrics u, v,
-    kept epsilon inside its edges: a float32 hit can fall just past an
-    edge, and a ray leaving from there would already be beyond the
-    neighbouring face's plane and miss it.
-
-    A barycentric b_k below `min_barycentric (N,3)` (epsilon over the
-    altitude onto corner k's opposite edge) is raised to it by moving the
-    point along that altitude, straight away from the edge: b_k gains d and
-    the edge's corners give it up in the ratio of the altitude's foot, so
-    the point moves d * altitude <= epsilon and keeps its place along the
-    edge (near a corner, off each edge in turn, twice over, since a move
-    off one can bring it nearer the other). Raising b_k and renormalising
-    would move it along the edge too, by up to b_k's floor times the
-    triangle's length: 0.8 mm on a fan's 0.7 m spokes, which threw the
-    light through a slab's bottom off by a third of a pixel."""
-    b0, b1, b2 = 1.0 - u - v, u, v
-    for _ in range(2):
-        for k in range(3):
-            need = min_barycentric[prim, k] - (b0 if k == 0 else (b1 if k == 1 else b2))
-            if need > 0.0:
-                s = _foot1(corners, prim, k)
-                if k == 0:
-                    b0, b1, b2 = b0 + need, b1 - need * (1.0 - s), b2 - need * s
-                elif k == 1:
-                    b0, b1, b2 = b0 - need * s, b1 + need, b2 - need * (1.0 - s)
-                else:
-                    b0, b1, b2 = b0 - need * (1.0 - s), b1 - need * s, b2 + need
-    return (b0 * corners[prim, 0, 0] + b1 * corners[prim, 1, 0] + b2 * corners[prim, 2, 0],
-            b0 * corners[prim, 0, 1] + b1 * corners[prim, 1, 1] + b2 * corners[prim, 2, 1],
-            b0 * corners[prim, 0, 2] + b1 * corners[prim, 1, 2] + b2 * corners[prim, 2, 2])
-
-
 @named_kernel("void", HIT_TYPES, GEOMETRY_TYPES, CAST_TYPES)
-def _cast(scene, origins, dirs, dists, members, prim_offset, copy_size, mirrored, corners, min_barycentric,
-          out_t, out_obj, out_prim, out_u, out_v, out_points):
+def _cast(scene, origins, dirs, dists, members, triangles, epsilon, out_t, out_obj, out_prim, out_u, out_v,
+          out_points):
     """Closest hits of rays `origins, dirs (k,3)` in Embree scene `scene`,
     within `dists (k,)` (empty: unbounded): geomID indexes `members`
     (object indices), primID the triangles of the object's copy (global:
-    plus `prim_offset` and the copy times `copy_size`), the point is
-    surface_point1; a miss has t = inf, MISS and the ray's origin. A
-    `mirrored` copy's triangles run the other way round than the mesh
-    Embree holds (Mesh.instanced): its barycentrics (u, v) of corners 1
-    and 2 are (u, 1 - u - v) of the copy's."""
+    plus the object's first and the copy times its copy size; see
+    tracing/triangles.py), the point is surface_point1; a miss has t = inf,
+    MISS and the ray's origin. A mirrored copy's triangles run the other
+    way round than the mesh Embree holds (Mesh.instanced): its barycentrics
+    (u, v) of corners 1 and 2 are (u, 1 - u - v) of the copy's."""
+    prim_offset, copy_size, copy_offset, mirrored = triangles[4], triangles[6], triangles[7], triangles[11]
     floats, words, address = ray_record()
     bounded = len(dists) > 0
     for i in range(len(origins)):
@@ -574,10 +523,10 @@ def _cast(scene, origins, dirs, dists, members, prim_offset, copy_size, mirrored
             continue
         obj = members[geom]
         face = prim + prim_offset[obj] + copy * copy_size[obj]
-        if mirrored[face]:
+        if mirrored[copy_offset[obj] + copy]:
             v = 1.0 - u - v
         out_t[i], out_obj[i], out_prim[i], out_u[i], out_v[i] = t, obj, face, u, v
-        set_row(out_points, i, surface_point1(corners, min_barycentric, face, u, v))
+        set_row(out_points, i, surface_point1(triangles, obj, face, u, v, epsilon))
 
 
 @kernel("void(u8, f8[:, ::1], f8[:, ::1], f8[::1], b1[::1])")
@@ -596,8 +545,8 @@ def _occlusions(scene, origins, dirs, dists, out):
             out[start + k] = packet_blocked(floats, k)
 
 
-@kernel("void(i8[::1], i8[::1], f8[:, ::1], i8[::1], i8[::1], b1[::1], i8[::1], f8[:, ::1], b1[::1])")
-def _contradicting(obj, prim, dirs, medium, outer, closed, body, face_normal, out):
+@kernel(f"void(i8[::1], i8[::1], f8[:, ::1], i8[::1], i8[::1], b1[::1], i8[::1], {TRIANGLES_TYPE}, b1[::1])")
+def _contradicting(obj, prim, dirs, medium, outer, closed, body, triangles, out):
     """out (n,): the hit is on a closed mesh, from the side the ray's
     media rule out: toward its front (entering) while inside it, or from
     behind while outside."""
@@ -605,14 +554,14 @@ def _contradicting(obj, prim, dirs, medium, outer, closed, body, face_normal, ou
         if obj[i] == MISS or not closed[obj[i]]:
             out[i] = False
         else:
-            toward = dot1(row(dirs, i), row(face_normal, prim[i])) < 0.0
+            toward = dot1(row(dirs, i), face_normal1(triangles, obj[i], prim[i])) < 0.0
             out[i] = toward == (inside1(medium[i], obj[i], body) | inside1(outer[i], obj[i], body))
 
 
-@kernel("void(i8[::1], f8[::1], f8[::1], f8[:, :, ::1], f8[:, ::1], f8[:, ::1])")
-def _shading_normals(prim, u, v, corner_normal, face_normal, out):
+@kernel(f"void({TRIANGLES_TYPE}, i8[::1], i8[::1], f8[::1], f8[::1], f8[:, ::1])")
+def _shading_normals(triangles, obj, prim, u, v, out):
     for i in range(len(prim)):
-        set_row(out, i, shading_normal1(corner_normal, face_normal, prim[i], u[i], v[i]))
+        set_row(out, i, normals1(triangles, obj[i], prim[i], u[i], v[i])[1])
 
 
 @kernel("void(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8, f8[:, ::1])")

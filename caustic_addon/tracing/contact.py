@@ -37,12 +37,15 @@ from ..util.jit import inline, kernel
 from ..util.rows import contiguous, take, take_rows, true_rows
 from ..util.vectors import dot, dot1, row, set_row, sum1
 from .hits import MISS, Hits, inside1
+from .triangles import TRIANGLES_TYPE, face_normal1, owner1
 
 # Faces closer than this many epsilons touch.
 CONTACT_EPSILONS = 2.0
 # The re-cast's half-length along the ray is CONTACT_EPSILONS epsilons
 # across the surface: longer for a glancing ray, up to 1 / _MIN_COSINE times.
 _MIN_COSINE = 0.05
+# Triangles of one object probed at a time, which bounds the probes' memory.
+_BATCH = 1 << 20
 # Barycentric coordinates of the points each caster face is probed at: its
 # centre and three points toward its corners.
 _PROBE_BARYCENTRICS = np.array([[1 / 3, 1 / 3, 1 / 3], [0.8, 0.1, 0.1], [0.1, 0.8, 0.1], [0.1, 0.1, 0.8]])
@@ -77,8 +80,8 @@ class Contacts:
         touching: dict[int, set[int]] = {}
         reach = CONTACT_EPSILONS * accel.epsilon
         # each object's box, (objects,3) corners
-        lo = np.array([o.mesh.vertices.min(axis=0) - reach for o in accel.objects]).reshape(-1, 3)
-        hi = np.array([o.mesh.vertices.max(axis=0) + reach for o in accel.objects]).reshape(-1, 3)
+        lo = np.array([o.mesh.bounds[0] - reach for o in accel.objects]).reshape(-1, 3)
+        hi = np.array([o.mesh.bounds[1] + reach for o in accel.objects]).reshape(-1, 3)
         for a, obj in enumerate(accel.objects):
             if not obj.is_caster:
                 continue
@@ -90,7 +93,7 @@ class Contacts:
             for b, prims in self._probe(a, near, lo, hi).items():
                 touching.setdefault(a, set()).add(b)
                 touching.setdefault(b, set()).add(a)
-                corners = np.take(accel.corners, prims, axis=0).reshape(-1, 3)
+                corners = accel.corner_points(np.full(len(prims), a), prims).reshape(-1, 3)
                 box = (corners.min(axis=0) - reach, corners.max(axis=0) + reach)
                 for index in (a, b):
                     self.boxes[index] = _union(self.boxes.get(index), box)
@@ -109,18 +112,24 @@ class Contacts:
         normal, from CONTACT_EPSILONS epsilons behind to as far in front,
         at the points _PROBE_BARYCENTRICS."""
         accel = self.accel
-        first, end = accel.prim_offset[a], accel.prim_offset[a + 1]
-        corners = accel.corners[first:end]
-        lo, hi = corners.min(axis=1), corners.max(axis=1)
-        candidate = np.zeros(len(corners), dtype=bool)
-        for b in near:
-            candidate |= np.all((lo <= box_hi[b]) & (hi >= box_lo[b]), axis=1)
-        candidate &= dot(accel.face_normal[first:end], accel.face_normal[first:end]) > 0.0
-        prims = first + np.flatnonzero(candidate)
+        prims, corners, normals = [], [], []
+        for first in range(accel.prim_offset[a], accel.prim_offset[a + 1], _BATCH):
+            prim = np.arange(first, min(first + _BATCH, accel.prim_offset[a + 1]))
+            owner = np.full(len(prim), a)
+            corner, normal = accel.corner_points(owner, prim), accel.face_normals(owner, prim)
+            lo, hi = corner.min(axis=1), corner.max(axis=1)
+            candidate = np.zeros(len(prim), dtype=bool)
+            for b in near:
+                candidate |= np.all((lo <= box_hi[b]) & (hi >= box_lo[b]), axis=1)
+            candidate &= dot(normal, normal) > 0.0
+            prims.append(prim[candidate])
+            corners.append(corner[candidate])
+            normals.append(normal[candidate])
+        prims = np.concatenate(prims)
         if len(prims) == 0:
             return {}
-        normal = np.repeat(np.take(accel.face_normal, prims, axis=0), len(_PROBE_BARYCENTRICS), axis=0)
-        points = np.einsum("kj,ijc->ikc", _PROBE_BARYCENTRICS, np.take(accel.corners, prims, axis=0)).reshape(-1, 3)
+        normal = np.repeat(np.concatenate(normals), len(_PROBE_BARYCENTRICS), axis=0)
+        points = np.einsum("kj,ijc->ikc", _PROBE_BARYCENTRICS, np.concatenate(corners)).reshape(-1, 3)
         reach = CONTACT_EPSILONS * accel.epsilon
         hits = _Subscene(accel, near).closest(points - reach * normal, normal, np.full(len(points), 2.0 * reach))
         face = np.repeat(prims, len(_PROBE_BARYCENTRICS))
@@ -155,13 +164,13 @@ class Contacts:
         done = np.zeros(n, dtype=bool)
         if leaving is not None:
             rows, owner, points, normal = np.empty(n, dtype=i8), np.empty(n, dtype=i8), np.empty((n, 3)), np.empty((n, 3))
-            count = _left_in_boxes(contiguous(leaving, i8), contiguous(origins, f8), dirs, accel.face_normal,
-                                   accel.owner, accel.epsilon, self.lo, self.hi, rows, owner, points, normal)
+            count = _left_in_boxes(contiguous(leaving, i8), contiguous(origins, f8), dirs, accel.triangles,
+                                   accel.prim_offset, accel.epsilon, self.lo, self.hi, rows, owner, points, normal)
             rows, owner, points, normal = rows[:count], owner[:count], points[:count], normal[:count]
             d = take(dirs, rows)
             found, _ = self._recast(owner, points, d, normal)
             meets = true_rows(_meeting(found.obj, found.prim, owner, d, take(medium, rows), take(outer, rows), normal,
-                                       accel.face_normal, accel.closed, accel.body))
+                                       accel.triangles, accel.closed, accel.body))
             rows, found = take(rows, meets), found.take(meets)
             found.t[:] = 0.0
             hits.replace(rows, found)
@@ -172,9 +181,9 @@ class Contacts:
             return
         mine = hits.take(rows)
         d = take(dirs, rows)
-        found, past = self._recast(mine.obj, mine.points, d, take(accel.face_normal, mine.prim))
+        found, past = self._recast(mine.obj, mine.points, d, accel.face_normals(mine.obj, mine.prim))
         first = true_rows(_other_first(mine.obj, mine.prim, found.obj, found.prim, d, take(medium, rows),
-                                       accel.face_normal, accel.closed, self.caster))
+                                       accel.triangles, accel.closed, self.caster))
         found.t = mine.t + past
         hits.replace(take(rows, first), found.take(first))
 
@@ -186,9 +195,9 @@ def in_box1(lo, hi, o, p):
             & (lo[o, 2] <= p[2]) & (p[2] <= hi[o, 2]))
 
 
-@kernel("i8(i8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], i8[::1], f8, f8[:, ::1], f8[:, ::1], "
+@kernel(f"i8(i8[::1], f8[:, ::1], f8[:, ::1], {TRIANGLES_TYPE}, i8[::1], f8, f8[:, ::1], f8[:, ::1], "
         "i8[::1], i8[::1], f8[:, ::1], f8[:, ::1])")
-def _left_in_boxes(leaving, origins, dirs, face_normal, owner, epsilon, lo, hi, rows, owners, points, normals):
+def _left_in_boxes(leaving, origins, dirs, triangles, prim_offset, epsilon, lo, hi, rows, owners, points, normals):
     """The rays that scattered at a face `leaving[i]` (not MISS) whose
     point on it, `origins[i]` less the epsilon offset1 put it off, lies in
     the contact box of the face's object: into `rows`, `owners`, `points`
@@ -198,11 +207,12 @@ def _left_in_boxes(leaving, origins, dirs, face_normal, owner, epsilon, lo, hi, 
         face = leaving[i]
         if face == MISS:
             continue
-        normal = row(face_normal, face)
+        owner = owner1(prim_offset, face)
+        normal = face_normal1(triangles, owner, face)
         side = -1.0 if dot1(row(dirs, i), normal) < 0.0 else 1.0
         point = sum1(1.0, row(origins, i), -(epsilon * side), normal)
-        if in_box1(lo, hi, owner[face], point):
-            rows[count], owners[count] = i, owner[face]
+        if in_box1(lo, hi, owner, point):
+            rows[count], owners[count] = i, owner
             set_row(points, count, point)
             set_row(normals, count, normal)
             count += 1
@@ -244,9 +254,9 @@ def meets1(d, found_normal, left_normal, found_closed, left_closed):
     return (dot1(d, left_normal) > 0.0) == (dot1(left_normal, found_normal) < 0.0)
 
 
-@kernel("b1[::1](i8[::1], i8[::1], i8[::1], f8[:, ::1], i8[::1], i8[::1], f8[:, ::1], f8[:, ::1], b1[::1], "
+@kernel(f"b1[::1](i8[::1], i8[::1], i8[::1], f8[:, ::1], i8[::1], i8[::1], f8[:, ::1], {TRIANGLES_TYPE}, b1[::1], "
         "i8[::1])")
-def _meeting(found_obj, found_prim, left, dirs, medium, outer, left_normal, face_normal, closed, body):
+def _meeting(found_obj, found_prim, left, dirs, medium, outer, left_normal, triangles, closed, body):
     """(n,) bool: the re-cast found a surface that the ray leaving object
     `left (n,)` meets (meets1), and not closed glass that its media
     `medium, outer (n,)` say it is in already (glass it crossed into
@@ -256,7 +266,7 @@ def _meeting(found_obj, found_prim, left, dirs, medium, outer, left_normal, face
         o = found_obj[i]
         if o != MISS:
             inside = inside1(medium[i], o, body) | inside1(outer[i], o, body)
-            out[i] = meets1(row(dirs, i), row(face_normal, found_prim[i]), row(left_normal, i), closed[o],
+            out[i] = meets1(row(dirs, i), face_normal1(triangles, o, found_prim[i]), row(left_normal, i), closed[o],
                             closed[left[i]]) and not (closed[o] and inside)
     return out
 
@@ -286,15 +296,15 @@ def other_first1(d, medium, mine, other, mine_normal, other_normal, closed_mine,
     return consistent and choice
 
 
-@kernel("b1[::1](i8[::1], i8[::1], i8[::1], i8[::1], f8[:, ::1], i8[::1], f8[:, ::1], b1[::1], b1[::1])")
-def _other_first(mine_obj, mine_prim, other_obj, other_prim, dirs, medium, face_normal, closed, caster):
+@kernel(f"b1[::1](i8[::1], i8[::1], i8[::1], i8[::1], f8[:, ::1], i8[::1], {TRIANGLES_TYPE}, b1[::1], b1[::1])")
+def _other_first(mine_obj, mine_prim, other_obj, other_prim, dirs, medium, triangles, closed, caster):
     """(n,) bool: the re-cast found another surface that the ray meets first (other_first1)."""
     out = np.zeros(len(mine_obj), dtype=np.bool_)
     for i in range(len(mine_obj)):
         m, o = mine_obj[i], other_obj[i]
         if o != MISS:
-            out[i] = other_first1(row(dirs, i), medium[i], m, o, row(face_normal, mine_prim[i]),
-                                  row(face_normal, other_prim[i]), closed[m], closed[o], caster[m], caster[o])
+            out[i] = other_first1(row(dirs, i), medium[i], m, o, face_normal1(triangles, m, mine_prim[i]),
+                                  face_normal1(triangles, o, other_prim[i]), closed[m], closed[o], caster[m], caster[o])
     return out
 
 

@@ -46,8 +46,8 @@ class Joins:
         closed = np.flatnonzero(accel.closed)
         if len(closed) < 2:
             return
-        lo = np.array([accel.objects[i].mesh.vertices.min(axis=0) for i in closed])
-        hi = np.array([accel.objects[i].mesh.vertices.max(axis=0) for i in closed])
+        lo = np.array([accel.objects[i].mesh.bounds[0] for i in closed])
+        hi = np.array([accel.objects[i].mesh.bounds[1] for i in closed])
         size = np.linalg.norm(hi - lo, axis=1)
         for k, a in enumerate(closed):
             gap = JOIN_SHARE * np.minimum(size, size[k])
@@ -68,10 +68,10 @@ class Joins:
             if len(rows) == 0:
                 continue
             d, back, start = take(dirs, rows), np.empty(len(rows)), np.empty((len(rows), 3))
-            _recast_rays(take(points, rows), d, take(accel.face_normal, take(prim, rows)),
+            _recast_rays(take(points, rows), d, accel.face_normals(take(obj, rows), take(prim, rows)),
                          CONTACT_EPSILONS * accel.epsilon, back, start)
             hits = scene.closest(start, d, back + self.gap[index])
             front = hits.hit.copy()
-            front[front] = np.einsum("ij,ij->i", d[front], take(accel.face_normal, hits.prim[front])) < 0.0
+            front[front] = np.einsum("ij,ij->i", d[front], accel.face_normals(hits.obj[front], hits.prim[front])) < 0.0
             found[rows[front]] = hits.obj[front]
         return found

@@ -45,7 +45,7 @@ def closed_form(scene: Scene):
     accel = Accelerator(scene.objects[:1], 2.0, threads=1)
     try:
         hits = accel.intersect(origins, dirs)
-        normal = np.take(accel.face_normal, np.maximum(hits.prim, 0), axis=0)
+        normal = accel.face_normals(np.maximum(hits.obj, 0), np.maximum(hits.prim, 0))
         normal = np.where((normal @ dirs[0] > 0.0)[:, None], -normal, normal)
         shadow = accel.intersect(hits.points + 1e-5 * normal, np.tile(toward_sun, (len(dirs), 1)))
     finally:

@@ -34,10 +34,26 @@ def test_each_copy_is_the_mesh_transformed_on_its_own():
         np.testing.assert_allclose(copies.corners[rows], alone.corners, atol=1e-12)
         np.testing.assert_allclose(copies.corner_normals[rows], alone.corner_normals, atol=1e-12)
         np.testing.assert_array_equal(copies.corner_uvs[rows], alone.corner_uvs)
-    # the accelerator makes the copies' shading normals, which the object's mesh does not hold
+    # the accelerator places each copy's triangles as it reads them, from one set of rows for all copies
     accel = Accelerator([Object.instanced("Copies", local, matrices, Diffuse(0.8))], 10.0, threads=1)
     assert accel.objects[0].mesh.corner_normals is None
-    np.testing.assert_array_equal(accel.corner_normal, copies.corner_normals)
+    assert len(accel.triangles[0]) == len(local.triangles)
+    prim = np.arange(len(copies.triangles))
+    obj = np.zeros(len(prim), dtype=np.int64)
+    np.testing.assert_allclose(accel.corner_points(obj, prim), copies.corners, atol=1e-12)
+    cross = np.cross(copies.corners[:, 1] - copies.corners[:, 0], copies.corners[:, 2] - copies.corners[:, 0])
+    np.testing.assert_allclose(accel.face_normals(obj, prim), cross / np.linalg.norm(cross, axis=1)[:, None],
+                               atol=1e-12)
+    # a copy's shading normal is its mesh's interpolant turned by M^-T, as Cycles turns an instance's
+    u, v = rng.random(len(prim)) * 0.5, rng.random(len(prim)) * 0.5
+    mirrored = np.repeat(np.linalg.det(matrices[:, :3, :3]) < 0.0, len(local.triangles))
+    normals = np.tile(local.corner_normals, (len(matrices), 1, 1))
+    normals[mirrored] = normals[mirrored, ::-1]  # a mirrored copy is wound the other way round
+    blend = (1.0 - u - v)[:, None] * normals[:, 0] + u[:, None] * normals[:, 1] + v[:, None] * normals[:, 2]
+    turned = np.einsum("kji,kj->ki", np.repeat(np.linalg.inv(matrices[:, :3, :3]), len(local.triangles), axis=0),
+                       blend)
+    np.testing.assert_allclose(accel.shading_normal(obj, prim, u, v),
+                               turned / np.linalg.norm(turned, axis=1)[:, None], atol=1e-12)
 
 
 def grid(count: int, spacing: float, z: float) -> np.ndarray:
@@ -84,7 +100,8 @@ def test_an_open_instanced_mesh_is_named_once():
 
 def test_instanced_glass_renders_as_the_same_glass_in_separate_objects():
     """Four ball lenses as one instanced object and as four objects: the
-    same caustics: the beams aim at one caster or at four, and agree to 0.5%."""
+    same caustics: the beams aim at one caster or at four, and agree to
+    0.5%. The copies are never made in world space (geometry.Copies)."""
     ball, matrices = shapes.uv_sphere(0.4, segments=64, rings=32), grid(2, 1.2, 1.0)
     floor = Object("Floor", shapes.plane(8.0), Diffuse(0.8))
     lamp = [PointLight((0.0, 0.0, 4.0), 2000.0)]
@@ -95,6 +112,8 @@ def test_instanced_glass_renders_as_the_same_glass_in_separate_objects():
     images = [render(scene, quick(lamp_rays=400_000, density="beam")).image for scene in (together, apart)]
     assert np.sqrt(np.mean((images[0] - images[1]) ** 2) / np.mean(images[1] ** 2)) < 0.005
     assert images[0].max() > 3.0 * np.median(images[0])  # the caustics are there
+    # the render read the copies through the one mesh and the transforms, and never made them in world space
+    assert "_made" not in vars(together.objects[1].mesh)
 
 
 def moved(x: float, mirror: bool = False) -> np.ndarray:
