@@ -5,8 +5,8 @@ depsgraph's object instances would cost a Python step per instance.
 
 Only depsgraphs whose every instancer is read so take this way; the rest
 (Blender 4.2, particles, Instancing Verts, Faces or Collection, instances
-of collections, lamps or other geometry, instances within instances other
-than an Object Info node's "As Instance") are walked one by one
+of lamps or other geometry, instances within instances other than an
+Object Info or Collection Info node's) are walked one by one
 (scene._read_objects)."""
 
 from __future__ import annotations
@@ -27,12 +27,14 @@ class Reference:
     """What some of an instancer's instances place: the mesh of `geometry`,
     which is no object of its own (an Ico Sphere node's, an Object Info
     node's), or evaluated mesh object `ob` (an Object Info node's "As
-    Instance"). `rows (k,)` are the instances' places among the instancer's
-    (in the depsgraph's order), `matrices (k,4,4)` their world transforms."""
+    Instance", an object of a Collection Info node's collection).
+    `numbers (k,)` are their places among the object instances the
+    depsgraph's walk yields for the instancer, `matrices (k,4,4)` their
+    world transforms."""
 
     ob: Optional[bpy.types.Object]
     geometry: Optional[bpy.types.GeometrySet]
-    rows: np.ndarray
+    numbers: np.ndarray
     matrices: np.ndarray
 
     @property
@@ -43,7 +45,7 @@ class Reference:
 
 @dataclass
 class Instancer:
-    """An instancer's instances: `count` of them, one depsgraph object instance each."""
+    """An instancer's instances: `count` object instances of the depsgraph's walk."""
 
     count: int
     references: list[Reference]
@@ -96,33 +98,93 @@ def _reference_index(instances) -> np.ndarray:
 
 def _instancer(depsgraph, ob, geometry, instances) -> Optional[Instancer]:
     """The Instancer of evaluated object `ob`, whose evaluated `geometry`
-    has `instances`; None where one of them places what only the walk reads."""
+    has `instances`; None where one of them places what only the walk reads.
+    The walk yields each instance's objects in turn (a collection's all),
+    which numbers them."""
     world = numpy_matrix(ob.matrix_world) @ _transforms(instances)
     index = _reference_index(instances)
-    references = []
+    entries = np.zeros(len(index), dtype=np.int64)
+    placed = []
     for number, reference in enumerate(geometry.instance_references()):
         rows = np.flatnonzero(index == number)
         if not len(rows):
             continue
-        if not isinstance(reference, bpy.types.GeometrySet) or _other_components(reference):
+        members = _members(depsgraph, reference)
+        if members is None:
             return None
-        inner = reference.instances_pointcloud()
-        if inner is None:
-            if reference.mesh is not None:
-                references.append(Reference(None, reference, rows, world[rows]))
+        entries[rows] = len(members)
+        placed += [(member, rows, k) for k, member in enumerate(members) if member is not None]
+    first = np.cumsum(entries) - entries
+    references = [Reference(target, mesh_of, first[rows] + k, world[rows] @ inner)
+                  for (target, mesh_of, inner), rows, k in placed]
+    return Instancer(int(entries.sum()), references)
+
+
+def _members(depsgraph, reference) -> Optional[list]:
+    """What one instance of `reference` places, in the walk's order: for
+    each of its objects (evaluated object or None, geometry whose mesh it is
+    or None, (4,4) transform within the instance), or None for an empty,
+    which the walk yields and the render skips. None where only the walk
+    reads it."""
+    if isinstance(reference, bpy.types.Collection):
+        return _collection_members(depsgraph, reference, np.eye(4))
+    if not isinstance(reference, bpy.types.GeometrySet) or _other_components(reference):
+        return None
+    inner = reference.instances_pointcloud()
+    if inner is None:
+        return [] if reference.mesh is None else [(None, reference, np.eye(4))]
+    # an Object Info node's "As Instance", a Collection Info node's: one instance of an object or collection
+    targets = reference.instance_references()
+    if reference.mesh is not None or len(inner.points) != 1 or len(targets) != 1:
+        return None
+    within = _transforms(inner)[0]
+    if isinstance(targets[0], bpy.types.Collection):
+        return _collection_members(depsgraph, targets[0], within)
+    target = _mesh_object(depsgraph, targets[0])
+    return None if target is None else [(target, None, within)]
+
+
+def _collection_members(depsgraph, collection, within: np.ndarray) -> Optional[list]:
+    """_members of an instance of `collection` under `within (4,4)`: each
+    object the depsgraph's mode shows, in the collection's order, its
+    matrix less the collection's Instance Offset (Blender's collection
+    instances, make_duplis_collection)."""
+    shown = _shown(collection, 'hide_render' if depsgraph.mode == 'RENDER' else 'hide_viewport')
+    offset = np.eye(4)
+    offset[:3, 3] = -np.array(collection.instance_offset[:], dtype=np.float64)
+    members = []
+    for source in collection.all_objects:
+        if source.name not in shown:
             continue
-        # an Object Info node's "As Instance": one instance of one object
-        placed = reference.instance_references()
-        if reference.mesh is not None or len(inner.points) != 1 or len(placed) != 1:
+        if source.type == 'EMPTY' and source.instance_type == 'NONE':
+            members.append(None)
+            continue
+        target = _mesh_object(depsgraph, source)
+        if target is None:
             return None
-        target = placed[0]
-        if not isinstance(target, bpy.types.Object) or target.type != 'MESH':
-            return None
-        target = target.evaluated_get(depsgraph)
-        if target.is_instancer or _makes_instances(target):
-            return None
-        references.append(Reference(target, None, rows, world[rows] @ _transforms(inner)[0]))
-    return Instancer(len(index), references)
+        members.append((target, None, within @ offset @ numpy_matrix(target.matrix_world)))
+    return members
+
+
+def _shown(collection, hidden: str) -> set[str]:
+    """The names of the objects of `collection` and its children that
+    neither they nor a collection they are in hide by the flag `hidden`."""
+    if getattr(collection, hidden):
+        return set()
+    names = {o.name for o in collection.objects if not getattr(o, hidden)}
+    for child in collection.children:
+        names |= _shown(child, hidden)
+    return names
+
+
+def _mesh_object(depsgraph, ob) -> Optional[bpy.types.Object]:
+    """Object `ob` evaluated, if it is a mesh that instances nothing itself; else None."""
+    if ob.type != 'MESH':
+        return None
+    ob = ob.evaluated_get(depsgraph)
+    if ob.is_instancer or _makes_instances(ob):
+        return None
+    return ob
 
 
 def _makes_instances(ob) -> bool:

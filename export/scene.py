@@ -169,7 +169,7 @@ class _Reader:
             instancer = instancers.get(ob.name)
             if instancer is not None and (self.renderable is None or ob.original.name in self.renderable):
                 for ref in instancer.references:
-                    self._reference(ob, ref, number + 1 + ref.rows)
+                    self._reference(ob, ref, number + 1 + ref.numbers)
             number += 1 + (instancer.count if instancer is not None else 0)
 
     def _reference(self, holder, ref: Reference, numbers: np.ndarray) -> None:

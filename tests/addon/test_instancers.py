@@ -11,10 +11,11 @@ import blender_scenes as scenes
 pytestmark = pytest.mark.skipif(bpy.app.version < (4, 5, 0), reason="Object.evaluated_geometry is Blender 4.5's")
 
 
-def both_reads(addon, monkeypatch):
-    """(bulk, walk, read): the scene read as the add-on reads it, what
-    read_instancers found there (None: the walk was taken), and the scene
-    walked (read_instancers says None)."""
+def both_reads(addon, monkeypatch, reader=None):
+    """(bulk, walk, read): the scene read as the add-on reads it (`reader`:
+    export.read_scene), what read_instancers found there (None: the walk
+    was taken), and the scene walked (read_instancers says None)."""
+    reader = reader or addon.export.read_scene
     found = []
 
     def spy(depsgraph):
@@ -24,9 +25,9 @@ def both_reads(addon, monkeypatch):
     real = addon.export.scene.read_instancers
     with monkeypatch.context() as patch:
         patch.setattr(addon.export.scene, "read_instancers", spy)
-        bulk = addon.export.read_scene(bpy.context)
+        bulk = reader(bpy.context)
         patch.setattr(addon.export.scene, "read_instancers", lambda depsgraph: None)
-        walk = addon.export.read_scene(bpy.context)
+        walk = reader(bpy.context)
     return bulk, walk, found[0]
 
 
@@ -50,7 +51,8 @@ def scene_of_instancers():
     """A floor, a lamp, a camera; an Ico Sphere scatter moved and turned;
     a scatter of an Object Info node's realized ball; a scatter of another
     ball "As Instance", of two materials; a scatter of diffuse cubes, which
-    receive and so are read one by one."""
+    receive and so are read one by one; a scatter of a Collection Info
+    node's collection (rock_collection)."""
     scenes.add_plane(6.0, scenes.diffuse_material())
     scenes.add_point_light((0.0, 0.0, 3.0), 500.0)
     scenes.add_camera((0.0, -4.0, 3.0))
@@ -71,17 +73,57 @@ def scene_of_instancers():
     cubes = scenes.scatter(2, 0.5, 'GeometryNodeMeshCube', name="Cubes", size=0.05)
     cubes.modifiers[0].node_group.nodes['Set Material'].inputs['Material'].default_value = scenes.diffuse_material()
     cubes.location.z = 2.0
+    rocks = scenes.scatter(2, 0.6, name="Rocks")
+    rocks.location.z = 2.5
+    tree = rocks.modifiers[0].node_group
+    info = tree.nodes.new('GeometryNodeCollectionInfo')
+    info.inputs['Collection'].default_value = rock_collection()
+    tree.links.new(info.outputs[0], tree.nodes['Instance on Points'].inputs['Instance'])
+
+
+def rock_collection():
+    """A collection off to the side, with an Instance Offset: two glass
+    rocks, one of them subdivided, a third hidden from renders, an empty,
+    and a child collection with a pebble."""
+    rocks = bpy.data.collections.new("Rock pile")
+    bpy.context.scene.collection.children.link(rocks)
+    pebbles = bpy.data.collections.new("Pebbles")
+    rocks.children.link(pebbles)
+    rocks.instance_offset = (5.0, 0.2, 0.0)
+    for name, y, collection in (("Rock A", 0.0, rocks), ("Rock B", 0.3, rocks), ("Hidden rock", 0.6, rocks),
+                                ("Pebble", 0.9, pebbles)):
+        rock = scenes.add_sphere(0.1, (5.0, y, 0.0), scenes.glass_material(), name, segments=8, rings=4)
+        for old in list(rock.users_collection):
+            old.objects.unlink(rock)
+        collection.objects.link(rock)
+    bpy.data.objects["Rock B"].modifiers.new("Smooth", 'SUBSURF')
+    bpy.data.objects["Hidden rock"].hide_render = True
+    rocks.objects.link(bpy.data.objects.new("Marker", None))
+    return rocks
 
 
 def test_instances_read_in_bulk_are_those_the_walk_reads(addon, monkeypatch):
     scene_of_instancers()
     bulk, walk, read = both_reads(addon, monkeypatch)
-    assert set(read) == {"Gems", "Realized", "Placed", "Cubes"}
+    assert set(read) == {"Gems", "Realized", "Placed", "Cubes", "Rocks"}
     assert_same(bulk, walk)
     copies = {o.name: o.copies for o in bulk.scene.objects}
     assert copies["Gems [Gems]"] == 9 and copies["Realized [Realized]"] == 4
     assert [n for name, n in copies.items() if name.startswith("Placed ball [Placed] [")] == [4, 4]  # two materials
     assert sum(name.startswith("Cubes [Cubes #") for name in copies) == 4
+    assert copies["Rock A [Rocks]"] == copies["Rock B [Rocks]"] == copies["Pebble [Rocks]"] == 4
+    assert "Hidden rock [Rocks]" not in copies
+
+
+def test_without_a_camera_the_viewports_instances_are_read_in_bulk(addon, monkeypatch):
+    """With no camera the bake reads the scene as the viewport shows it,
+    where a collection's objects hidden from renders are shown."""
+    scene_of_instancers()
+    bpy.data.objects.remove(bpy.data.objects["Camera"])
+    bulk, walk, read = both_reads(addon, monkeypatch, addon.export.read_for_bake)
+    assert read is not None
+    assert_same(bulk, walk)
+    assert "Hidden rock [Rocks]" in [o.name for o in bulk.scene.objects]
 
 
 def test_particles_and_collection_instances_are_walked(addon, monkeypatch):
