@@ -47,7 +47,8 @@ class Seen(NamedTuple):
     """A stack's weights toward the eye at n points, each (n,3).
 
     layer     the specular layer's (principled.Lobe.gain)
-    metal     the metal's (Lobe.metal);  b its F82-tint factor (Lobe.b)
+    metal     the metal's (Lobe.metal); base its F0, the Base Color in 0..1
+              (Lobe.base); b its F82-tint factor (Lobe.b)
     coat      the coat's lobe's
     diffuse   the diffuse base's share: what its colour, and the caustic, are times
     emission  what the coat leaves of the surface's emission
@@ -55,6 +56,7 @@ class Seen(NamedTuple):
 
     layer: np.ndarray
     metal: np.ndarray
+    base: np.ndarray
     b: np.ndarray
     coat: np.ndarray
     diffuse: np.ndarray
@@ -152,7 +154,7 @@ class Stack:
         else:
             gain, share = self.layer.toward(cos_v)
             layer, diffuse = gain * rest, share[:, None] * rest
-        return Seen(layer, metal, b, coat, diffuse, above)
+        return Seen(layer, metal, f0, b, coat, diffuse, above)
 
 
 @kernel("void(f8[::1], f8[::1], f8, f8[:, ::1], f8[:, ::1])")

@@ -145,7 +145,7 @@ class Materials:
             seen = stack.toward(cos_v[rows], np.take(base, rows, axis=0))
             lobe.active[rows] = stack.layer is not None or stack.metallic > 0.0
             lobe.alpha[rows], lobe.gain[rows] = stack.alpha, seen.layer
-            lobe.metal[rows], lobe.base[rows], lobe.b[rows] = seen.metal, np.clip(base[rows], 0.0, 1.0), seen.b
+            lobe.metal[rows], lobe.base[rows], lobe.b[rows] = seen.metal, seen.base, seen.b
             if stack.layer is not None:
                 lobe.f0[rows], lobe.eta[rows] = stack.layer.f0, stack.layer.eta
             if stack.coat is not None:
