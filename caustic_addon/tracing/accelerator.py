@@ -160,6 +160,7 @@ class Accelerator:
         self._geometries = [embree.Geometry(obj.mesh.vertices, obj.mesh.triangles) if obj.instances is None else
                             embree.Instances(self._prototypes[i].scene, obj.instances.transforms)
                             for i, obj in enumerate(objects)]
+        self._built: dict[tuple, _View] = {}
         self._all = self.view_of(np.arange(len(objects)))
         self._views = self._ray_views()
         for body in np.unique(self.body[self.closed]):
@@ -170,25 +171,20 @@ class Accelerator:
 
     def view_of(self, indices: np.ndarray) -> _View:
         """The objects `indices (k,)` in an Embree scene, built at the
-        accelerator's quality."""
-        if len(indices) == 0:
-            return _View(None, np.asarray(indices, dtype=np.int64))
-        return _View(embree.Scene([self._geometries[i] for i in indices], self.quality),
-                     np.asarray(indices, dtype=np.int64))
+        accelerator's quality, once for each set of objects: the kinds of
+        ray, the contacts' probes and partners and the joins' partners
+        often ask for the same."""
+        indices = np.asarray(indices, dtype=np.int64)
+        key = tuple(indices.tolist())
+        if key not in self._built:
+            scene = embree.Scene([self._geometries[i] for i in indices], self.quality) if len(indices) else None
+            self._built[key] = _View(scene, indices)
+        return self._built[key]
 
     def _ray_views(self) -> list[_View]:
-        """The _View each kind of ray sees, by kind; kinds that see the same
-        objects share one."""
-        views, built = [], {}
-        for flag in _VISIBILITY_FLAGS:
-            seen = np.flatnonzero([getattr(o.visibility, flag) for o in self.objects])
-            if len(seen) == len(self.objects):
-                views.append(self._all)
-            else:
-                if tuple(seen) not in built:
-                    built[tuple(seen)] = self.view_of(seen)
-                views.append(built[tuple(seen)])
-        return views
+        """The _View each kind of ray sees, by kind."""
+        return [self.view_of(np.flatnonzero([getattr(o.visibility, flag) for o in self.objects]))
+                for flag in _VISIBILITY_FLAGS]
 
     def _body_orientation(self, members: np.ndarray) -> tuple[bool, float]:
         """(closed, +1 or -1) of the body made of objects `members (k,)`:
