@@ -434,13 +434,6 @@ def cycles_dispersion(d: dict) -> Table:
     return ["Dispersion Scale", "Abbe Number", "Abbe expected", "Cycles renders", "red-blue spread: Cycles / engine"], rows
 
 
-def world_paths(d: dict) -> Table:
-    ways = list(next(iter(d["scenes"].values())))
-    return (["scene", *(f"{way}: time, error" for way in ways)],
-            [[scene.replace("_", " "), *(f"{seconds(r[way]['seconds'])}, {percent(r[way]['relative_l2'], 3)}"
-                                         for way in ways)] for scene, r in d["scenes"].items()])
-
-
 def flicker(d: dict) -> Table:
     return ["mode", "flicker", "temporal noise", "static frames identical", "a frame"], [
         [m["mode"], f"{m['flicker']:.3f}", percent(m["temporal_noise"]), "yes" if m["static_identical"] else "no",
@@ -467,7 +460,7 @@ FORMATTERS: dict[str, Callable[[dict], Table]] = {
     "first_render": first_render, "animation": animation, "live": live, "instances": instances, "farm": farm,
     "allocator": allocator,
     "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass, "through_glass": through_glass,
-    "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "world_paths": world_paths,
+    "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "sky_caustics": emitters,
     "flicker": flicker, "gallery": gallery, "glints": glints, "glossy_floor": glossy_floor,
     "emitters": emitters, "liquid_glass": liquid_glass, "smooth_edges": smooth_edges, "coated_floor": coated_floor,
 }
@@ -498,6 +491,7 @@ SECTIONS = [
         ("glints", "Glints: a lamp seen in glass, against Cycles"),
         ("glossy_floor", "A glossy floor under a large light, against Cycles"),
         ("emitters", "A softbox built as an emitting mesh, against Cycles"),
+        ("sky_caustics", "The sky's caustic, against Cycles"),
         ("liquid_glass", "Water in a glass tumbler, against Cycles"),
         ("smooth_edges", "Glass shaded smooth across its edges, against Cycles"),
         ("coated_floor", "A caustic on coated and metallic floors, against Cycles"),
@@ -505,7 +499,6 @@ SECTIONS = [
         ("through_glass", "The caustic seen through glass"),
         ("dispersion", "Dispersion and coloured glass"),
         ("cycles_dispersion", "Dispersion against Cycles"),
-        ("world_paths", "The world's light through glass"),
         ("flicker", "Flicker from frame to frame"),
         ("gallery", "The gallery"),
     ]),

@@ -11,6 +11,7 @@ from typing import Optional
 import numpy as np
 
 from .emission.mesh_lights import mesh_lights
+from .emission.sky_lamps import lighting_casters
 from .emission.world_sun import extract_sun
 from .errors import SceneError
 from .maps.cache import MapCache, lamp_pass_key
@@ -73,8 +74,9 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
     # (the emitting objects' lamps follow from the objects the key holds)
     key = (key or lamp_pass_key(scene, settings)) if cache is not None else None
     scene = replace(scene, lights=scene.lights + mesh_lights(scene))
-    # an environment's sun is a lamp, the rest of the world the sky the eye
-    # pass sees through the casters
+    # an environment's sun is a lamp, and the rest of the world, the sky, is
+    # suns of its regions (those that light the casters): their light
+    # through the casters is in the maps
     sun, sky = extract_sun(scene.world)
     lamps = scene.lights + ([sun] if sun is not None else [])
 
@@ -108,6 +110,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
                 lamp_stats = LampPassStats()
                 if run_lamps:
                     lamp_pass = beam_pass if settings.density == "beam" else photon_pass
+                    lamps += lighting_casters(scene, sky, accel)
                     lamp_stats = lamp_pass(scene, lamps, settings, accel, materials, maps, monitor, share)
                 if cache is not None:
                     cache.put(key, (maps, lamp_stats, list(warnings)))

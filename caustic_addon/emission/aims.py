@@ -152,7 +152,7 @@ class Aim:
         lamp rays are shared by."""
         light = self.light
         if self.is_disc:
-            return float(light.strength * energy * self.measure)
+            return float(light.strength * radiometry.sun_energy(light, energy) * self.measure)
         if isinstance(light, AreaLight):
             facing = max(float(self.axis @ light.direction), 0.0)
             return float(light.power * energy * self.measure * facing / math.pi)

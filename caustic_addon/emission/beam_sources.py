@@ -71,24 +71,28 @@ class BeamSource:
         axes = np.stack([t, b / np.linalg.norm(b)])
         return axes, c @ axes.T
 
-    def differentials(self, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def differentials(self, dirs: np.ndarray, first_hit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(d_origins (n,2,3), d_dirs (n,2,3)): how rays along `dirs (n,3)`
         change per metre (a sun's: per radian) along each of the lamp's
-        `cell_frame` axes, each toward the same point of the caster's aim
-        (ray differentials, Igehy 1999; passes/differentials.py carries them
-        through the bounces). From a point of a lamp moved by e, the ray
-        through the point at the target's distance s along it turns by -(e
-        - d (d.e)) / s; a sun's direction turns by e, the ray pivoting
-        where it crosses the aim's disc, its origin `start_distance`
-        upstream moving by minus that times the turn. Zero for a lamp of
-        size 0."""
+        `cell_frame` axes (ray differentials, Igehy 1999;
+        passes/differentials.py carries them through the bounces). From a
+        point of a lamp moved by e, the ray through the point at the
+        target's distance s along it turns by -(e - d (d.e)) / s. A sun's
+        direction turns by e, the ray pivoting where it first meets the
+        scene, `first_hit (n,)` m along it (where it meets nothing, at the
+        aim's disc): every direction of the sun's cell lights that point
+        of a caster alike, while a pivot on the disc, which crosses a
+        large flat caster far from where the ray meets it, would move a
+        landing by that whole lever arm. Zero for a lamp of size 0."""
         n = len(dirs)
         if self.cell is None:
             return np.zeros((n, 2, 3)), np.zeros((n, 2, 3))
         edges = np.broadcast_to(self.cell_frame()[0], (n, 2, 3))
         across = edges - dirs[:, None, :] * np.einsum("nkc,nc->nk", edges, dirs)[:, :, None]
         if self.aim.is_disc:
-            return -self.aim.start_distance * across, across
+            met = np.isfinite(first_hit) & (first_hit > 0)
+            pivot = np.where(met, first_hit, self.aim.start_distance)
+            return -pivot[:, None, None] * across, across
         return edges.copy(), -across / self.aim.target_distance
 
 

@@ -34,6 +34,7 @@ from ..scene import AreaLight, Light, MeshLight, SunLight
 from ..util.vectors import DIVISION_FLOOR
 from . import mesh_lights
 from .aims import Sphere, aims, emitting_points, reach
+from .sky_lamps import SkyRegion
 
 # Map cells between the caustics of neighbouring points of a lamp.
 BEAM_SHIFT = 2.0
@@ -74,7 +75,11 @@ def point_lamps(light: Light, per_axis: int, facing: np.ndarray) -> tuple[list[L
     at its cells' centroids with their shares of its light, and each one's
     cell's corners less its point (4,3) (`lamp_cells`); for m = 1 one lamp
     at its centre; a point or spot lamp's disc faces `facing (3,)`, the
-    direction of its casters. A lamp of size 0 is itself, of no cell."""
+    direction of its casters. A lamp of size 0 is itself, of no cell; a
+    region of the sky (sky_lamps.py) is its one point and cell, whatever
+    `per_axis`."""
+    if isinstance(light, SkyRegion):
+        return [replace(light, angle=0.0)], [light.cell]
     if not has_size(light):
         return [light], [None]
     cells = lamp_cells(light, per_axis, facing)
@@ -191,4 +196,8 @@ def beam_lamps(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere,
         out += points
         cells += corners
         phases.append(grid_phases(len(points)))
-    return out, np.concatenate(phases) if phases else np.zeros((0, 2)), cells
+    phases = np.concatenate(phases) if phases else np.zeros((0, 2))
+    # the sky's regions are points of one lamp
+    sky = [k for k, lamp in enumerate(out) if isinstance(lamp, SkyRegion)]
+    phases[sky] = grid_phases(len(sky)) if sky else phases[sky]
+    return out, phases, cells

@@ -126,7 +126,13 @@ def intensity(light: Light, energy: float, dirs: np.ndarray) -> np.ndarray:
 
 def sun_irradiance(light: SunLight, energy: float) -> np.ndarray:
     """Irradiance (3,) W/m^2 of a sun on a surface facing it."""
-    return light.color * (light.strength * energy)
+    return light.color * (light.strength * sun_energy(light, energy))
+
+
+def sun_energy(light: SunLight, energy: float) -> float:
+    """The render's Energy as it scales a sun: not at all for one of the
+    world's (SunLight.of_world), as it scales no world."""
+    return 1.0 if light.of_world else energy
 
 
 def sun_radiance(light: SunLight, energy: float) -> np.ndarray:

@@ -53,7 +53,7 @@ def extract_sun(world: World) -> tuple[Optional[SunLight], World]:
     spanned = float(solid_angle[rows].sum())
     strength = float(irradiance.max())
     sun = SunLight(-toward, strength, irradiance / strength, name="the world's sun",
-                   angle=2.0 * math.acos(1.0 - spanned / (2.0 * math.pi)))
+                   angle=2.0 * math.acos(1.0 - spanned / (2.0 * math.pi)), of_world=True)
     rest = image.copy()
     rest[rows, cols] = 0.0
     return sun, replace(world, environment=rest)

@@ -87,10 +87,15 @@ class Chart:
 
 
 class PlaneChart(Chart):
-    """A flat receiver: coordinates along two unit axes in its plane."""
+    """A flat receiver: coordinates along two unit axes in its plane. Its
+    map holds the light that arrives on one side, the side `front` (3,)
+    points to (receivers.facing_casters), or on both where `front` is
+    None: a plane's two sides share its chart, and the light from below a
+    floor is not the light its top shows."""
 
     def __init__(self, point: np.ndarray, normal: np.ndarray, vertices: np.ndarray):
         self.point, self.normal = point, normal
+        self.front: Optional[np.ndarray] = None
         self.axis_x, self.axis_y = orthonormal_basis(normal)
         local = self.plane_coords(vertices)
         self.origin, self.size = local.min(axis=0), np.ptp(local, axis=0)

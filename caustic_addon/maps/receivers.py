@@ -49,6 +49,8 @@ def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str],
             # the gutter grows the chart, and with it an automatic cell
             for _ in range(3):
                 chart.lay_out(GUTTER_CELLS * _cell_size(obj.name, chart, settings, []))
+        if isinstance(chart, PlaneChart):
+            chart.front = facing_casters(chart, scene.casters)
         cell = _cell_size(obj.name, chart, settings, warnings)
         if settings.density != "beam":
             maps[index] = IlluminationMap(obj.name, chart, cell, estimate)
@@ -60,6 +62,23 @@ def build_maps(scene: Scene, settings: RenderSettings, warnings: list[str],
         maps[index] = BeamMap(obj.name, chart, cell, estimate, threads=settings.threads, screen=screen,
                               sub_cell=view is not None)
     return maps
+
+
+def facing_casters(chart: PlaneChart, casters: list[Object]) -> Optional[np.ndarray]:
+    """The unit normal of the side of a flat receiver's plane that the
+    `casters` are on, each by the share of its bounding box on that side
+    times the box's diagonal; None where they are as much on either side,
+    or there are none."""
+    weight = 0.0
+    for caster in casters:
+        lo, hi = caster.mesh.bounds
+        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+            continue
+        centre = float((0.5 * (lo + hi) - chart.point) @ chart.normal)
+        reach = float(0.5 * np.abs(hi - lo) @ np.abs(chart.normal))
+        above = float(np.clip(0.5 + centre / (2.0 * reach), 0.0, 1.0)) if reach > 0 else float(centre > 0)
+        weight += (2.0 * above - 1.0) * float(np.linalg.norm(hi - lo))
+    return None if weight == 0.0 else np.sign(weight) * chart.normal
 
 
 def _cell_size(name: str, chart: Chart, settings: RenderSettings, warnings: list[str]) -> float:

@@ -53,6 +53,7 @@ from ..emission.aims import Sphere, casters_and_bounds, visible_targets
 from ..emission.beam_sources import BeamSource, beam_sources, disc_shares
 from ..emission.lamp_points import beam_lamps
 from ..emission.photons import make_emitters
+from ..emission.sky_lamps import SkyRegion
 from ..maps.deposits import Deposits
 from ..maps.illumination_map import IlluminationMap
 from ..maps.receivers import GUTTER_CELLS
@@ -94,12 +95,19 @@ _MAX_STRETCH = 1.5
 # A beam's hull (_spread_beams) drops corners whose turn's sine is under
 # this: rounding would keep points in the middle of an edge as corners.
 _COLLINEAR = 1e-9
-# A beam from a point of a lamp with a size is SPREAD_COPIES^2 copies over
-# its lamp cell's image (_spread_beams); their moves are halved along a
+# A beam from a point of a lamp with a size is copies over its lamp cell's
+# image (_spread_beams), 2 or more along each way, as many as it takes for
+# each part to be no wider than half the beam or than PART_CELLS map cells,
+# whichever is wider, and at most SPREAD_PARTS (a lamp's point, whose cell's
+# image is a few map cells) or SKY_SPREAD_PARTS (a region of the sky, whose
+# image is wider than its beams: with 2 parts, rings of seams crossed a
+# floor under a pane along its grid); their moves are halved along a
 # direction where the beam is MOVE_RATIO times as wide as the image, and
 # copies that move less than _STILL of that are one, and a part kept less
 # than _STILL is none.
-SPREAD_COPIES = 2
+SPREAD_PARTS = 2
+SKY_SPREAD_PARTS = 4
+PART_CELLS = 2.0
 MOVE_RATIO = 4.0
 _STILL = 0.02
 # A beam across a box chart's seam is copied into each island when it is
@@ -252,8 +260,14 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
         order = np.argsort(which, kind="stable")
         band = bands[which[order]]
         weight *= materials.band_weights[band]
-        differentials = None if not spreading else tuple(np.concatenate(parts) for parts in zip(*(
-            source.differentials(d) for source, (_, d, _) in zip(sources, rays))))
+        differentials = None
+        if spreading:
+            # where the rays first meet the scene, a sun's pivot
+            first = (accel.intersect(origins, dirs).t if any(source.aim.is_disc for source in sources)
+                     else np.full(len(dirs), np.inf))
+            ends = np.cumsum([len(d) for _, d, _ in rays])[:-1]
+            differentials = tuple(np.concatenate(parts) for parts in zip(*(
+                source.differentials(d, t) for source, (_, d, _), t in zip(sources, rays, np.split(first, ends)))))
         landed = trace_paths(accel, materials, maps, origins, dirs, weight, vertex[order], band, max_depth,
                              start_media, seed, differentials)
         if spreading and landed.d_xy is not None:
@@ -286,18 +300,23 @@ def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: A
     local = triangles % keys
     measure = aim_measure[triangles[:, 0] // keys] * disc_shares(
         np.stack([local // width, local % width], axis=-1) / scale, grid)
-    deposits, beams, flux_landed = _beams_and_photons(LandingIndex(landings, maps), triangles, measure, maps)
+    most_parts = np.array([SKY_SPREAD_PARTS if isinstance(source.light, SkyRegion) else SPREAD_PARTS
+                           for source in sources])
+    deposits, beams, flux_landed = _beams_and_photons(LandingIndex(landings, maps), triangles, measure, maps,
+                                                      np.take(most_parts, triangles[:, 0] // keys))
     refined = len(traced) + len(centres) - on_grid
     return JobResult(deposits, LampPassStats(owned + refined, refined, beams, flux_landed))
 
 
 def _beams_and_photons(lookup: LandingIndex, triangles: np.ndarray, measure: np.ndarray,
-                       maps: dict[int, IlluminationMap]):
+                       maps: dict[int, IlluminationMap], most_parts: np.ndarray):
     """Triangles `triangles (n,3)` (vertex keys) of emission measure
     `measure (n,)` (sr or m^2) whose three paths landed in one family become
-    beams (`_beam_geometry`); the landed corners of the others carry a third
-    of the triangle's flux each, as photons. Returns (the deposits, the
-    number of beams, the flux (3,) W that beams and photons carry)."""
+    beams (`_beam_geometry`), spread over their lamp cell's image in at
+    most `most_parts (n,)` parts each way; the landed corners of the others
+    carry a third of the triangle's flux each, as photons. Returns (the
+    deposits, the number of beams, the flux (3,) W that beams and photons
+    carry)."""
     land = lookup.landings
     tri, idx = coherent_triangles(lookup, triangles)
     min_area, reach = np.zeros(max(maps, default=-1) + 1), np.zeros(max(maps, default=-1) + 1)
@@ -324,8 +343,9 @@ def _beams_and_photons(lookup: LandingIndex, triangles: np.ndarray, measure: np.
             deposits.add_beams(int(o), *take_rows(good & (obj == o), corners, irradiance))
         else:
             # the copies that stay triangles apart from the hulls: each holds the memory of its corners
+            mine = good & (obj == o)
             spread_triangles, triangle_light, hulls, hull_light = _spread_beams(
-                *take_rows(good & (obj == o), corners, irradiance, spread), SPREAD_COPIES)
+                *take_rows(mine, corners, irradiance, spread), np.take(most_parts, tri[mine]), maps[int(o)].cell)
             for part, light in ((spread_triangles, triangle_light), (hulls, hull_light)):
                 if len(part):
                     deposits.add_beams(int(o), part, light)
@@ -430,18 +450,34 @@ def _distance_2d(a, b):
 
 
 @inline
-def _taper(corners, b, ux, uy, ratio):
-    """1 / (1 + (w / (ratio |u|))^4), w the width of beam `b` of `corners
-    (b,3,2)` along (ux, uy): 1 for a beam much narrower than u, 1/2 at
-    `ratio` times as wide, 0 for a far wider one (and for u = 0)."""
+def _width(corners, b, ux, uy):
+    """The width of beam `b` of `corners (b,3,2)` along (ux, uy); 0 for u = 0."""
+    lo, hi = np.inf, -np.inf
+    for k in range(3):
+        along = corners[b, k, 0] * ux + corners[b, k, 1] * uy
+        lo, hi = min(lo, along), max(hi, along)
+    size = np.sqrt(ux * ux + uy * uy)
+    return (hi - lo) / size if size > 0.0 else 0.0
+
+
+@inline
+def _taper(width, ux, uy, ratio):
+    """1 / (1 + (w / (ratio |u|))^4) for a beam of `width` w along (ux,
+    uy): 1 for a beam much narrower than u, 1/2 at `ratio` times as wide,
+    0 for a far wider one (and for u = 0)."""
     size = np.sqrt(ux * ux + uy * uy)
     if size == 0.0:
         return 0.0
-    lo, hi = np.inf, -np.inf
-    for k in range(3):
-        along = (corners[b, k, 0] * ux + corners[b, k, 1] * uy) / size
-        lo, hi = min(lo, along), max(hi, along)
-    return 1.0 / (1.0 + ((hi - lo) / (ratio * size)) ** 4)
+    return 1.0 / (1.0 + (width / (ratio * size)) ** 4)
+
+
+@inline
+def _parts(width, ux, uy, most, cell):
+    """Parts of the image along (ux, uy) for a beam of `width` along it: as
+    many as it takes for each to be no wider than half the beam, or than
+    PART_CELLS map cells of `cell` m, 2 at least and `most` at most."""
+    part = max(0.5 * width, PART_CELLS * cell, 1e-300)
+    return min(most, max(2, int(np.ceil(np.sqrt(ux * ux + uy * uy) / part))))
 
 
 @inline
@@ -450,6 +486,19 @@ def _bilinear(spread, b, s, t, axis):
     quadrilateral `spread[b] (4,2)` (corners at (0,0), (1,0), (1,1), (0,1))."""
     return ((1.0 - s) * (1.0 - t) * spread[b, 0, axis] + s * (1.0 - t) * spread[b, 1, axis]
             + s * t * spread[b, 2, axis] + (1.0 - s) * t * spread[b, 3, axis])
+
+
+@inline
+def _part_area(spread, b, s0, s1, r0, r1):
+    """The signed area of the flat quadrilateral whose corners are the
+    points (s0, r0), (s1, r0), (s1, r1), (s0, r1) of `spread[b]`'s
+    (`_bilinear`): the parts of a split tile the whole, and their areas
+    add up to its area."""
+    x0, y0 = _bilinear(spread, b, s0, r0, 0), _bilinear(spread, b, s0, r0, 1)
+    x1, y1 = _bilinear(spread, b, s1, r0, 0), _bilinear(spread, b, s1, r0, 1)
+    x2, y2 = _bilinear(spread, b, s1, r1, 0), _bilinear(spread, b, s1, r1, 1)
+    x3, y3 = _bilinear(spread, b, s0, r1, 0), _bilinear(spread, b, s0, r1, 1)
+    return 0.5 * ((x0 * y1 - x1 * y0) + (x1 * y2 - x2 * y1) + (x2 * y3 - x3 * y2) + (x3 * y0 - x0 * y3))
 
 
 @inline
@@ -462,7 +511,7 @@ def _in_axes(x, y, ux, uy, vx, vy, det, keep_u, keep_v):
 
 
 @inline
-def _spread_plan1(corners, spread, b, copies):
+def _spread_plan1(corners, spread, b, most, cell):
     """How `_spread_beams` spreads beam `b`: (u, v (2 each), det, the
     moves' tapers along u and v, the parts along u and v, the parts'
     tapers along u and v, whether the parts are hulls)."""
@@ -471,17 +520,19 @@ def _spread_plan1(corners, spread, b, copies):
     vx = 0.5 * (spread[b, 2, 0] + spread[b, 3, 0] - spread[b, 0, 0] - spread[b, 1, 0])
     vy = 0.5 * (spread[b, 2, 1] + spread[b, 3, 1] - spread[b, 0, 1] - spread[b, 1, 1])
     det = ux * vy - uy * vx
-    move_u, move_v = _taper(corners, b, ux, uy, MOVE_RATIO), _taper(corners, b, vx, vy, MOVE_RATIO)
-    split_u = copies if move_u > _STILL else 1
-    split_v = copies if move_v > _STILL else 1
-    keep_u = _taper(corners, b, ux / split_u, uy / split_u, 1.0)
-    keep_v = _taper(corners, b, vx / split_v, vy / split_v, 1.0)
+    width_u, width_v = _width(corners, b, ux, uy), _width(corners, b, vx, vy)
+    move_u, move_v = _taper(width_u, ux, uy, MOVE_RATIO), _taper(width_v, vx, vy, MOVE_RATIO)
+    split_u = _parts(width_u, ux, uy, most, cell) if move_u > _STILL else 1
+    split_v = _parts(width_v, vx, vy, most, cell) if move_v > _STILL else 1
+    keep_u = _taper(width_u, ux / split_u, uy / split_u, 1.0)
+    keep_v = _taper(width_v, vx / split_v, vy / split_v, 1.0)
     hulled = det != 0.0 and keep_u > _STILL and keep_v > _STILL
     return ux, uy, vx, vy, det, move_u, move_v, split_u, split_v, keep_u, keep_v, hulled
 
 
-@kernel("Tuple((f8[:, :, ::1], f8[:, ::1], f8[:, :, ::1], f8[:, ::1]))(f8[:, :, ::1], f8[:, ::1], f8[:, :, ::1], i8)")
-def _spread_beams(corners, irradiance, spread, copies):
+@kernel("Tuple((f8[:, :, ::1], f8[:, ::1], f8[:, :, ::1], f8[:, ::1]))(f8[:, :, ::1], f8[:, ::1], f8[:, :, ::1], "
+        "i8[::1], f8)")
+def _spread_beams(corners, irradiance, spread, most_parts, cell):
     """Beams of `corners (b,3,2)` chart metres and `irradiance (b,3)`
     spread over the image of the lamp's cell their paths stand for, the
     quadrilateral `spread (b,4,2)` (where the cell's corners move the
@@ -489,9 +540,10 @@ def _spread_beams(corners, irradiance, spread, copies):
     first order the cell's light through the grid triangle, the beam
     convolved with the image.
 
-    The convolution is `copies` x `copies` copies of the beam, each moved
-    to the centre of its part of the image (its split into as many parts)
-    with a share of the light: copies of a tiling tile, so light that is
+    The convolution is copies of the beam, up to `most_parts (b,)` along
+    each of the image's ways (`_parts`), each moved to the centre of its part of
+    the image (its split into as many parts)
+    with its part's share of the image's area of the light: copies of a tiling tile, so light that is
     even stays even. A beam much smaller than its part (a focus, where a
     lamp point's light gathers) is spread over it: uniformly over the
     Minkowski sum of the beam and the part (the convex hull of the 12
@@ -509,7 +561,7 @@ def _spread_beams(corners, irradiance, spread, copies):
     count = len(corners)
     triangles = hulls = 0
     for b in range(count):
-        plan = _spread_plan1(corners, spread, b, copies)
+        plan = _spread_plan1(corners, spread, b, most_parts[b], cell)
         if plan[11]:
             hulls += plan[7] * plan[8]
         else:
@@ -520,9 +572,10 @@ def _spread_beams(corners, irradiance, spread, copies):
     t = h_row = 0
     for b in range(count):
         ux, uy, vx, vy, det, move_u, move_v, split_u, split_v, keep_u, keep_v, hulled = _spread_plan1(
-            corners, spread, b, copies)
+            corners, spread, b, most_parts[b], cell)
         moved = det != 0.0 and split_u * split_v > 1
         beam_area = abs(signed_area1(corners[b, 0], corners[b, 1], corners[b, 2]))
+        whole = _part_area(spread, b, 0.0, 1.0, 0.0, 1.0)
         for i in range(split_u):
             for j in range(split_v):
                 s0, s1 = i / split_u, (i + 1) / split_u
@@ -567,7 +620,12 @@ def _spread_beams(corners, irradiance, spread, copies):
                     for k in range(3):
                         hull[k, 0], hull[k, 1] = corners[b, k, 0] + mx, corners[b, k, 1] + my
                     area = beam_area
-                share = beam_area / area / (split_u * split_v)
+                # each part's share of the light is its share of the image's area (a sky
+                # region's cell at the pole is a triangle, whose parts are not alike)
+                part = 1.0 / (split_u * split_v)
+                if moved and whole != 0.0:
+                    part = max(_part_area(spread, b, s0, s1, r0, r1) / whole, 0.0)
+                share = beam_area / area * part
                 if hulled:
                     for k in range(7):
                         out_h[h_row, k, 0], out_h[h_row, k, 1] = hull[min(k, h - 1), 0], hull[min(k, h - 1), 1]

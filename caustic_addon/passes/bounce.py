@@ -575,12 +575,19 @@ def on_maps(accel: Accelerator, materials: Materials, maps: dict, paths: Paths, 
     at a time: (object index, rows (k,) of `paths`, xy (k,2) chart metres,
     scale (k,) chart area per world area, island (k,) of the chart,
     basic (k,) the share of their flux a map holds: the basic irradiance
-    of the medium they arrive through, specular.basic_irradiance_scale)."""
+    of the medium they arrive through, specular.basic_irradiance_scale).
+    A flat receiver's map takes the paths that arrive on its front
+    (charts.PlaneChart)."""
     land = np.flatnonzero(paths.specular & np.isin(hits.obj, list(maps)))
     for index in np.unique(hits.obj[land]):
         rows = land[hits.obj[land] == index]
-        local = np.take(hits.prim, rows) - accel.prim_offset[index]
         chart = maps[index].chart
+        front = getattr(chart, "front", None)
+        if front is not None:
+            rows = rows[np.take(paths.dirs, rows, axis=0) @ front < 0.0]
+            if len(rows) == 0:
+                continue
+        local = np.take(hits.prim, rows) - accel.prim_offset[index]
         xy = chart.coords(local, np.take(hits.u, rows), np.take(hits.v, rows), np.take(hits.points, rows, axis=0))
         basic = basic_irradiance_scale(materials.medium_ior(np.take(paths.medium, rows)))
         yield int(index), rows, xy, chart.area_scale(local), chart.islands_of(local), basic

@@ -37,8 +37,10 @@ Cycles computes with bounces at 0. All are estimated from the same
 directions, drawn by cos(theta) / pi (Malley), for an image by the world's
 radiance (environment.py), and by each lobe's visible normals (Heitz 2018),
 weighted by the balance heuristic (Veach 1997). A direction
-that meets a caster goes on through it to the sky (world_paths.py): that
-part of the world's light is kept apart, for the caustic pass."""
+that meets a caster brings its light to the surface through the maps
+(emission/sky_lamps.py), as a lamp's; what the lobes reflect of it goes on
+through the caster to the sky (world_paths.py), kept apart for the caustic
+pass."""
 
 from __future__ import annotations
 
@@ -309,11 +311,13 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
                 chance: np.ndarray | None = None) -> tuple[WorldLight, WorldLight]:
     """(open, through): the world's light at the points, shadows included,
     in two parts: what reaches them along directions that meet nothing,
-    and, given `sky_paths`, what reaches them through the casters
-    (world_paths.py; a ray leaves triangle `surface (n,)` inside object
-    `medium (n,)`), else nothing. A shadow ray finds the directions that
-    meet something first; those of point i are followed with probability
-    `chance[i]` (Russian roulette: what they bring is divided by it),
+    and, given `sky_paths`, what their lobes reflect of the sky through
+    the casters (world_paths.py; a ray leaves triangle `surface (n,)`
+    inside object `medium (n,)`), else nothing; the irradiance through
+    the casters is the maps' (emission/sky_lamps.py). A shadow ray finds
+    the directions that meet something first; those of point i are
+    followed with probability `chance[i]`, 0 for none (Russian roulette:
+    what they bring is divided by it),
     _WORLD_BATCH or so at a time (one bounce.trace for them all: its calls
     cost more than its rays). `samples` directions of each strategy per
     point, the cosine's, the image's and each of the `lobes`' (material_table.layers_at):
@@ -326,9 +330,10 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
     view = contiguous(view, np.float64)
     tangent, bitangent = frames(shading) if lobes else (None, None)
 
-    def add(part: WorldLight, idx, seen, toward, light, density, cos) -> None:
+    def add(part: WorldLight, idx, seen, toward, light, density, cos, irradiance: bool = True) -> None:
         light = contiguous(light, np.float64)
-        _add_world(part.irradiance, idx, seen, light, density, cos, samples)
+        if irradiance:
+            _add_world(part.irradiance, idx, seen, light, density, cos, samples)
         if not lobes:
             return
         rows = np.flatnonzero(seen)
@@ -355,7 +360,7 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
         opened, met, behind = sky_paths.light(origins, toward, np.take(medium, at), np.take(surface, at), draws)
         add(parts[0], at, opened, toward, environment.light(np.take(toward, np.flatnonzero(opened), axis=0)),
             density, cos)
-        add(parts[1], at, met, toward, np.take(behind, np.flatnonzero(met), axis=0), density, cos)
+        add(parts[1], at, met, toward, np.take(behind, np.flatnonzero(met), axis=0), density, cos, irradiance=False)
 
     nowhere = np.zeros(0, dtype=bool)
     for k in range(samples):
@@ -380,7 +385,7 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
             add(parts[0], idx, seen, toward, environment.light(np.take(toward, np.flatnonzero(seen), axis=0)),
                 density, cos)
             if sky_paths is not None and not seen.all():
-                rows = np.flatnonzero(~seen)
+                rows = np.flatnonzero(~seen & (np.take(chance, idx) > 0))
                 at = np.take(idx, rows)
                 draws = (np.take(pixel, at) * _WORLD_DRAWS + np.take(index, at)) * _WORLD_STRATEGIES + strategy
                 blocked.append((at, *(np.take(a, rows, axis=0) for a in (origins, toward, density, cos)), draws))

@@ -11,8 +11,9 @@ differentials carry there, in the pixels the edge pass refines (EyeTracer).
 
 At an opaque surface: ambient * albedo, plus direct light from each lamp and
 from the world (direct_light.py), plus caustic irradiance E_c * albedo / pi
-read from the receiver's map and the world's light through the casters
-(world_paths.py), both in the caustic pass. Under a Principled BSDF's
+read from the receiver's map, which holds the lamps' and the sky's light
+through the casters, and what the point's lobes reflect of the sky through
+them (world_paths.py), both in the caustic pass. Under a Principled BSDF's
 layers (coat, metal, specular layer) the albedo is the base colour times
 the share they leave it toward the eye, and its emission what the coat
 leaves (optics/layers.py); their lobes reflect the lamps and the world,
@@ -55,6 +56,7 @@ from ..tracing.hits import MISS, Hits
 from ..util.jit import kernel
 from ..util.parallel import Monitor, chunk_size, run_chunks
 from ..util.rows import take, take_rows
+from ..util.vectors import max_channel
 from .bounce import Roulette, facets, multiscatter, split, trace
 from .interface import Interface
 from .camera_rays import camera_footprints, eye_rays, pixel_offsets, ray_differentials
@@ -201,12 +203,15 @@ class EyeTracer:
             caustic[on_map] = irradiance * take_rows(on_map, diffuse)[0] / math.pi
         ambient = self.scene.ambient * diffuse
         if not self.dark_world:
-            chance = None if self.sky_paths is None else self.sky_paths.chances(diffuse, direct + caustic)
+            chance = None
+            if self.sky_paths is not None:
+                glossy = sum((max_channel(lobe.gain) + max_channel(lobe.metal) for lobe in lobes), np.zeros(len(rays)))
+                chance = self.sky_paths.chances(glossy, direct + caustic)
             seen, through = world_light(accel, self.environment, points, shading, facing, view, lobes, self.far,
                                         pixel, stratum, settings.world_samples, settings.seed, self.sky_paths,
                                         rays.medium, hits.prim, chance)
             ambient = ambient + seen.irradiance * diffuse / math.pi + seen.glossy
-            caustic += through.irradiance * diffuse / math.pi + through.glossy
+            caustic += through.glossy
         self._add("ambient", rays.ids, rays.weight, ambient)
         self._add("caustic", rays.ids, rays.weight, caustic)
 
@@ -397,7 +402,7 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     seen = camera_radiance_scale(materials, camera_media[0])
     environment = Environment(scene.world)
     sky_paths = None
-    if materials.specular_surface.any() and not sky.is_black:
+    if materials.specular_surface.any() and not sky.is_black and materials.stacks:
         sky_paths = WorldThroughCasters(accel, materials, Environment(sky), settings.max_depth, settings.seed)
     holdout = np.array([o.visibility.holdout for o in scene.objects], dtype=bool)
     edges = settings.edge_samples > settings.spp

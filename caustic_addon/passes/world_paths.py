@@ -1,16 +1,13 @@
-"""The world's light through the casters: a direction toward the world
-that meets glass or a mirror goes on through it, as a photon would the
-other way (photon.one_branch: one branch by its Fresnel probability,
-Russian roulette when faint, Beer-Lambert inside), until it leaves the
-scene, where it sees the sky.
-
-This is the soft light a floor gets from the sky through a glass ball or
-from under water. Photons from a source as large as the sky spread thin
-and, read back, make blocks of a photon's window; gathered from the floor,
-the light has the noise of the world's own shadow rays, as Cycles gathers
-it (a diffuse surface's BSDF rays through the glass). The sky here is the
-world without its sun: an environment's sun is a lamp of the pass from the
-lamps (emission/world_sun.py), whose caustic is sharp."""
+"""The world's light through the casters, as a Principled receiver's
+lobes reflect it: a direction toward the world that meets glass or a
+mirror goes on through it, as a photon would the other way
+(photon.one_branch: one branch by its Fresnel probability, Russian
+roulette when faint, Beer-Lambert inside), until it leaves the scene,
+where it sees the sky: a glossy floor's reflection of the sky through a
+glass ball. The sky here is the world without its sun, whose glossy
+light through glass is dropped as a lamp's is. What the casters let
+through onto the receivers, their irradiance, is in the maps, from the
+sky's suns (emission/sky_lamps.py)."""
 
 from __future__ import annotations
 
@@ -76,15 +73,16 @@ class WorldThroughCasters:
     max_depth: int
     seed: int
 
-    def chances(self, diffuse: np.ndarray, lit: np.ndarray) -> np.ndarray:
-        """(n,) the chance with which points of diffuse reflectance
-        `diffuse (n,3)`, whose radiance from the lamps and the maps is `lit
-        (n,3)`, follow their blocked directions toward the world: 1 where the
-        sky's mean radiance times the reflectance could be ROULETTE_SHARE of
-        `lit` (max channels), less in proportion below, at least MIN_CHANCE."""
-        could = max_channel(diffuse) * self.sky.mean_level
+    def chances(self, glossy: np.ndarray, lit: np.ndarray) -> np.ndarray:
+        """(n,) the chance with which points whose lobes reflect at most
+        `glossy (n,)` of the light, and whose radiance from the lamps and
+        the maps is `lit (n,3)`, follow their blocked directions toward the
+        world: 1 where the sky's mean radiance times `glossy` could be
+        ROULETTE_SHARE of `lit` (max channels), less in proportion below,
+        at least MIN_CHANCE, and 0 where they reflect nothing."""
+        could = glossy * self.sky.mean_level
         have = ROULETTE_SHARE * max_channel(lit)
-        return np.clip(could / np.maximum(have, DIVISION_FLOOR), MIN_CHANCE, 1.0)
+        return np.where(glossy > 0, np.clip(could / np.maximum(have, DIVISION_FLOOR), MIN_CHANCE, 1.0), 0.0)
 
     def light(self, origins: np.ndarray, dirs: np.ndarray, medium: np.ndarray, surface: np.ndarray,
               draws: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -81,6 +81,8 @@ class SunLight:
 
     direction     unit vector the light travels along (Blender's -Z of the lamp)
     angle         Blender's Angle: the full angle the sun's disc spans, radians
+    of_world      the sun stands for part of the world's light (its sun, a
+                  region of its sky), which the render's Energy does not scale
     """
 
     direction: np.ndarray
@@ -89,6 +91,7 @@ class SunLight:
     name: str = "Sun"
     angle: float = 0.0
     visibility: Visibility = LAMP_VISIBILITY
+    of_world: bool = False
 
     def __post_init__(self):
         self.direction = _unit(self.direction)

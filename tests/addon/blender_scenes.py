@@ -128,6 +128,16 @@ def scatter(count, spacing, mesh_node='GeometryNodeMeshIcoSphere', material=None
     return holder
 
 
+def world_nodes():
+    """A new world of the scene, its node tree and Background node."""
+    world = bpy.data.worlds.new("World")
+    bpy.context.scene.world = world
+    if world.node_tree is None:
+        world.use_nodes = True
+    tree = world.node_tree
+    return world, tree, next(n for n in tree.nodes if n.bl_idname == 'ShaderNodeBackground')
+
+
 def set_resolution(width, height):
     render = bpy.context.scene.render
     render.resolution_x, render.resolution_y, render.resolution_percentage = width, height, 100

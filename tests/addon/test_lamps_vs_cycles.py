@@ -123,18 +123,8 @@ def test_an_emitting_mesh_lights_the_floor_and_shades_the_pole_as_cycles_does(em
     assert rms < 0.08
 
 
-def world_nodes():
-    """A new world of the scene, its node tree and Background node."""
-    world = bpy.data.worlds.new("World")
-    bpy.context.scene.world = world
-    if world.node_tree is None:
-        world.use_nodes = True
-    tree = world.node_tree
-    return world, tree, next(n for n in tree.nodes if n.bl_idname == 'ShaderNodeBackground')
-
-
 def grey_world():
-    _, _, background = world_nodes()
+    _, _, background = scenes.world_nodes()
     background.inputs['Color'].default_value = (0.5, 0.5, 0.5, 1.0)
     bpy.context.scene.render.film_transparent = True
 
@@ -142,7 +132,7 @@ def grey_world():
 def sky_world():
     """Blender's default Sky Texture (Nishita in 4.2 to 4.5, its successor
     in 5.0+), the sun 35 degrees up: Cycles bakes it for the add-on."""
-    _, tree, background = world_nodes()
+    _, tree, background = scenes.world_nodes()
     sky = tree.nodes.new('ShaderNodeTexSky')
     sky.sun_elevation, sky.sun_rotation = math.radians(35.0), math.radians(60.0)
     tree.links.new(sky.outputs['Color'], background.inputs['Color'])
@@ -152,7 +142,7 @@ def sky_world():
 def turned_hdri_world():
     """An HDRI, black but for a bright band, turned 90 degrees by a Mapping
     node: baked, since the add-on reads only an unturned image itself."""
-    _, tree, background = world_nodes()
+    _, tree, background = scenes.world_nodes()
     h, w = 64, 128
     pixels = np.full((h, w, 4), 0.2, dtype=np.float32)
     pixels[12:20, 40:56, :3] = 40.0

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 import blender_scenes as scenes
-from test_lamps_vs_cycles import ours, world_nodes
+from test_lamps_vs_cycles import ours
 
 WIDTH, HEIGHT = 64, 48
 SPP = 16
@@ -179,7 +179,7 @@ def bright_patch_world(folder):
     reads itself. Closest interpolation: the add-on lights with each
     pixel's own value, and Cycles' Linear look-up lights the floor 4% less
     under this patch (its diffuse part alone)."""
-    _, tree, background = world_nodes()
+    _, tree, background = scenes.world_nodes()
     h, w = 90, 180
     pixels = np.full((h, w, 4), 0.2, dtype=np.float32)
     pixels[25:35, 40:50, :3] = 20.0

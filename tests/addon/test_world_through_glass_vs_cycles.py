@@ -25,11 +25,7 @@ def glass_ball_in_a_grey_world():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scenes.add_plane(20.0, scenes.diffuse_material())
     scenes.add_sphere(0.5, (0.0, 0.0, 0.5), scenes.glass_material(), segments=96, rings=48)
-    world = bpy.data.worlds.new("World")
-    bpy.context.scene.world = world
-    if world.node_tree is None:
-        world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    scenes.world_nodes()[2].inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
     camera = scenes.add_camera((0.95, 0.0, 5.0), target=(0.95, 0.0, 0.0))
     camera.data.type, camera.data.ortho_scale = 'ORTHO', 0.8
     camera.rotation_euler = (0.0, 0.0, 0.0)

@@ -23,10 +23,11 @@ def water_over_floor(bottom: float, camera_z: float = 20.0, sky: bool = False) -
     down by an orthographic camera at `camera_z`; a `bottom` below 0 puts
     the floor inside the water, as a pool's water modelled past its floor
     does. With `sky`, no sun but a uniform world of radiance 1, and water
-    200 m across, so that the floor sees the sky through its surface only."""
+    20 m across, so that the floor sees the sky through its surface, but
+    for 0.3% of its light within 3 degrees of the horizon."""
     camera = np.eye(4)
     camera[2, 3] = camera_z
-    water = (shapes.wavy_slab(200.0, 0.5, waves=(), cells=1, center=(0, 0, bottom)) if sky
+    water = (shapes.wavy_slab(20.0, 0.5, waves=(), cells=1, center=(0, 0, bottom)) if sky
              else shapes.cylinder(2.0, 0.5, (0, 0, bottom)))
     return Scene(objects=[Object("Floor", shapes.plane(400.0 if sky else 8.0), Diffuse(albedo=ALBEDO)),
                           Object("Water", water, Dielectric(WATER))],

@@ -1,0 +1,191 @@
+"""The sky, the world without its sun (world_sun.py), as suns for the pass
+from the lamps, so that its light through the casters lands in the
+illumination maps as a lamp's does: beams without noise, which a bake and
+Live carry to the receivers' materials.
+
+The lat-long image is cut into SKY_REGIONS regions of equal light, the
+median cut of Debevec ("A Median Cut Algorithm for Light Probe Sampling",
+SIGGRAPH 2005 poster): the region that holds the most light is halved,
+by its luminance times solid angle, across its longer side in angle, and
+a region wider than a quarter turn across its longitude, so that none
+spans half the sky. Each region is one sun (`SkyRegion`), toward the
+centroid c of its light, of strength
+
+    S = sum_i L_i Omega_i (d_i . c)
+
+the irradiance its pixels (radiance L_i, solid angle Omega_i, direction
+d_i) bring to a plane facing c. A flat receiver lit through lossless
+glass then gets n . c S = n . sum_i L_i Omega_i d_i, the region's own
+irradiance, wherever the region's colour is even (the centroid weighs
+luminance). Its `cell` is the flat quadrilateral of the region's corner
+directions, grown to the region's solid angle (`region_cell`), over whose
+image its beams spread (lamp_points.py, beam.py),
+so that the regions' caustics, each sharp, sum to the sky's soft one;
+photons leave a cone of the region's solid angle around c instead.
+
+A world of one colour is a uniform image of UNIFORM_SIZE pixels. The
+regions whose light meets something opaque before any caster (the sky
+below a floor) are left out (`reaching`): the lamp rays go to those
+that light the casters."""
+
+from __future__ import annotations
+
+import heapq
+import math
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+
+from ..sampling.warps import concentric_disc
+from ..scene import Scene, SunLight, World
+from ..tracing.accelerator import Accelerator
+from ..tracing.hits import MISS
+from .aims import Sphere, aims, casters_and_bounds
+from .environment import luminance, uv_to_directions
+
+# The regions the sky is cut into: each one sun, and one beam grid.
+SKY_REGIONS = 256
+# Rows and columns of the image that stands for a world of one colour.
+UNIFORM_SIZE = (64, 128)
+# A region is cut across its longitude while it spans more than this share of a turn.
+MAX_TURN = 0.25
+# Probe rays across each of a region's aims per side, along each of its
+# centre's and corners' directions (`reaching`).
+PROBES = 6
+
+
+@dataclass
+class SkyRegion(SunLight):
+    """A sun that stands for a region of the sky: `angle` is the cone of
+    the region's solid angle (photons), `cell (4,3)` the directions its
+    corners' light travels along less `direction` (beams)."""
+
+    cell: Optional[np.ndarray] = field(default=None, repr=False)
+
+
+def lighting_casters(scene: Scene, sky: World, accel: Accelerator) -> list[SkyRegion]:
+    """The suns of the regions of `sky` whose light reaches the casters of `scene`."""
+    targets, scene_sphere = casters_and_bounds(scene)
+    casters = np.array([o.is_caster for o in scene.objects], dtype=bool)
+    return reaching(sky_lamps(sky), accel, casters, targets, scene_sphere)
+
+
+def sky_lamps(sky: World, count: int = SKY_REGIONS) -> list[SkyRegion]:
+    """The sky `sky` as at most `count` suns, one per region of its light
+    (`median_cut`); none for a black sky."""
+    image = sky.environment if sky.environment is not None else np.ones((*UNIFORM_SIZE, 3))
+    rgb = image * sky.color
+    h, w = rgb.shape[:2]
+    theta = (np.arange(h) + 0.5) / h * math.pi
+    phi = (0.5 - (np.arange(w) + 0.5) / w) * 2.0 * math.pi
+    pixel_sr = (2.0 * math.pi / w) * (math.pi / h) * np.sin(theta)
+    power = rgb * pixel_sr[:, None, None]
+    weight = np.maximum(luminance(power), 0.0)
+    if not weight.sum() > 0:
+        return []
+    boxes = median_cut(weight, count, theta)
+    # each pixel's box, len(boxes) for those of none (they hold no light)
+    label = np.full((h, w), len(boxes), dtype=np.int64)
+    for k, (r0, r1, c0, c1) in enumerate(boxes):
+        label[r0:r1, c0:c1] = k
+    label = label.ravel()
+    # the pixels' directions, separably: (sin t cos p, sin t sin p, cos t)
+    axes = (np.sin(theta)[:, None] * np.cos(phi)[None, :], np.sin(theta)[:, None] * np.sin(phi)[None, :],
+            np.broadcast_to(np.cos(theta)[:, None], (h, w)))
+    bins = len(boxes) + 1
+    toward = np.stack([np.bincount(label, (weight * a).ravel(), bins) for a in axes], axis=1)
+    solid = np.bincount(label, np.broadcast_to(pixel_sr[:, None], (h, w)).ravel(), bins)
+    lit = np.linalg.norm(toward, axis=1) > 0
+    centre = toward / np.maximum(np.linalg.norm(toward, axis=1), 1e-300)[:, None]
+    facing = sum(np.take(centre[:, k], label).reshape(h, w) * axes[k] for k in range(3))
+    strength = np.stack([np.bincount(label, (power[..., c] * facing).ravel(), bins) for c in range(3)], axis=1)
+    lamps = []
+    for k in np.flatnonzero(lit & (strength.max(axis=1) > 0)):
+        r0, r1, c0, c1 = boxes[k]
+        corners = uv_to_directions(np.array([[c0 / w, r0 / h], [c1 / w, r0 / h], [c1 / w, r1 / h], [c0 / w, r1 / h]]))
+        peak = float(strength[k].max())
+        lamps.append(SkyRegion(-centre[k], peak, strength[k] / peak, name="the sky",
+                               angle=2.0 * math.acos(max(-1.0, 1.0 - solid[k] / (2.0 * math.pi))),
+                               of_world=True, cell=region_cell(centre[k], corners, solid[k])))
+    return lamps
+
+
+def region_cell(centre: np.ndarray, corners: np.ndarray, solid_angle: float) -> np.ndarray:
+    """(4,3) a region's cell: the directions its corners' light travels
+    along less its centre's, c - corners for unit `centre` c and `corners
+    (4,3)`, grown about c until the flat quadrilateral they span has the
+    region's `solid_angle`: the chords between the corners of a region
+    at the pole cut off a third of it, and its light would gather."""
+    cell = centre - corners
+    a, b, c, d = corners
+    flat = 0.5 * (np.linalg.norm(np.cross(b - a, c - a)) + np.linalg.norm(np.cross(c - a, d - a)))
+    return cell * math.sqrt(solid_angle / flat) if flat > 0 else cell
+
+
+def median_cut(weight: np.ndarray, count: int, theta: np.ndarray) -> list[tuple[int, int, int, int]]:
+    """At most `count` boxes (row0, row1, col0, col1), half-open, that tile
+    the lat-long `weight (h,w)` (rows at polar angles `theta (h,)`): the
+    heaviest box is cut in two of equal weight, across its longer side in
+    angle (its width at its widest row), or across its columns while it
+    spans more than MAX_TURN of a turn, until there are `count` or none can
+    be cut; each box shrunk to the rows and columns that hold its weight.
+    `weight` holds some."""
+    h, w = weight.shape
+    table = np.zeros((h + 1, w + 1))
+    table[1:, 1:] = weight.cumsum(axis=0).cumsum(axis=1)
+
+    def total(r0, r1, c0, c1) -> float:
+        return float(table[r1, c1] - table[r0, c1] - table[r1, c0] + table[r0, c0])
+
+    def tight(r0, r1, c0, c1) -> tuple[int, int, int, int]:
+        """The box shrunk to its rows and columns that hold light."""
+        rows = np.flatnonzero(np.diff(table[r0:r1 + 1, c1] - table[r0:r1 + 1, c0]) > 0)
+        cols = np.flatnonzero(np.diff(table[r1, c0:c1 + 1] - table[r0, c0:c1 + 1]) > 0)
+        return r0 + rows[0], r0 + rows[-1] + 1, c0 + cols[0], c0 + cols[-1] + 1
+
+    heap = [(-total(0, h, 0, w), 0, tight(0, h, 0, w))]
+    done, order = [], 1
+    while heap and len(heap) + len(done) < count:
+        _, _, (r0, r1, c0, c1) = heapq.heappop(heap)
+        turn = (c1 - c0) / w
+        width = turn * 2.0 * math.pi * float(np.sin(theta[r0:r1]).max())
+        across_columns = c1 - c0 > 1 and (turn > MAX_TURN or width >= (r1 - r0) / h * math.pi or r1 - r0 == 1)
+        if across_columns:
+            sums = table[r1, c0 + 1:c1] - table[r0, c0 + 1:c1] - table[r1, c0] + table[r0, c0]
+        elif r1 - r0 > 1:
+            sums = table[r0 + 1:r1, c1] - table[r0 + 1:r1, c0] - table[r0, c1] + table[r0, c0]
+        else:
+            done.append((r0, r1, c0, c1))
+            continue
+        cut = 1 + int(np.argmin(np.abs(sums - 0.5 * total(r0, r1, c0, c1))))
+        halves = ([(r0, r1, c0, c0 + cut), (r0, r1, c0 + cut, c1)] if across_columns
+                  else [(r0, r0 + cut, c0, c1), (r0 + cut, r1, c0, c1)])
+        for box in halves:
+            heapq.heappush(heap, (-total(*box), order, tight(*box)))
+            order += 1
+    return done + [box for _, _, box in heap]
+
+
+def reaching(regions: list[SkyRegion], accel: Accelerator, casters: np.ndarray, targets: list[Sphere],
+             scene_sphere: Sphere) -> list[SkyRegion]:
+    """The `regions` whose light reaches a caster (`casters (m,)` bool by
+    object) before anything else, as PROBES x PROBES rays across each of
+    their aims along their centre's and each corner's direction find: a
+    region none of whose probes meets a caster first is left out."""
+    disc = concentric_disc((np.stack(np.meshgrid(np.arange(PROBES), np.arange(PROBES)), axis=-1).reshape(-1, 2)
+                            + 0.5) / PROBES)
+    origins, dirs, owner = [], [], []
+    for k, region in enumerate(regions):
+        toward = region.direction + np.vstack([np.zeros(3), region.cell])
+        toward /= np.linalg.norm(toward, axis=1)[:, None]
+        for aim in aims(region, targets, scene_sphere):
+            through = aim.center + aim.radius * (disc[:, :1] * aim.tangent + disc[:, 1:] * aim.bitangent)
+            origins.append((through[None, :, :] - aim.start_distance * toward[:, None, :]).reshape(-1, 3))
+            dirs.append(np.repeat(toward, len(disc), axis=0))
+            owner.append(np.full(len(toward) * len(disc), k))
+    if not origins:
+        return []
+    hits = accel.intersect(np.concatenate(origins), np.concatenate(dirs))
+    met = (hits.obj != MISS) & np.take(casters, np.maximum(hits.obj, 0))
+    return [regions[k] for k in np.unique(np.concatenate(owner)[met])]
