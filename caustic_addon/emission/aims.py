@@ -179,6 +179,11 @@ class Aim:
             return np.einsum("ij,ij->i", crossing, crossing) <= self.radius ** 2 * (1.0 + _EDGE_TOLERANCE)
         return dirs @ self.axis >= self.cos_max - _EDGE_TOLERANCE
 
+    def crossing(self, disc: np.ndarray) -> np.ndarray:
+        """(n,3) where a sun's rays cross its disc at points `disc (n,2)` of
+        the unit disc: center + radius (x t + y b)."""
+        return self.center + self.radius * (disc[:, :1] * self.tangent + disc[:, 1:] * self.bitangent)
+
     def rays(self, disc: np.ndarray, lamp: Optional[np.ndarray] = None) -> tuple[np.ndarray, np.ndarray]:
         """(origins (n,3), dirs (n,3)) at points `disc (n,2)` of the unit
         disc, mapped so that a uniform density on the disc is uniform in the
@@ -188,7 +193,7 @@ class Aim:
         azimuth about the axis (Archimedes' hat-box theorem); a disc: through
         center + radius (x t + y b), along a direction of the sun's disc."""
         if self.is_disc:
-            through = self.center + self.radius * (disc[:, :1] * self.tangent + disc[:, 1:] * self.bitangent)
+            through = self.crossing(disc)
             if lamp is not None and self.light.angle > 0.0:
                 dirs = cone_directions(self.axis, math.cos(0.5 * self.light.angle), lamp)
             else:

@@ -199,5 +199,6 @@ def beam_lamps(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere,
     phases = np.concatenate(phases) if phases else np.zeros((0, 2))
     # the sky's regions are points of one lamp
     sky = [k for k, lamp in enumerate(out) if isinstance(lamp, SkyRegion)]
-    phases[sky] = grid_phases(len(sky)) if sky else phases[sky]
+    if sky:
+        phases[sky] = grid_phases(len(sky))
     return out, phases, cells

@@ -19,9 +19,9 @@ glass then gets n . c S = n . sum_i L_i Omega_i d_i, the region's own
 irradiance, wherever the region's colour is even (the centroid weighs
 luminance). Its `cell` is the flat quadrilateral of the region's corner
 directions, grown to the region's solid angle (`region_cell`), over whose
-image its beams spread (lamp_points.py, beam.py),
-so that the regions' caustics, each sharp, sum to the sky's soft one;
-photons leave a cone of the region's solid angle around c instead.
+image its beams spread (lamp_points.py, beam.py), so that the regions'
+caustics, each sharp, sum to the sky's soft one; photons leave a cone of
+the region's solid angle around c instead.
 
 A world of one colour is a uniform image of UNIFORM_SIZE pixels. The
 regions whose light meets something opaque before any caster (the sky
@@ -180,8 +180,7 @@ def reaching(regions: list[SkyRegion], accel: Accelerator, casters: np.ndarray, 
         toward = region.direction + np.vstack([np.zeros(3), region.cell])
         toward /= np.linalg.norm(toward, axis=1)[:, None]
         for aim in aims(region, targets, scene_sphere):
-            through = aim.center + aim.radius * (disc[:, :1] * aim.tangent + disc[:, 1:] * aim.bitangent)
-            origins.append((through[None, :, :] - aim.start_distance * toward[:, None, :]).reshape(-1, 3))
+            origins.append((aim.crossing(disc)[None, :, :] - aim.start_distance * toward[:, None, :]).reshape(-1, 3))
             dirs.append(np.repeat(toward, len(disc), axis=0))
             owner.append(np.full(len(toward) * len(disc), k))
     if not origins:

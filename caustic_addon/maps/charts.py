@@ -46,10 +46,13 @@ class Chart:
     """A receiver's 2D parameterisation in metres.
 
     origin (2,) and size (2,): the rectangle of chart coordinates it covers.
+    front (3,): the side of the receiver whose light its map holds (a
+    flat receiver's, PlaneChart); None, as here: both.
     """
 
     origin: np.ndarray
     size: np.ndarray
+    front: Optional[np.ndarray] = None
 
     def image_frame(self, corner: np.ndarray, extent: np.ndarray) -> ImageFrame:
         """Where an image of the chart rectangle from `corner (2,)` over
@@ -95,7 +98,6 @@ class PlaneChart(Chart):
 
     def __init__(self, point: np.ndarray, normal: np.ndarray, vertices: np.ndarray):
         self.point, self.normal = point, normal
-        self.front: Optional[np.ndarray] = None
         self.axis_x, self.axis_y = orthonormal_basis(normal)
         local = self.plane_coords(vertices)
         self.origin, self.size = local.min(axis=0), np.ptp(local, axis=0)

@@ -576,15 +576,13 @@ def on_maps(accel: Accelerator, materials: Materials, maps: dict, paths: Paths, 
     scale (k,) chart area per world area, island (k,) of the chart,
     basic (k,) the share of their flux a map holds: the basic irradiance
     of the medium they arrive through, specular.basic_irradiance_scale).
-    A flat receiver's map takes the paths that arrive on its front
-    (charts.PlaneChart)."""
+    A map takes the paths that arrive on its chart's front (charts.Chart)."""
     land = np.flatnonzero(paths.specular & np.isin(hits.obj, list(maps)))
     for index in np.unique(hits.obj[land]):
         rows = land[hits.obj[land] == index]
         chart = maps[index].chart
-        front = getattr(chart, "front", None)
-        if front is not None:
-            rows = rows[np.take(paths.dirs, rows, axis=0) @ front < 0.0]
+        if chart.front is not None:
+            rows = rows[np.take(paths.dirs, rows, axis=0) @ chart.front < 0.0]
             if len(rows) == 0:
                 continue
         local = np.take(hits.prim, rows) - accel.prim_offset[index]

@@ -308,13 +308,13 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
                 facing: np.ndarray, view: np.ndarray, lobes: list[Lobe], far: float, pixel: np.ndarray,
                 first_stratum: np.ndarray, samples: int, seed: int, sky_paths: WorldThroughCasters | None = None,
                 medium: np.ndarray | None = None, surface: np.ndarray | None = None,
-                chance: np.ndarray | None = None) -> tuple[WorldLight, WorldLight]:
-    """(open, through): the world's light at the points, shadows included,
-    in two parts: what reaches them along directions that meet nothing,
-    and, given `sky_paths`, what their lobes reflect of the sky through
-    the casters (world_paths.py; a ray leaves triangle `surface (n,)`
-    inside object `medium (n,)`), else nothing; the irradiance through
-    the casters is the maps' (emission/sky_lamps.py). A shadow ray finds
+                chance: np.ndarray | None = None) -> tuple[WorldLight, np.ndarray]:
+    """(open, through (n,3) W/(m^2 sr)): the world's light at the points,
+    shadows included, in two parts: what reaches them along directions
+    that meet nothing, and, given `sky_paths`, the radiance their lobes
+    reflect of the sky through the casters (world_paths.py; a ray leaves
+    triangle `surface (n,)` inside object `medium (n,)`), else 0; the
+    irradiance through the casters is the maps' (emission/sky_lamps.py). A shadow ray finds
     the directions that meet something first; those of point i are
     followed with probability `chance[i]`, 0 for none (Russian roulette:
     what they bring is divided by it),
@@ -324,30 +324,31 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
     `_world_directions` weighs them, `_add_world` adds what each brings to the
     irradiance, and `_add_lobe_light` to the glossy part through each lobe."""
     n = len(points)
-    parts = [WorldLight(np.zeros((n, 3)), np.zeros((n, 3))) for _ in range(2)]
+    seen_light, through = WorldLight(np.zeros((n, 3)), np.zeros((n, 3))), np.zeros((n, 3))
     image = environment.world.environment is not None
     shading, facing = contiguous(shading, np.float64), contiguous(facing, np.float64)
     view = contiguous(view, np.float64)
     tangent, bitangent = frames(shading) if lobes else (None, None)
 
-    def add(part: WorldLight, idx, seen, toward, light, density, cos, irradiance: bool = True) -> None:
-        light = contiguous(light, np.float64)
-        if irradiance:
-            _add_world(part.irradiance, idx, seen, light, density, cos, samples)
+    def add_glossy(out: np.ndarray, idx, seen, toward, light, density) -> None:
         if not lobes:
             return
         rows = np.flatnonzero(seen)
         at, toward = np.take(idx, rows), contiguous(np.take(toward, rows, axis=0), np.float64)
-        radiance = light / (np.take(density, rows) * samples)[:, None]
+        radiance = contiguous(light, np.float64) / (np.take(density, rows) * samples)[:, None]
         for lobe in lobes:
-            _add_lobe_light(part.glossy, at, toward, radiance, shading, view, *lobe.fields)
+            _add_lobe_light(out, at, toward, radiance, shading, view, *lobe.fields)
+
+    def add(idx, seen, toward, light, density, cos) -> None:
+        _add_world(seen_light.irradiance, idx, seen, contiguous(light, np.float64), density, cos, samples)
+        add_glossy(seen_light.glossy, idx, seen, toward, light, density)
 
     blocked = []
 
     def follow() -> None:
         """The blocked directions gathered so far, each followed on through
         the casters with its point's chance (one trace for them all), added
-        to their parts."""
+        to the open light or, through the casters, to the lobes' light."""
         if not blocked:
             return
         at, origins, toward, density, cos, draws = (np.concatenate(c) for c in zip(*blocked))
@@ -357,10 +358,9 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
                                                     for a in (at, origins, toward, density, cos, draws))
         # a followed direction stands for 1 / chance of its kind
         density = density * np.take(chance, at)
-        opened, met, behind = sky_paths.light(origins, toward, np.take(medium, at), np.take(surface, at), draws)
-        add(parts[0], at, opened, toward, environment.light(np.take(toward, np.flatnonzero(opened), axis=0)),
-            density, cos)
-        add(parts[1], at, met, toward, np.take(behind, np.flatnonzero(met), axis=0), density, cos, irradiance=False)
+        clear, met, behind = sky_paths.light(origins, toward, np.take(medium, at), np.take(surface, at), draws)
+        add(at, clear, toward, environment.light(np.take(toward, np.flatnonzero(clear), axis=0)), density, cos)
+        add_glossy(through, at, met, toward, np.take(behind, np.flatnonzero(met), axis=0), density)
 
     nowhere = np.zeros(0, dtype=bool)
     for k in range(samples):
@@ -382,8 +382,7 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
             toward = np.take(dirs, idx, axis=0)
             origins = accel.offset(np.take(points, idx, axis=0), np.take(facing, idx, axis=0), toward)
             seen = ~accel.occluded(origins, toward, np.full(len(idx), far))
-            add(parts[0], idx, seen, toward, environment.light(np.take(toward, np.flatnonzero(seen), axis=0)),
-                density, cos)
+            add(idx, seen, toward, environment.light(np.take(toward, np.flatnonzero(seen), axis=0)), density, cos)
             if sky_paths is not None and not seen.all():
                 rows = np.flatnonzero(~seen & (np.take(chance, idx) > 0))
                 at = np.take(idx, rows)
@@ -392,7 +391,7 @@ def world_light(accel: Accelerator, environment: Environment, points: np.ndarray
                 if sum(len(b[0]) for b in blocked) >= _WORLD_BATCH:
                     follow()
     follow()
-    return parts[0], parts[1]
+    return seen_light, through
 
 
 def _world_lobe_stream(number: int) -> int:

@@ -211,7 +211,7 @@ class EyeTracer:
                                         pixel, stratum, settings.world_samples, settings.seed, self.sky_paths,
                                         rays.medium, hits.prim, chance)
             ambient = ambient + seen.irradiance * diffuse / math.pi + seen.glossy
-            caustic += through.glossy
+            caustic += through
         self._add("ambient", rays.ids, rays.weight, ambient)
         self._add("caustic", rays.ids, rays.weight, caustic)
 

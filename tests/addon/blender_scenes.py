@@ -128,9 +128,9 @@ def scatter(count, spacing, mesh_node='GeometryNodeMeshIcoSphere', material=None
     return holder
 
 
-def world_nodes():
-    """A new world of the scene, its node tree and Background node."""
-    world = bpy.data.worlds.new("World")
+def world_nodes(name="World"):
+    """A new world `name` of the scene, its node tree and Background node."""
+    world = bpy.data.worlds.new(name)
     bpy.context.scene.world = world
     if world.node_tree is None:
         world.use_nodes = True

@@ -377,11 +377,7 @@ def test_normalize_off_multiplies_the_power_by_the_lamps_area(addon):
 
 def test_the_world_colour_and_an_environment_image(addon):
     lamp_scene()
-    world = bpy.data.worlds.new("Sky")
-    bpy.context.scene.world = world
-    if world.node_tree is None:
-        world.use_nodes = True
-    background = next(n for n in world.node_tree.nodes if n.bl_idname == 'ShaderNodeBackground')
+    world, _, background = scenes.world_nodes("Sky")
     background.inputs['Color'].default_value = (0.2, 0.4, 0.8, 1.0)
     background.inputs['Strength'].default_value = 2.0
     np.testing.assert_allclose(read(addon).scene.world.color, (0.4, 0.8, 1.6))

@@ -15,18 +15,8 @@ from caustic_addon import World
 from caustic_addon.emission.environment import Environment, uv_to_directions
 
 
-def world_tree():
-    """(world, its node tree, its Background node) of a new world for the scene."""
-    world = bpy.data.worlds.new("Sky")
-    bpy.context.scene.world = world
-    if world.node_tree is None:
-        world.use_nodes = True
-    tree = world.node_tree
-    return world, tree, next(n for n in tree.nodes if n.bl_idname == 'ShaderNodeBackground')
-
-
 def sky_world(elevation=35.0, rotation=0.0):
-    world, tree, background = world_tree()
+    world, tree, background = scenes.world_nodes("Sky")
     sky = tree.nodes.new('ShaderNodeTexSky')
     sky.sun_elevation, sky.sun_rotation = math.radians(elevation), math.radians(rotation)
     tree.links.new(sky.outputs['Color'], background.inputs['Color'])
@@ -60,7 +50,7 @@ def test_a_turned_environment_is_baked_as_its_mapping_turns_it(addon):
     R d for a direction d: the bake holds the unturned image's light from
     R d, within a few percent for a smooth image."""
     scenes.add_plane(4.0, scenes.diffuse_material())
-    _, tree, background = world_tree()
+    _, tree, background = scenes.world_nodes("Sky")
     h, w = 32, 64
     u, v = np.meshgrid((np.arange(w) + 0.5) / w, (np.arange(h) + 0.5) / h)
     pixels = np.ones((h, w, 4), dtype=np.float32)
@@ -118,7 +108,7 @@ def test_baking_leaves_the_file_as_it_was(addon):
 
 def test_a_light_path_trick_is_named(addon):
     scenes.add_plane(4.0, scenes.diffuse_material())
-    _, tree, background = world_tree()
+    _, tree, background = scenes.world_nodes("Sky")
     path, mix = tree.nodes.new('ShaderNodeLightPath'), tree.nodes.new('ShaderNodeMixRGB')
     path.name = "Camera Only"
     tree.links.new(path.outputs['Is Camera Ray'], mix.inputs[0])
