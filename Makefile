@@ -119,8 +119,8 @@ package: venv
 # comparison with Mitsuba's particle tracer, where its venv has Mitsuba;
 # `make bench-report` only writes the README again.
 BENCH := cycles_accuracy accuracy speed passes beams_at_scale memory animation live instances paper sized_lamps \
-	glints glossy_floor emitters sky_caustics liquid_glass smooth_edges coated_floor rough_glass through_glass dispersion \
-	cycles_dispersion flicker gallery
+	glints glossy_floor emitters sky_caustics liquid_glass smooth_edges coated_floor rough_glass rough_beside_smooth \
+	through_glass dispersion cycles_dispersion flicker gallery
 MITSUBA_PYTHON ?= /tmp/mitsuba-venv/bin/python
 
 bench: package

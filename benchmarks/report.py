@@ -396,6 +396,13 @@ def rough_glass(d: dict) -> Table:
              *(f"{way}: to 5% / 2%" for way in ways)], rows)
 
 
+def rough_beside_smooth(d: dict) -> Table:
+    rows = [[run["way"], count(run["lamp_rays"]), percent(run["smooth_relative_l2"]),
+             percent(run["rough_relative_l2"]), seconds(run["seconds"])] for run in d["runs"]]
+    return ["beam mode", "lamp rays", "under the smooth ball: relative L2 error",
+            "under the rough ball", "time"], rows
+
+
 def through_glass(d: dict) -> Table:
     rows = [["pixels seen through the ball", count(d["pixels"])]]
     rows += [[f"{r['spp']} sample{'s' if r['spp'] > 1 else ''} per pixel, {count(d['lamp_rays'])} lamp rays",
@@ -459,7 +466,8 @@ FORMATTERS: dict[str, Callable[[dict], Table]] = {
     "speed": speed, "passes": passes, "bvh_build": bvh_build, "beams_at_scale": beams_at_scale, "memory": memory,
     "first_render": first_render, "animation": animation, "live": live, "instances": instances, "farm": farm,
     "allocator": allocator,
-    "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass, "through_glass": through_glass,
+    "paper": paper, "sized_lamps": sized_lamps, "rough_glass": rough_glass,
+    "rough_beside_smooth": rough_beside_smooth, "through_glass": through_glass,
     "dispersion": dispersion, "cycles_dispersion": cycles_dispersion, "sky_caustics": emitters,
     "flicker": flicker, "gallery": gallery, "glints": glints, "glossy_floor": glossy_floor,
     "emitters": emitters, "liquid_glass": liquid_glass, "smooth_edges": smooth_edges, "coated_floor": coated_floor,
@@ -496,6 +504,7 @@ SECTIONS = [
         ("smooth_edges", "Glass shaded smooth across its edges, against Cycles"),
         ("coated_floor", "A caustic on coated and metallic floors, against Cycles"),
         ("rough_glass", "Rough glass, against Cycles"),
+        ("rough_beside_smooth", "A rough glass beside a smooth one"),
         ("through_glass", "The caustic seen through glass"),
         ("dispersion", "Dispersion and coloured glass"),
         ("cycles_dispersion", "Dispersion against Cycles"),

@@ -118,14 +118,15 @@ def flux_radius(caustic: np.ndarray, region: np.ndarray, radius: np.ndarray, sha
 @contextmanager
 def grid_photons():
     """Beam mode keeping beam grids for lamps that light a rough caster
-    (the way the engine does not ship): their paths land as photons past
-    the rough surface."""
-    original = beam.photon_lamps
-    beam.photon_lamps = lambda lights, scene: []
+    (the way the engine does not ship; every caster taken as smooth in
+    choosing what photons light): their paths land as photons past the
+    rough surface."""
+    original = beam.caster_spheres
+    beam.caster_spheres = lambda scene, rough=None: [] if rough else original(scene)
     try:
         yield
     finally:
-        beam.photon_lamps = original
+        beam.caster_spheres = original
 
 
 @contextmanager

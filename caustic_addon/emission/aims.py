@@ -57,11 +57,21 @@ def casters_and_bounds(scene: Scene) -> tuple[list[Sphere], Sphere]:
     one around the casters of each body, which lamps aim at, and the sphere
     around the whole scene."""
     lo, hi = scene.bounds()
+    return caster_spheres(scene), Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)))
+
+
+def caster_spheres(scene: Scene, rough: Optional[bool] = None) -> list[Sphere]:
+    """The bounding spheres of the casters of each body, in the scene's
+    order; with `rough`, only those of the bodies that have a rough part
+    (True) or none (False)."""
     bodies: dict[str, list[Mesh]] = {}
+    roughened: set[str] = set()
     for caster in scene.casters:
         bodies.setdefault(caster.body_name, []).append(caster.mesh)
-    return ([Sphere.around_meshes(meshes) for meshes in bodies.values()],
-            Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo))))
+        if not caster.material.smooth:
+            roughened.add(caster.body_name)
+    return [Sphere.around_meshes(meshes) for body, meshes in bodies.items()
+            if rough is None or (body in roughened) == rough]
 
 
 def upstream_distance(scene_sphere: Sphere) -> float:

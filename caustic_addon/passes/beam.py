@@ -29,8 +29,9 @@ where its cell's light lands, the landing's image of the cell
 (`_spread_beams`): the points' caustics, each sharp, then sum to the soft
 one rather than to a lattice of dots, one a point.
 
-A lamp that can light a rough caster sends photons instead
-(`photon_lamps`); grid paths that meet a rough surface all the same (a
+A lamp sends photons toward the rough casters it can light
+(`photon_lamps`), and where those aims overlap its aims at smooth ones,
+toward these too; grid paths that meet a rough surface all the same (a
 spot's light turned toward one by another caster) scatter about microfacet
 normals of their own and land as photons.
 
@@ -49,17 +50,17 @@ from typing import Optional
 
 import numpy as np
 
-from ..emission.aims import Sphere, casters_and_bounds, visible_targets
+from ..emission.aims import Sphere, aims, caster_spheres, casters_and_bounds, overlapping, visible_targets
 from ..emission.beam_sources import BeamSource, beam_sources, disc_shares
 from ..emission.lamp_points import beam_lamps
-from ..emission.photons import make_emitters
+from ..emission.photons import Emitter, make_emitters
 from ..emission.sky_lamps import SkyRegion
 from ..maps.deposits import Deposits
 from ..maps.illumination_map import IlluminationMap
 from ..maps.receivers import GUTTER_CELLS
 from ..maps.raster import signed_area1
 from ..sampling.hash import hash_uniform
-from ..scene import Light, RenderSettings, Scene
+from ..scene import Light, MeshLight, RenderSettings, Scene
 from ..scene.material_table import Materials
 from ..tracing.accelerator import Accelerator
 from ..tracing.hits import MISS, Hits
@@ -641,18 +642,59 @@ def _spread_beams(corners, irradiance, spread, most_parts, cell):
     return out_t, values_t, out_h, values_h
 
 
-def photon_lamps(lights: list[Light], scene: Scene) -> list[Light]:
-    """The lamps whose light beam mode sends as photons: those that can
-    light a rough caster (aims.visible_targets). Its light scatters about
-    random microfacet normals, so neighbouring grid paths part there and
-    bound no beam; and where a lamp with a size would be a grid of point
-    lamps for its beams, photons leave every point of it. Measured on the
-    ball lens under a sphere lamp (benchmarks/rough_glass.py), the photon
-    pass beats both the beam grid's paths landing as photons past the rough
-    surface and beams spread about shared microfacet normals, in time and
-    in error; a smooth caster those lamps also light casts photons too."""
-    rough = [Sphere.around_meshes([o.mesh]) for o in scene.casters if not o.material.smooth]
-    return [light for light in lights if rough and visible_targets(light, rough)]
+def photon_lamps(lights: list[Light], smooth: list[Sphere], rough: list[Sphere],
+                 scene_sphere: Sphere) -> tuple[list[Light], list[Light]]:
+    """(the lamps whose light beam mode sends all as photons, those that send
+    photons toward the rough casters and beams toward the smooth ones), of
+    the `lights`, the casters' bounding spheres being `smooth` and `rough`.
+
+    A lamp that can light a rough caster (aims.visible_targets) sends
+    photons toward it: its light scatters about random microfacet normals,
+    so neighbouring grid paths part there and bound no beam; and where a
+    lamp with a size would be a grid of point lamps for its beams, photons
+    leave every point of it. Measured on the ball lens under a sphere lamp
+    (benchmarks/rough_glass.py), the photon pass beats both the beam grid's
+    paths landing as photons past the rough surface and beams spread about
+    shared microfacet normals, in time and in error. Its aims at the smooth
+    casters keep their beams where none of them overlaps an aim at a rough
+    one (aims.overlapping), so that no ray is the two passes' at once;
+    where one does, and for an emitting mesh, whose pieces aim on their
+    own, all its light goes as photons."""
+    whole, apart = [], []
+    for light in lights:
+        if not visible_targets(light, rough):
+            continue
+        if isinstance(light, MeshLight) or not visible_targets(light, smooth):
+            whole.append(light)
+            continue
+        toward_smooth, toward_rough = aims(light, smooth, scene_sphere), aims(light, rough, scene_sphere)
+        near = overlapping(toward_smooth + toward_rough)
+        shared = any(j < len(toward_smooth) for i in range(len(toward_smooth), len(near)) for j in near[i])
+        (whole if shared else apart).append(light)
+    return whole, apart
+
+
+def _photon_emitters(lights: list[Light], whole: list[Light], apart: list[Light], targets: list[Sphere],
+                     rough: list[Sphere], scene_sphere: Sphere, settings: RenderSettings) -> list[Emitter]:
+    """Beam mode's photon emitters (`photon_lamps`): the `whole` lamps'
+    toward every caster of `targets`, the `apart` ones' toward the `rough`
+    casters, each with the share of the lamp rays that the flux it sends
+    there has of the flux all the `lights` send toward the casters."""
+    every = make_emitters(lights, targets, scene_sphere, "targeted", settings.energy, settings.lamp_rays,
+                          settings.seed)
+    emitters = [e for e in every if any(e.source is light for light in whole)]
+    if apart:
+        def flux(some: list[Emitter]) -> float:
+            return sum(aim.flux(settings.energy) for e in some for aim in e.aims)
+        toward_rough = make_emitters(apart, rough, scene_sphere, "targeted", settings.energy, 1, settings.seed)
+        rays = int(round(settings.lamp_rays * flux(toward_rough) / flux(every)))
+        added = make_emitters(apart, rough, scene_sphere, "targeted", settings.energy, rays, settings.seed)
+        # ids after every other photon's
+        base = max(e.id_base + e.count for e in every)
+        for e in added:
+            e.id_base += base
+        emitters += added
+    return emitters
 
 
 def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel: Accelerator, materials: Materials,
@@ -664,19 +706,17 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
     of rows share a row, so every grid triangle is in one."""
     count = materials.band_count
     targets, scene_sphere = casters_and_bounds(scene)
+    smooth, rough = caster_spheres(scene, rough=False), caster_spheres(scene, rough=True)
     receivers = np.concatenate([o.mesh.vertices for o in scene.receivers])
-    # the lamps that light a rough caster send photons, each lamp its share
-    # of the lamp rays by its flux
-    as_photons = photon_lamps(lights, scene)
-    emitters = [e for e in make_emitters(lights, targets, scene_sphere, "targeted", settings.energy,
-                                         settings.lamp_rays, settings.seed)
-                if any(e.source is light for light in as_photons)]
-    beamed = [light for light in lights if not any(light is other for other in as_photons)]
+    # toward rough casters lamps send photons (photon_lamps)
+    whole, apart = photon_lamps(lights, smooth, rough, scene_sphere)
+    emitters = _photon_emitters(lights, whole, apart, targets, rough, scene_sphere, settings)
+    beamed = [light for light in lights if not any(light is other for other in whole)]
     # each wavelength band's share of the lamp rays that photons leave
     band_rays = (settings.lamp_rays - sum(e.count for e in emitters)) // count
-    lamps, phases, cells = beam_lamps(beamed, targets, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
+    lamps, phases, cells = beam_lamps(beamed, smooth, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
                                       min(imap.cell for imap in maps.values()), band_rays)
-    sources = beam_sources(lamps, targets, scene_sphere, settings.energy, band_rays, phases, cells)
+    sources = beam_sources(lamps, smooth, scene_sphere, settings.energy, band_rays, phases, cells)
     stacks: dict[tuple[int, tuple[int, int]], list[BeamSource]] = {}
     for source in sources:
         stacks.setdefault((source.grid, lamp_media(accel, source.light)), []).append(source)

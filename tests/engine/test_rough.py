@@ -3,6 +3,7 @@ and against quadratures of the Walter et al. BSDF, Multiscatter GGX's
 energy in white furnaces, and rough casters in the passes."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -410,14 +411,56 @@ def test_beam_mode_sends_the_light_of_lamps_that_light_a_rough_caster_as_photons
     assert render(ceiling(0.0), RenderSettings(lamp_rays=4000, spp=1)).stats["lamp_rays_refined"] > 0
 
 
+def two_balls(apart: float, rough: bool = True) -> Scene:
+    """A smooth glass ball (radius 0.5 m) at x = -`apart` and, if `rough`, a
+    rough one (Roughness 0.2) at x = `apart`, both 1 m over the floor, under
+    a point lamp 4 m up."""
+    objects = [Object("Floor", shapes.plane(20.0), Diffuse(albedo=1.0)),
+               Object("Smooth", shapes.uv_sphere(0.5, (-apart, 0, 1.0), 64, 32), Dielectric(1.5))]
+    if rough:
+        objects.append(Object("Rough", shapes.uv_sphere(0.5, (apart, 0, 1.0), 64, 32),
+                              Dielectric(1.5, roughness=0.2)))
+    return Scene(objects, [PointLight((0, 0, 4.0), 1000.0)], top_camera(3.0, 16))
+
+
+def test_beam_mode_keeps_beams_toward_smooth_casters_beside_a_rough_one():
+    """A lamp over a smooth glass ball and a rough one 3 m apart, whose aims
+    do not overlap: it sends photons toward the rough ball only. The smooth
+    ball's caustic is beams, as with no rough ball beside it (the floor's
+    mean irradiance under it within 0.2% of that render's, whose grid has
+    all the rays; as photons it is 3% off), and the rough ball's light
+    lands as the photon pass's does (the flux landed within 2% of the
+    adaptive density's). Brought 0.3 m apart, the aims overlap and all the
+    lamp's light goes as photons."""
+    from caustic_addon.emission.aims import caster_spheres, casters_and_bounds
+    from caustic_addon.passes.beam import photon_lamps
+    for apart, expected in ((1.5, (0, 1)), (0.3, (1, 0))):
+        scene = two_balls(apart)
+        whole, beside = photon_lamps(scene.lights, caster_spheres(scene, rough=False),
+                                     caster_spheres(scene, rough=True), casters_and_bounds(scene)[1])
+        assert (len(whole), len(beside)) == expected, apart
+    rng = np.random.default_rng(1)
+    r, phi = 0.7 * np.sqrt(rng.random(20_000)), 2.0 * math.pi * rng.random(20_000)
+    under_smooth = np.stack([r * np.cos(phi) - 1.5, r * np.sin(phi)], axis=1)
+    settings = RenderSettings(spp=1)
+    both = render(two_balls(1.5), settings)
+    alone = render(two_balls(1.5, rough=False), settings)
+    photons = render(two_balls(1.5), replace(settings, density="adaptive"))
+    assert both.stats["lamp_rays_refined"] > 0
+    assert (both.maps["Floor"].irradiance_at(under_smooth).mean()
+            == pytest.approx(alone.maps["Floor"].irradiance_at(under_smooth).mean(), rel=2e-3))
+    assert both.stats["flux_landed_w"][0] == pytest.approx(photons.stats["flux_landed_w"][0], rel=0.02)
+
+
 def test_beam_grid_paths_past_a_rough_surface_bound_no_beam(monkeypatch):
     """Grid paths that meet a rough surface after all (a lamp taken not to
     light it, as a spot whose light another caster turns toward it) bound
     no beam (their neighbours took other microfacets; no landing counts
     as a beam's): they land as photons, with the flux the photon pass
     brings, and refinement spends no rays on them."""
+    from caustic_addon.emission import aims
     from caustic_addon.passes import beam
-    monkeypatch.setattr(beam, "photon_lamps", lambda lights, scene: [])
+    monkeypatch.setattr(beam, "caster_spheres", lambda scene, rough=None: [] if rough else aims.caster_spheres(scene))
     result = render(ceiling(0.3), RenderSettings(lamp_rays=40_000, spp=1, beam_refinement=2))
     photons = render(ceiling(0.3), RenderSettings(lamp_rays=40_000, spp=1, density="adaptive"))
     assert result.stats["lamp_rays_refined"] == 0 and result.stats["landed"] == 0
