@@ -55,8 +55,8 @@ def all_photons():
     light as photons."""
     original = beam.photon_lamps
 
-    def whole(lights, smooth, rough, scene_sphere):
-        both = original(lights, smooth, rough, scene_sphere)
+    def whole(lights, smooth, rough):
+        both = original(lights, smooth, rough)
         return both[0] + both[1], []
 
     beam.photon_lamps = whole

@@ -74,6 +74,21 @@ def caster_spheres(scene: Scene, rough: Optional[bool] = None) -> list[Sphere]:
             if rough is None or (body in roughened) == rough]
 
 
+def meets_any(spheres: list[Sphere], origins: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+    """(n,) bool: the rays `origins, dirs (n,3)` (unit) that meet one of the
+    `spheres` ahead of their origin, or start inside one: with oc the
+    centre less the origin, the ray's closest approach |oc|^2 - (oc.d)^2
+    is within the radius squared, and oc.d >= 0 or |oc| <= r."""
+    met = np.zeros(len(dirs), dtype=bool)
+    for sphere in spheres:
+        oc = sphere.center - origins
+        along = np.einsum("ij,ij->i", oc, dirs)
+        square = np.einsum("ij,ij->i", oc, oc)
+        r2 = sphere.radius ** 2
+        met |= (square - along ** 2 <= r2) & ((along >= 0.0) | (square <= r2))
+    return met
+
+
 def upstream_distance(scene_sphere: Sphere) -> float:
     """How far before a target's centre a sun's rays start: beyond
     everything in the scene."""

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..sampling.warps import concentric_disc
 from ..scene import Light
-from .aims import Aim, Sphere, aims, balance_density, overlapping, share
+from .aims import Aim, Sphere, aims, balance_density, meets_any, overlapping, share
 
 
 @dataclass
@@ -24,7 +24,10 @@ class BeamSource:
     that several aims hold. `cell (4,3)`: the
     corners, less the lamp's position (a sun's: its direction), of the cell
     of a lamp with a size that the lamp (one of its points,
-    lamp_points.lamp_cells) stands for (None: a lamp of size 0)."""
+    lamp_points.lamp_cells) stands for (None: a lamp of size 0). A ray
+    that meets one of the spheres `rough` and none of `smooth`
+    (aims.meets_any) carries nothing: photons carry that light
+    (passes.beam.photon_lamps)."""
 
     aim: Aim
     energy: float
@@ -32,6 +35,8 @@ class BeamSource:
     overlap: list[tuple[Aim, float]] = field(default_factory=list)
     roll: float = 0.0
     cell: Optional[np.ndarray] = None
+    rough: tuple = ()
+    smooth: tuple = ()
 
     @property
     def light(self) -> Light:
@@ -55,6 +60,8 @@ class BeamSource:
         others, density = zip(*self.overlap)
         weight = self.aim.emitted(self.energy, dirs)
         weight *= ((1.0 / self.cell_measure) / balance_density(others, np.array(density), origins, dirs))[:, None]
+        if self.rough:
+            weight[meets_any(list(self.rough), origins, dirs) & ~meets_any(list(self.smooth), origins, dirs)] = 0.0
         return origins, dirs, weight
 
     def cell_frame(self) -> tuple[np.ndarray, np.ndarray]:

@@ -24,7 +24,7 @@ from ..sampling.sequences import r2_sequence
 from ..sampling.warps import sample_disc
 from ..scene import Light, MeshLight, SunLight
 from . import mesh_lights, radiometry
-from .aims import Aim, Sphere, aims, balance_density, overlapping, share
+from .aims import Aim, Sphere, aims, balance_density, meets_any, overlapping, share
 
 
 # Hash streams of a photon's point on a lamp with a size (the transport uses
@@ -54,11 +54,14 @@ class Photons:
 class Emitter:
     """Makes photons [start, stop) of one lamp. `count` is how many it makes
     in all; its photons' ids start at `id_base`; `source` the scene's lamp
-    it is (a mesh light's pieces are lamps of their own)."""
+    it is (a mesh light's pieces are lamps of their own); a photon that
+    meets one of the spheres `beamed` (aims.meets_any) carries nothing:
+    beams carry that light (passes.beam.photon_lamps)."""
 
     count: int
     id_base: int = 0
     source: Light = None
+    beamed: tuple = ()
 
     def emit(self, start: int, stop: int) -> Photons:
         raise NotImplementedError
@@ -119,6 +122,8 @@ class AimedEmitter(Emitter):
             origins[sel], dirs[sel] = self.aims[k].rays(disc[sel], lamp[sel])
             density[sel] = balance_density([self.aims[j] for j in near], self.density[near], origins[sel], dirs[sel])
         flux = self.aims[0].emitted(self.energy, dirs) / density[:, None]
+        if self.beamed:
+            flux[meets_any(list(self.beamed), origins, dirs)] = 0.0
         return _kept(origins, dirs, flux, ids)
 
 

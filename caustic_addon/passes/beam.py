@@ -29,9 +29,8 @@ where its cell's light lands, the landing's image of the cell
 (`_spread_beams`): the points' caustics, each sharp, then sum to the soft
 one rather than to a lattice of dots, one a point.
 
-A lamp sends photons toward the rough casters it can light
-(`photon_lamps`), and where those aims overlap its aims at smooth ones,
-toward these too; grid paths that meet a rough surface all the same (a
+A lamp sends photons toward the rough casters it can light and beams
+toward the smooth ones (`photon_lamps`); grid paths that meet a rough surface all the same (a
 spot's light turned toward one by another caster) scatter about microfacet
 normals of their own and land as photons.
 
@@ -50,7 +49,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..emission.aims import Sphere, aims, caster_spheres, casters_and_bounds, overlapping, visible_targets
+from ..emission.aims import Sphere, caster_spheres, casters_and_bounds, visible_targets
 from ..emission.beam_sources import BeamSource, beam_sources, disc_shares
 from ..emission.lamp_points import beam_lamps
 from ..emission.photons import Emitter, make_emitters
@@ -642,8 +641,7 @@ def _spread_beams(corners, irradiance, spread, most_parts, cell):
     return out_t, values_t, out_h, values_h
 
 
-def photon_lamps(lights: list[Light], smooth: list[Sphere], rough: list[Sphere],
-                 scene_sphere: Sphere) -> tuple[list[Light], list[Light]]:
+def photon_lamps(lights: list[Light], smooth: list[Sphere], rough: list[Sphere]) -> tuple[list[Light], list[Light]]:
     """(the lamps whose light beam mode sends all as photons, those that send
     photons toward the rough casters and beams toward the smooth ones), of
     the `lights`, the casters' bounding spheres being `smooth` and `rough`.
@@ -655,30 +653,30 @@ def photon_lamps(lights: list[Light], smooth: list[Sphere], rough: list[Sphere],
     leave every point of it. Measured on the ball lens under a sphere lamp
     (benchmarks/rough_glass.py), the photon pass beats both the beam grid's
     paths landing as photons past the rough surface and beams spread about
-    shared microfacet normals, in time and in error. Its aims at the smooth
-    casters keep their beams where none of them overlaps an aim at a rough
-    one (aims.overlapping), so that no ray is the two passes' at once;
-    where one does, and for an emitting mesh, whose pieces aim on their
-    own, all its light goes as photons."""
+    shared microfacet normals, in time and in error. Toward the smooth
+    casters it keeps its beams. Where its aims at the two overlap, a ray
+    that meets a smooth caster's bounding sphere is the beams' and one that
+    meets only rough casters' spheres the photons' (aims.meets_any;
+    BeamSource.rough, Emitter.beamed), so none is counted twice, and a
+    smooth glass in front of or beside a rough one keeps its beams; the
+    grid paths that go on to meet the rough caster land as photons. A lamp
+    that lights no smooth caster, and an emitting mesh, whose pieces aim on
+    their own, send all their light as photons."""
     whole, apart = [], []
     for light in lights:
-        if not visible_targets(light, rough):
-            continue
-        if isinstance(light, MeshLight) or not visible_targets(light, smooth):
-            whole.append(light)
-            continue
-        toward_smooth, toward_rough = aims(light, smooth, scene_sphere), aims(light, rough, scene_sphere)
-        near = overlapping(toward_smooth + toward_rough)
-        shared = any(j < len(toward_smooth) for i in range(len(toward_smooth), len(near)) for j in near[i])
-        (whole if shared else apart).append(light)
+        if visible_targets(light, rough):
+            alone = isinstance(light, MeshLight) or not visible_targets(light, smooth)
+            (whole if alone else apart).append(light)
     return whole, apart
 
 
 def _photon_emitters(lights: list[Light], whole: list[Light], apart: list[Light], targets: list[Sphere],
-                     rough: list[Sphere], scene_sphere: Sphere, settings: RenderSettings) -> list[Emitter]:
+                     smooth: list[Sphere], rough: list[Sphere], scene_sphere: Sphere,
+                     settings: RenderSettings) -> list[Emitter]:
     """Beam mode's photon emitters (`photon_lamps`): the `whole` lamps'
     toward every caster of `targets`, the `apart` ones' toward the `rough`
-    casters, each with the share of the lamp rays that the flux it sends
+    casters, leaving the rays that meet a `smooth` one's sphere to the
+    beams, each with the share of the lamp rays that the flux it sends
     there has of the flux all the `lights` send toward the casters."""
     every = make_emitters(lights, targets, scene_sphere, "targeted", settings.energy, settings.lamp_rays,
                           settings.seed)
@@ -693,6 +691,7 @@ def _photon_emitters(lights: list[Light], whole: list[Light], apart: list[Light]
         base = max(e.id_base + e.count for e in every)
         for e in added:
             e.id_base += base
+            e.beamed = tuple(smooth)
         emitters += added
     return emitters
 
@@ -709,14 +708,17 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
     smooth, rough = caster_spheres(scene, rough=False), caster_spheres(scene, rough=True)
     receivers = np.concatenate([o.mesh.vertices for o in scene.receivers])
     # toward rough casters lamps send photons (photon_lamps)
-    whole, apart = photon_lamps(lights, smooth, rough, scene_sphere)
-    emitters = _photon_emitters(lights, whole, apart, targets, rough, scene_sphere, settings)
+    whole, apart = photon_lamps(lights, smooth, rough)
+    emitters = _photon_emitters(lights, whole, apart, targets, smooth, rough, scene_sphere, settings)
     beamed = [light for light in lights if not any(light is other for other in whole)]
     # each wavelength band's share of the lamp rays that photons leave
     band_rays = (settings.lamp_rays - sum(e.count for e in emitters)) // count
     lamps, phases, cells = beam_lamps(beamed, smooth, scene_sphere, (receivers.min(axis=0), receivers.max(axis=0)),
                                       min(imap.cell for imap in maps.values()), band_rays)
     sources = beam_sources(lamps, smooth, scene_sphere, settings.energy, band_rays, phases, cells)
+    for source in sources:
+        if visible_targets(source.light, rough):
+            source.rough, source.smooth = tuple(rough), tuple(smooth)
     stacks: dict[tuple[int, tuple[int, int]], list[BeamSource]] = {}
     for source in sources:
         stacks.setdefault((source.grid, lamp_media(accel, source.light)), []).append(source)

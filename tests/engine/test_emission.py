@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from caustic_addon import PointLight, SpotLight, SunLight
-from caustic_addon.emission.aims import Aim, Sphere, aims, balance_density, overlapping
+from caustic_addon.emission.aims import Aim, Sphere, aims, balance_density, meets_any, overlapping
 from caustic_addon.emission.photons import PointSphereEmitter, make_emitters
 from caustic_addon.sampling.warps import sample_disc
 
@@ -112,3 +112,21 @@ def test_an_aim_shares_its_rays_only_with_the_aims_that_can_hold_them(light):
         assert holding <= set(near[i].tolist())
         assert np.array_equal(balance_density([every[j] for j in near[i]], density[near[i]], origins, dirs),
                               balance_density(every, density, origins, dirs))
+
+
+def test_rays_meet_a_sphere_within_their_closest_approach_ahead():
+    """A unit sphere 3 m along +z from the origin: rays from the origin meet
+    it up to asin(1/3) off the axis and not beyond, not backwards, and a ray
+    from inside meets it in any direction; the fraction of directions
+    uniform over the sphere that meet it is its cone's share, (1 - cos)/2."""
+    sphere = Sphere(np.array([0.0, 0.0, 3.0]), 1.0)
+    edge = math.asin(1.0 / 3.0)
+    tilts = np.array([0.0, edge - 1e-6, edge + 1e-6, math.pi])
+    dirs = np.stack([np.sin(tilts), np.zeros(4), np.cos(tilts)], axis=1)
+    assert list(meets_any([sphere], np.zeros((4, 3)), dirs)) == [True, True, False, False]
+    assert meets_any([sphere], np.tile([0.0, 0.0, 3.5], (4, 1)), dirs).all()
+    rng = np.random.default_rng(2)
+    everywhere = rng.normal(size=(400_000, 3))
+    everywhere /= np.linalg.norm(everywhere, axis=1)[:, None]
+    share = meets_any([sphere], np.zeros_like(everywhere), everywhere).mean()
+    assert share == pytest.approx((1.0 - math.cos(edge)) / 2.0, abs=2e-3)

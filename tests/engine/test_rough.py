@@ -424,21 +424,18 @@ def two_balls(apart: float, rough: bool = True) -> Scene:
 
 
 def test_beam_mode_keeps_beams_toward_smooth_casters_beside_a_rough_one():
-    """A lamp over a smooth glass ball and a rough one 3 m apart, whose aims
-    do not overlap: it sends photons toward the rough ball only. The smooth
-    ball's caustic is beams, as with no rough ball beside it (the floor's
-    mean irradiance under it within 0.2% of that render's, whose grid has
-    all the rays; as photons it is 3% off), and the rough ball's light
-    lands as the photon pass's does (the flux landed within 2% of the
-    adaptive density's). Brought 0.3 m apart, the aims overlap and all the
-    lamp's light goes as photons."""
-    from caustic_addon.emission.aims import caster_spheres, casters_and_bounds
+    """A lamp over a smooth glass ball and a rough one 3 m apart sends
+    photons toward the rough ball and beams toward the smooth one. The
+    smooth ball's caustic is beams, as with no rough ball beside it (the
+    floor's mean irradiance under it within 0.2% of that render's, whose
+    grid has all the rays; as photons it is 3% off), and the rough ball's
+    light lands as the photon pass's does (the flux landed within 2% of the
+    adaptive density's)."""
+    from caustic_addon.emission.aims import caster_spheres
     from caustic_addon.passes.beam import photon_lamps
-    for apart, expected in ((1.5, (0, 1)), (0.3, (1, 0))):
-        scene = two_balls(apart)
-        whole, beside = photon_lamps(scene.lights, caster_spheres(scene, rough=False),
-                                     caster_spheres(scene, rough=True), casters_and_bounds(scene)[1])
-        assert (len(whole), len(beside)) == expected, apart
+    scene = two_balls(1.5)
+    assert photon_lamps(scene.lights, *(caster_spheres(scene, rough=rough) for rough in (False, True))) == (
+        [], scene.lights)
     rng = np.random.default_rng(1)
     r, phi = 0.7 * np.sqrt(rng.random(20_000)), 2.0 * math.pi * rng.random(20_000)
     under_smooth = np.stack([r * np.cos(phi) - 1.5, r * np.sin(phi)], axis=1)
@@ -450,6 +447,27 @@ def test_beam_mode_keeps_beams_toward_smooth_casters_beside_a_rough_one():
     assert (both.maps["Floor"].irradiance_at(under_smooth).mean()
             == pytest.approx(alone.maps["Floor"].irradiance_at(under_smooth).mean(), rel=2e-3))
     assert both.stats["flux_landed_w"][0] == pytest.approx(photons.stats["flux_landed_w"][0], rel=0.02)
+
+
+def test_beams_and_photons_share_a_lamps_overlapping_aims():
+    """A smooth glass ball over a rough one beside it, whose cones from the
+    lamp overlap: a ray that meets the smooth ball's bounding sphere is the
+    beams', one that meets only the rough ball's the photons'. No light is
+    counted twice: the flux landed is the photon pass's at 1,000,000 lamp
+    rays within 1% (with the photons that meet the smooth ball's sphere
+    kept, 8% more lands), and the smooth ball's light still makes beams."""
+    from caustic_addon.emission.aims import aims, caster_spheres, casters_and_bounds, overlapping
+    objects = [Object("Floor", shapes.plane(20.0), Diffuse(albedo=1.0)),
+               Object("Smooth", shapes.uv_sphere(0.5, (0, 0, 1.6), 64, 32), Dielectric(1.5)),
+               Object("Rough", shapes.uv_sphere(0.4, (0.8, 0, 0.5), 64, 32), Dielectric(1.5, roughness=0.2))]
+    scene = Scene(objects, [PointLight((0, 0, 4.0), 1000.0)], top_camera(3.0, 16))
+    cones = [aims(scene.lights[0], caster_spheres(scene, rough=rough), casters_and_bounds(scene)[1])[0]
+             for rough in (False, True)]
+    assert list(overlapping(cones)[1]) == [0, 1]
+    beams = render(scene, RenderSettings(spp=1))
+    photons = render(scene, RenderSettings(spp=1, density="adaptive", lamp_rays=1_000_000))
+    assert beams.stats["lamp_rays_refined"] > 0
+    assert beams.stats["flux_landed_w"][0] == pytest.approx(photons.stats["flux_landed_w"][0], rel=0.01)
 
 
 def test_beam_grid_paths_past_a_rough_surface_bound_no_beam(monkeypatch):
