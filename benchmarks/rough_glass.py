@@ -1,8 +1,8 @@
 """Rough glass: the ball lens's caustic through a Glass BSDF of Roughness
-0.1, 0.2 and 0.4, the engine against a long Cycles path-traced render, and
+0.05, 0.2 and 0.5, the engine against a long Cycles path-traced render, and
 beam mode's two ways with a rough caster.
 
-    .venv/bin/python benchmarks/rough_glass.py [--cycles-samples 1024] [--roughness 0.1 0.2 0.4]
+    .venv/bin/python benchmarks/rough_glass.py [--cycles-samples 1024] [--roughness 0.05 0.2 0.5]
 
 The scene is the ball lens (benchmarks/scenes/ball_lens.py) at 160x120,
 its glass given Roughness r (Multiscatter GGX, Blender's default), under a
@@ -77,7 +77,7 @@ from caustic_addon.sampling.sequences import r2_sequence  # noqa: E402
 RESULTS = record.RESULTS
 RADIUS = 0.1
 PIXX, PIXY = 160, 120
-ROUGHNESS = [0.1, 0.2, 0.4]
+ROUGHNESS = [0.05, 0.2, 0.5]
 CONVERGED = RenderSettings(lamp_rays=4_000_000, density="adaptive", k_nearest=256, spp=16, lamp_samples=32)
 LAMP_RAYS = [10_000, 20_000, 40_000, 80_000, 160_000, 320_000]
 # Spread beams cost several times more a lamp ray: their curve stops sooner.
