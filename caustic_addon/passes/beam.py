@@ -30,9 +30,9 @@ where its cell's light lands, the landing's image of the cell
 one rather than to a lattice of dots, one a point.
 
 A lamp sends photons toward the rough casters it can light and beams
-toward the smooth ones (`photon_lamps`); grid paths that meet a rough surface all the same (a
-spot's light turned toward one by another caster) scatter about microfacet
-normals of their own and land as photons.
+toward the smooth ones (`photon_lamps`); grid paths that meet a rough
+surface all the same (light a smooth glass turns toward a rough one)
+scatter about microfacet normals of their own and land as photons.
 
 When a material disperses, every wavelength band traces its own grid with
 its own IOR and carries the band's RGB weight (spectrum.py): beams of
