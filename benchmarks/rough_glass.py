@@ -121,12 +121,12 @@ def grid_photons():
     (the way the engine does not ship; every caster taken as smooth in
     choosing what photons light): their paths land as photons past the
     rough surface."""
-    original = beam.caster_spheres
-    beam.caster_spheres = lambda scene, rough=None: [] if rough else original(scene)
+    original = beam.smooth_and_rough
+    beam.smooth_and_rough = lambda scene, targets: (targets, [])
     try:
         yield
     finally:
-        beam.caster_spheres = original
+        beam.smooth_and_rough = original
 
 
 @contextmanager

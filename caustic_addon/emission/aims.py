@@ -17,7 +17,7 @@ from typing import Optional
 import numpy as np
 
 from ..sampling.warps import cone_directions, cone_of_disc, orthonormal_basis
-from ..scene import AreaLight, Light, Mesh, Scene, SpotLight, SunLight
+from ..scene import AreaLight, Light, Mesh, Object, Scene, SpotLight, SunLight
 from ..util.jit import kernel
 from ..util.rows import contiguous
 from ..util.vectors import row, set_row
@@ -57,21 +57,24 @@ def casters_and_bounds(scene: Scene) -> tuple[list[Sphere], Sphere]:
     one around the casters of each body, which lamps aim at, and the sphere
     around the whole scene."""
     lo, hi = scene.bounds()
-    return caster_spheres(scene), Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)))
+    return ([Sphere.around_meshes([caster.mesh for caster in body]) for body in _bodies(scene)],
+            Sphere(0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo))))
 
 
-def caster_spheres(scene: Scene, rough: Optional[bool] = None) -> list[Sphere]:
-    """The bounding spheres of the casters of each body, in the scene's
-    order; with `rough`, only those of the bodies that have a rough part
-    (True) or none (False)."""
-    bodies: dict[str, list[Mesh]] = {}
-    roughened: set[str] = set()
+def smooth_and_rough(scene: Scene, targets: list[Sphere]) -> tuple[list[Sphere], list[Sphere]]:
+    """casters_and_bounds' `targets`, one per body, parted into those of
+    the bodies with no rough part and those of the bodies with one."""
+    rough = [any(not caster.material.smooth for caster in body) for body in _bodies(scene)]
+    return ([sphere for sphere, r in zip(targets, rough) if not r],
+            [sphere for sphere, r in zip(targets, rough) if r])
+
+
+def _bodies(scene: Scene) -> list[list[Object]]:
+    """The casters of each body, bodies in the scene's order."""
+    bodies: dict[str, list[Object]] = {}
     for caster in scene.casters:
-        bodies.setdefault(caster.body_name, []).append(caster.mesh)
-        if not caster.material.smooth:
-            roughened.add(caster.body_name)
-    return [Sphere.around_meshes(meshes) for body, meshes in bodies.items()
-            if rough is None or (body in roughened) == rough]
+        bodies.setdefault(caster.body_name, []).append(caster)
+    return list(bodies.values())
 
 
 def meets_any(spheres: list[Sphere], origins: np.ndarray, dirs: np.ndarray) -> np.ndarray:

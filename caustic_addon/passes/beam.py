@@ -49,7 +49,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..emission.aims import Sphere, caster_spheres, casters_and_bounds, visible_targets
+from ..emission.aims import Sphere, casters_and_bounds, smooth_and_rough, visible_targets
 from ..emission.beam_sources import BeamSource, beam_sources, disc_shares
 from ..emission.lamp_points import beam_lamps
 from ..emission.photons import Emitter, make_emitters
@@ -707,7 +707,7 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
     of rows share a row, so every grid triangle is in one."""
     count = materials.band_count
     targets, scene_sphere = casters_and_bounds(scene)
-    smooth, rough = caster_spheres(scene, rough=False), caster_spheres(scene, rough=True)
+    smooth, rough = smooth_and_rough(scene, targets)
     receivers = np.concatenate([o.mesh.vertices for o in scene.receivers])
     # toward rough casters lamps send photons (photon_lamps)
     whole, apart = photon_lamps(lights, smooth, rough)

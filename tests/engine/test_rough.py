@@ -431,11 +431,10 @@ def test_beam_mode_keeps_beams_toward_smooth_casters_beside_a_rough_one():
     grid has all the rays; as photons it is 3% off), and the rough ball's
     light lands as the photon pass's does (the flux landed within 2% of the
     adaptive density's)."""
-    from caustic_addon.emission.aims import caster_spheres
+    from caustic_addon.emission.aims import casters_and_bounds, smooth_and_rough
     from caustic_addon.passes.beam import photon_lamps
     scene = two_balls(1.5)
-    assert photon_lamps(scene.lights, *(caster_spheres(scene, rough=rough) for rough in (False, True))) == (
-        [], scene.lights)
+    assert photon_lamps(scene.lights, *smooth_and_rough(scene, casters_and_bounds(scene)[0])) == ([], scene.lights)
     rng = np.random.default_rng(1)
     r, phi = 0.7 * np.sqrt(rng.random(20_000)), 2.0 * math.pi * rng.random(20_000)
     under_smooth = np.stack([r * np.cos(phi) - 1.5, r * np.sin(phi)], axis=1)
@@ -456,13 +455,13 @@ def test_beams_and_photons_share_a_lamps_overlapping_aims():
     counted twice: the flux landed is the photon pass's at 1,000,000 lamp
     rays within 1% (with the photons that meet the smooth ball's sphere
     kept, 8% more lands), and the smooth ball's light still makes beams."""
-    from caustic_addon.emission.aims import aims, caster_spheres, casters_and_bounds, overlapping
+    from caustic_addon.emission.aims import aims, casters_and_bounds, overlapping, smooth_and_rough
     objects = [Object("Floor", shapes.plane(20.0), Diffuse(albedo=1.0)),
                Object("Smooth", shapes.uv_sphere(0.5, (0, 0, 1.6), 64, 32), Dielectric(1.5)),
                Object("Rough", shapes.uv_sphere(0.4, (0.8, 0, 0.5), 64, 32), Dielectric(1.5, roughness=0.2))]
     scene = Scene(objects, [PointLight((0, 0, 4.0), 1000.0)], top_camera(3.0, 16))
-    cones = [aims(scene.lights[0], caster_spheres(scene, rough=rough), casters_and_bounds(scene)[1])[0]
-             for rough in (False, True)]
+    targets, scene_sphere = casters_and_bounds(scene)
+    cones = [aims(scene.lights[0], spheres, scene_sphere)[0] for spheres in smooth_and_rough(scene, targets)]
     assert list(overlapping(cones)[1]) == [0, 1]
     beams = render(scene, RenderSettings(spp=1))
     photons = render(scene, RenderSettings(spp=1, density="adaptive", lamp_rays=1_000_000))
@@ -476,9 +475,8 @@ def test_beam_grid_paths_past_a_rough_surface_bound_no_beam(monkeypatch):
     no beam (their neighbours took other microfacets; no landing counts
     as a beam's): they land as photons, with the flux the photon pass
     brings, and refinement spends no rays on them."""
-    from caustic_addon.emission import aims
     from caustic_addon.passes import beam
-    monkeypatch.setattr(beam, "caster_spheres", lambda scene, rough=None: [] if rough else aims.caster_spheres(scene))
+    monkeypatch.setattr(beam, "smooth_and_rough", lambda scene, targets: (targets, []))
     result = render(ceiling(0.3), RenderSettings(lamp_rays=40_000, spp=1, beam_refinement=2))
     photons = render(ceiling(0.3), RenderSettings(lamp_rays=40_000, spp=1, density="adaptive"))
     assert result.stats["lamp_rays_refined"] == 0 and result.stats["landed"] == 0
