@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -39,8 +38,7 @@ import bpy  # noqa: E402
 
 import blender_scenes as scenes  # noqa: E402
 import conftest  # noqa: E402
-from benchmarks import record  # noqa: E402
-from benchmarks.against_cycles import figures, reference_noise, write_pair  # noqa: E402
+from benchmarks.against_cycles import record_against_cycles  # noqa: E402
 
 PIXX, PIXY = 160, 120
 OURS = {"defaults (4 samples)": 4, "16 samples": 16}
@@ -67,26 +65,10 @@ def main() -> None:
     conftest.registered_addon()
     scenes.glass_ball_under_an_emitting_plane(PIXX, PIXY)
     renders = {name: ours(spp) for name, spp in OURS.items()}
-    caustic_pass = renders["defaults (4 samples)"][1].sum(axis=-1)
-    caustic = caustic_pass >= 0.1 * caustic_pass.max()
-    with tempfile.TemporaryDirectory() as folder:
-        reference, reference_s = cycles(args.cycles_samples, 0, folder)
-        second, _ = cycles(args.cycles_samples, 1, folder)
-        swept = {samples: figures(*cycles(samples, 2, folder), reference, caustic) for samples in CYCLES_SAMPLES}
-    results = {name: figures(image, seconds, reference, caustic) for name, (image, _, seconds) in renders.items()}
-    path = record.write("emitters", {
-        "scene": f"glass ball (radius 0.5) on a white floor under a 1 m emitting plane of strength 12, black world, "
-                 f"{PIXX}x{PIXY}",
-        "caustic_pixels": int(caustic.sum()),
-        "cycles_reference": {"samples": args.cycles_samples, "seconds": reference_s,
-                             **reference_noise(reference, second, caustic)},
-        "ours": results, "cycles": {str(s): f for s, f in swept.items()}})
-    print(f"wrote {path}")
-    for name, f in {**results, **{f"Cycles {s}": f for s, f in swept.items()}}.items():
-        print(f"{name}: mean x{f['mean_ratio']:.3f}, L2 {f['relative_l2']:.1%}, "
-              f"caustic L2 {f['caustic_relative_l2']:.1%}, {f['seconds']:.2f} s")
-    if args.side_by_side:
-        write_pair(args.side_by_side, renders["defaults (4 samples)"][0], reference)
+    record_against_cycles(
+        "emitters", f"glass ball (radius 0.5) on a white floor under a 1 m emitting plane of strength 12, "
+                    f"black world, {PIXX}x{PIXY}",
+        renders, "defaults (4 samples)", cycles, args.cycles_samples, CYCLES_SAMPLES, args.side_by_side)
 
 
 if __name__ == "__main__":

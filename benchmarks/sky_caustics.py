@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -43,8 +42,7 @@ import bpy  # noqa: E402
 
 import blender_scenes as scenes  # noqa: E402
 import conftest  # noqa: E402
-from benchmarks import record  # noqa: E402
-from benchmarks.against_cycles import figures, reference_noise, write_pair  # noqa: E402
+from benchmarks.against_cycles import record_against_cycles  # noqa: E402
 
 PIXX, PIXY = 120, 90
 OURS = {"defaults (40,000 light rays)": 40_000, "200,000 light rays": 200_000}
@@ -105,31 +103,14 @@ def main() -> None:
     addon = conftest.registered_addon()
     glass_ball_under_a_sky()
     renders = {name: ours(rays) for name, rays in OURS.items()}
-    caustic_pass = renders["defaults (40,000 light rays)"][1].sum(axis=-1)
-    caustic = caustic_pass >= 0.1 * caustic_pass.max()
     scene = bpy.context.scene
     addon.comparison.whitted.black_after_a_diffuse_bounce(bpy.data.materials["Floor"])
     addon.comparison.whitted.whitted_settings(addon.export.overrides.Overrides(), scene, scene.caustic.max_depth)
     scene.render.engine = 'CYCLES'
-    with tempfile.TemporaryDirectory() as folder:
-        reference, reference_s = cycles(args.cycles_samples, 0, folder)
-        second, _ = cycles(args.cycles_samples, 1, folder)
-        swept = {samples: figures(*cycles(samples, 2, folder), reference, caustic)
-                 for samples in CYCLES_SAMPLES}
-    results = {name: figures(image, seconds, reference, caustic) for name, (image, _, seconds) in renders.items()}
-    path = record.write("sky_caustics", {
-        "scene": f"glass ball (radius 0.5) on a white floor under an HDRI sky with a window and no sun, "
-                 f"{PIXX}x{PIXY}",
-        "caustic_pixels": int(caustic.sum()),
-        "cycles_reference": {"samples": args.cycles_samples, "seconds": reference_s,
-                             **reference_noise(reference, second, caustic)},
-        "ours": results, "cycles": {str(s): f for s, f in swept.items()}})
-    print(f"wrote {path}")
-    for name, f in {**results, **{f"Cycles {s}": f for s, f in swept.items()}}.items():
-        print(f"{name}: mean x{f['mean_ratio']:.3f}, L2 {f['relative_l2']:.1%}, "
-              f"caustic L2 {f['caustic_relative_l2']:.1%}, {f['seconds']:.2f} s")
-    if args.side_by_side:
-        write_pair(args.side_by_side, renders["defaults (40,000 light rays)"][0], reference)
+    record_against_cycles(
+        "sky_caustics", f"glass ball (radius 0.5) on a white floor under an HDRI sky with a window and no sun, "
+                        f"{PIXX}x{PIXY}",
+        renders, "defaults (40,000 light rays)", cycles, args.cycles_samples, CYCLES_SAMPLES, args.side_by_side)
 
 
 if __name__ == "__main__":
