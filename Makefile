@@ -14,7 +14,7 @@ python_of = $(if $(filter $(NEWEST),$(1)),$(PY313),$(PY311))
 venv_of = $(if $(filter $(NEWEST),$(1)),$(VENV),.venv-$(1))
 
 .PHONY: all venv demo test test-engine bench bench-mitsuba bench-report clean package $(addprefix test-,$(NEWEST) $(OLDER)) \
-	$(foreach part,addon engine-a engine-b numpy,$(foreach v,$(NEWEST) $(OLDER),test-$(v)-$(part)))
+	$(foreach part,addon engine-a engine-b engine-versions numpy,$(foreach v,$(NEWEST) $(OLDER),test-$(v)-$(part)))
 
 all: test
 
@@ -43,17 +43,21 @@ demo: $(VENV)/.installed
 test-engine: venv
 	$(foreach v,$(NEWEST) $(OLDER),$(call venv_of,$(v))/bin/python -m pytest -c tests/pytest.ini tests/engine &&) true
 
-# The engine's suite runs with the newest and the oldest Python and numpy
-# (5.3, 4.2); 4.5 shares 4.2's Python, so it runs the add-on's suite and the
-# engine's check of the numpy it ships. The suites run as parts of about
-# five to ten minutes, two at a time, each part's output kept whole (a part
-# keeps about 1.4 of the 2 cores busy), the longest first, so that both
-# cores stay busy to the end: each Blender's add-on suite, and the engine's
-# in two halves of its test files.
-PARTS := 4.2-addon $(NEWEST)-addon 4.5-addon 4.2-engine-a 4.2-engine-b $(NEWEST)-engine-a $(NEWEST)-engine-b \
-	4.5-numpy
+# The engine's whole suite runs with the newest Python and numpy (5.3). The
+# older Blenders share Python 3.11 and run the add-on's whole suite, which
+# renders through the engine on their numpy; with the oldest numpy (4.2)
+# the engine's tests of what differs between Pythons and numpy versions
+# run too: its kernels' cache and compiled code, the numpy API it names,
+# its command line, its messages, Embree's wheel and the heap. The suites
+# run as parts of about five to ten minutes, two at a time, each part's
+# output kept whole (a part keeps about 1.4 of the 2 cores busy), the
+# longest first, so that both cores stay busy to the end: each Blender's
+# add-on suite, and the newest's engine suite in two halves of its files.
+PARTS := 4.2-addon $(NEWEST)-addon 4.5-addon $(NEWEST)-engine-a $(NEWEST)-engine-b 4.2-engine-versions 4.5-numpy
 ENGINE_A := $(sort $(wildcard tests/engine/test_[a-k]*.py))
 ENGINE_B := $(filter-out $(ENGINE_A),$(sort $(wildcard tests/engine/test_*.py)))
+ENGINE_VERSIONS := $(addprefix tests/engine/,test_kernels.py test_shipped_numpy_api.py test_cli.py \
+	test_scenes_and_errors.py test_embree.py test_heap.py)
 test: venv package $(addprefix test-,$(PARTS))
 
 ifeq ($(MAKECMDGOALS),test)
@@ -63,7 +67,8 @@ endif
 pytest_of = $(call venv_of,$(1))/bin/python -m pytest -c tests/pytest.ini
 versions_of = $(foreach v,$(NEWEST) $(OLDER),test-$(v)-$(1))
 
-test-4.2 test-$(NEWEST): test-%: test-%-addon test-%-engine-a test-%-engine-b
+test-$(NEWEST): test-%: test-%-addon test-%-engine-a test-%-engine-b
+test-4.2: test-4.2-addon test-4.2-engine-versions
 test-4.5: test-4.5-addon test-4.5-numpy
 
 # The engine's tests and the add-on's have helper modules of the same
@@ -72,15 +77,19 @@ $(call versions_of,addon): test-%-addon: venv package
 	@echo "== Blender $*: the add-on =="
 	$(call pytest_of,$*) tests/addon
 
-$(call versions_of,engine-a): test-%-engine-a: venv package
+$(call versions_of,engine-a): test-%-engine-a: venv
 	@echo "== Blender $*: the engine, $(notdir $(firstword $(ENGINE_A))) to $(notdir $(lastword $(ENGINE_A))) =="
 	$(call pytest_of,$*) $(ENGINE_A)
 
-$(call versions_of,engine-b): test-%-engine-b: venv package
+$(call versions_of,engine-b): test-%-engine-b: venv
 	@echo "== Blender $*: the engine, $(notdir $(firstword $(ENGINE_B))) to $(notdir $(lastword $(ENGINE_B))) =="
 	$(call pytest_of,$*) $(ENGINE_B)
 
-$(call versions_of,numpy): test-%-numpy: venv package
+$(call versions_of,engine-versions): test-%-engine-versions: venv
+	@echo "== Blender $*: the engine on what differs between Pythons and numpy versions =="
+	$(call pytest_of,$*) $(ENGINE_VERSIONS)
+
+$(call versions_of,numpy): test-%-numpy: venv
 	@echo "== Blender $*: the engine on the numpy it ships =="
 	$(call pytest_of,$*) tests/engine/test_shipped_numpy_api.py
 

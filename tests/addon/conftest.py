@@ -56,6 +56,18 @@ def factory(addon):
     yield
 
 
+@pytest.fixture
+def coarse_world_bakes(addon, monkeypatch):
+    """World bakes of 512 x 256 pixels, a sixteenth of the add-on's, for
+    the tests that look at where a bake's light is, not at a sun a pixel
+    wide; no bake is kept across them."""
+    bake = addon.export.world_bake
+    monkeypatch.setattr(bake, "BAKE_WIDTH", 512)
+    bake._bakes.clear()
+    yield
+    bake._bakes.clear()
+
+
 class Reports:
     """What the operators reported since the last call (Blender prints
     'Warning: ...' and 'Info: ...' lines to stdout in the background)."""

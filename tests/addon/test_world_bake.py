@@ -34,18 +34,22 @@ def brightest_direction(environment: np.ndarray) -> np.ndarray:
 
 
 @pytest.mark.parametrize("elevation, rotation", [(35.0, 0.0), (35.0, 60.0), (60.0, -120.0)])
-def test_the_skys_sun_is_baked_where_its_node_puts_it(addon, elevation, rotation):
+def test_the_skys_sun_is_baked_where_its_node_puts_it(addon, elevation, rotation, request):
     """Blender's sun direction: (cos e sin r, cos e cos r, sin e) for
-    elevation e and rotation r, within a bake pixel (0.18 degrees)."""
+    elevation e and rotation r, within a bake pixel: 0.18 degrees in the
+    add-on's bake, 0.7 in the coarse bakes the turned suns are checked in."""
+    coarse = rotation != 0.0
+    if coarse:
+        request.getfixturevalue("coarse_world_bakes")
     scenes.add_plane(4.0, scenes.diffuse_material())
     sky_world(elevation, rotation)
     baked = read_world(addon).scene.world
     e, r = math.radians(elevation), math.radians(rotation)
     sun = np.array([math.cos(e) * math.sin(r), math.cos(e) * math.cos(r), math.sin(e)])
-    assert math.degrees(math.acos(min(1.0, brightest_direction(baked.environment) @ sun))) < 0.2
+    assert math.degrees(math.acos(min(1.0, brightest_direction(baked.environment) @ sun))) < (0.7 if coarse else 0.2)
 
 
-def test_a_turned_environment_is_baked_as_its_mapping_turns_it(addon):
+def test_a_turned_environment_is_baked_as_its_mapping_turns_it(addon, coarse_world_bakes):
     """A Mapping node turning the coordinates by R looks the image up at
     R d for a direction d: the bake holds the unturned image's light from
     R d, within a few percent for a smooth image."""
@@ -74,17 +78,17 @@ def test_a_turned_environment_is_baked_as_its_mapping_turns_it(addon):
     np.testing.assert_allclose(baked[rows.ravel(), cols.ravel()], expected, rtol=0.03)
 
 
-def test_a_changed_sky_is_baked_again(addon):
+def test_a_changed_sky_is_baked_again(addon, coarse_world_bakes):
     scenes.add_plane(4.0, scenes.diffuse_material())
     _, sky = sky_world(35.0)
     first = brightest_direction(read_world(addon).scene.world.environment)
     sky.sun_elevation = math.radians(60.0)
     second = brightest_direction(read_world(addon).scene.world.environment)
-    assert math.degrees(math.asin(first[2])) == pytest.approx(35.0, abs=0.2)
-    assert math.degrees(math.asin(second[2])) == pytest.approx(60.0, abs=0.2)
+    assert math.degrees(math.asin(first[2])) == pytest.approx(35.0, abs=0.7)
+    assert math.degrees(math.asin(second[2])) == pytest.approx(60.0, abs=0.7)
 
 
-def test_baking_leaves_the_file_as_it_was(addon):
+def test_baking_leaves_the_file_as_it_was(addon, coarse_world_bakes):
     """No scene, camera, object or image is left behind, the user's scene
     keeps its render settings, and a world hidden from the camera stays so
     (the bake shows it to its own camera for a while)."""
@@ -106,7 +110,7 @@ def test_baking_leaves_the_file_as_it_was(addon):
     assert (scene.render.filepath, scene.render.resolution_x, scene.render.engine) == ("//frames/", 321, engine)
 
 
-def test_a_light_path_trick_is_named(addon):
+def test_a_light_path_trick_is_named(addon, coarse_world_bakes):
     scenes.add_plane(4.0, scenes.diffuse_material())
     _, tree, background = scenes.world_nodes("Sky")
     path, mix = tree.nodes.new('ShaderNodeLightPath'), tree.nodes.new('ShaderNodeMixRGB')

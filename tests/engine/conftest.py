@@ -16,6 +16,14 @@ if HERE not in sys.path:
     sys.path.insert(0, HERE)
 
 
+def pytest_collection_modifyitems(items):
+    """A test that compiles every kernel afresh runs first: it seeds the
+    engine's cache with what it compiled, so the tests after it, and the
+    command lines they start, load their kernels instead of compiling them
+    again."""
+    items.sort(key=lambda item: item.get_closest_marker("compiles_every_kernel") is None)
+
+
 @pytest.fixture
 def small_disk(tmp_path):
     """mount(size in bytes): a folder on a file system of its own (tmpfs) of
