@@ -148,4 +148,4 @@ bench-report: $(VENV)/.installed
 	$(VENV)/bin/python benchmarks/report.py --readme README.md
 
 clean:
-	rm -rf $(VENV) $(foreach v,$(OLDER),.venv-$(v)) dist wheels out kernels
+	rm -rf $(VENV) $(foreach v,$(OLDER),.venv-$(v)) dist wheels out kernels .blender-user

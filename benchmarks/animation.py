@@ -29,7 +29,6 @@ figures are kept from the last run).
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import math
 import os
 import sys
@@ -37,20 +36,20 @@ import tempfile
 import time
 from pathlib import Path
 
-import bpy
-
 REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))  # the repository root
+sys.path[:0] = [str(REPO), str(REPO / "packaging")]  # the repository root, and its source_tree
+
+from source_tree import blender_user_folders, import_addon  # noqa: E402
+
+blender_user_folders()
+
+import bpy  # noqa: E402
 
 from benchmarks import record  # noqa: E402
 
 
 def register_addon() -> None:
-    spec = importlib.util.spec_from_file_location("caustics", REPO / "__init__.py",
-                                                  submodule_search_locations=[str(REPO)])
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["caustics"] = module
-    spec.loader.exec_module(module)
+    module = import_addon()
     module.register()
     # the frames are timed with the kernels compiled, as a user's are after the first start
     module.jobs.kernels.wait()
@@ -130,7 +129,7 @@ def caustic_animation(frames: int) -> dict:
 
 def per_frame(frames: int, run) -> dict:
     """Wall and CPU seconds a frame of `run()`, which traces every map afresh (none kept from an earlier run)."""
-    sys.modules["caustics"].jobs.MAP_CACHE.clear()
+    import_addon().jobs.MAP_CACHE.clear()
     clock, cpu = time.perf_counter(), time.process_time()
     run()
     return dict(wall=(time.perf_counter() - clock) / frames, cpu=(time.process_time() - cpu) / frames)

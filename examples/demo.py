@@ -17,11 +17,11 @@ one-time step is reported on its own line: it is never a render's time.
 Writes out/demo.png (the three panels, labelled; needs matplotlib, which
 the demo's venv has), out/demo_<panel>.exr (linear) and out/demo.json.
 Uses the installed extension if Blender has it, else the add-on in this
-source tree. Exits 1 on any failure.
+source tree, imported as the installed one is (packaging/source_tree.py).
+Exits 1 on any failure.
 """
 
 import argparse
-import importlib.util
 import json
 import math
 import sys
@@ -30,10 +30,15 @@ import time
 import traceback
 from pathlib import Path
 
-import bpy
-import numpy as np
-
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "packaging"))
+
+from source_tree import blender_user_folders, import_addon  # noqa: E402
+
+blender_user_folders()
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
 PIXELS = (640, 400)
 
 
@@ -50,11 +55,7 @@ def enable_addon():
     for name, module in sys.modules.items():
         if name.endswith(".caustics") and hasattr(module, "export") and hasattr(bpy.types, "CAUSTIC_OT_render"):
             return module, False
-    spec = importlib.util.spec_from_file_location("caustics", REPO / "__init__.py",
-                                                  submodule_search_locations=[str(REPO)])
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["caustics"] = module
-    spec.loader.exec_module(module)
+    module = import_addon()
     module.register()
     return module, True
 

@@ -20,13 +20,11 @@ import importlib
 import os
 import platform
 import sys
-import tomllib
 import types
 import zipfile
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
-PACKAGE = "bl_ext.user_default." + tomllib.loads((REPO / "blender_manifest.toml").read_text())["id"]
+from source_tree import PACKAGE, REPO
 
 
 def engine_as_installed():

@@ -37,6 +37,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import inspect
+import os
 import platform
 import shutil
 import sys
@@ -76,7 +77,21 @@ def use_kernel_cache(folder: str | Path, seed: str | Path | None = None) -> None
         _cache_root = Path(folder)
         shipped = None if seed is None else Path(seed) / _ENGINE_NAME / _DIGEST
         if shipped is not None and shipped.is_dir() and not cache_folder().is_dir():
-            shutil.copytree(shipped, cache_folder())
+            _copy_whole(shipped, cache_folder())
+
+
+def _copy_whole(source: Path, target: Path) -> None:
+    """Copy the folder `source` to `target` in one rename, so that another
+    process seeding the same folder at the same time (two Blenders started
+    together on one user folder) never reads half a copy, nor fails on the
+    other's; the later of the two copies is dropped."""
+    partial = _cache_root / f".seeding-{os.getpid()}-{threading.get_ident()}"
+    shutil.copytree(source, partial, dirs_exist_ok=True)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        os.rename(partial, target)
+    except OSError:
+        shutil.rmtree(partial, ignore_errors=True)
 
 
 def cache_folder() -> Path:

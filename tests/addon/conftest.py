@@ -1,34 +1,30 @@
-"""The add-on under the real bpy: registered once from the source tree (as
-Blender would import it, a package with relative imports), and a factory
-fresh empty file for every test."""
+"""The add-on under the real bpy: registered once from the source tree, as
+Blender imports an installed extension (packaging/source_tree.py), with
+Blender's user folders apart from the user's own, and a factory fresh empty
+file for every test."""
 
-import importlib.util
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
-import bpy
-import pytest
-
 REPO = Path(__file__).resolve().parents[2]
 HERE = str(Path(__file__).resolve().parent)
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)
-# The name the add-on is imported under, as examples/demo.py and the benchmarks import
-# it, so that all share its compiled kernels; an installed extension is bl_ext.<repo>.caustics.
-PACKAGE = "caustics"
+for folder in (HERE, str(REPO / "packaging")):
+    if folder not in sys.path:
+        sys.path.insert(0, folder)
+
+from source_tree import PACKAGE, blender_user_folders, import_addon  # noqa: E402
+
+blender_user_folders()
+
+import bpy  # noqa: E402
+import pytest  # noqa: E402
 
 
 def load_addon():
-    """Import the repo root as package PACKAGE."""
-    if PACKAGE in sys.modules:
-        return sys.modules[PACKAGE]
-    spec = importlib.util.spec_from_file_location(PACKAGE, REPO / "__init__.py", submodule_search_locations=[str(REPO)])
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[PACKAGE] = module
-    spec.loader.exec_module(module)
-    return module
+    """The add-on from the source tree, as module PACKAGE."""
+    return import_addon()
 
 
 def registered_addon():

@@ -262,7 +262,7 @@ def test_live_says_why_nothing_shows(live):
 
 
 def test_schedule_previews_while_changing_then_refines_once(addon):
-    from caustics.jobs.live import LiveSchedule, PREVIEW, REFINE, REFINE_AFTER
+    from bl_ext.user_default.caustics.jobs.live import LiveSchedule, PREVIEW, REFINE, REFINE_AFTER
 
     class Job:
         result, error, cancelled, seconds = object(), None, False, 0.05
@@ -302,8 +302,8 @@ def test_previews_refine_their_beams_while_they_fit_their_budget(addon, seconds,
     """A preview under a third of PREVIEW_BUDGET_S (0.1 s) makes the next
     ones refine once; a refined one past the budget stops that; between
     the two, previews keep what they do."""
-    from caustics.caustic_addon import RenderSettings
-    from caustics.jobs.live import PREVIEW, LiveSchedule, preview_settings
+    from bl_ext.user_default.caustics.caustic_addon import RenderSettings
+    from bl_ext.user_default.caustics.jobs.live import PREVIEW, LiveSchedule, preview_settings
 
     class Job:
         result, error = object(), None
@@ -331,7 +331,7 @@ def test_a_dispersive_casters_preview_traces_fewer_bands_on_finer_grids(addon):
     reads closer to the full caustic. Its light is brighter than the full
     caustic's by the photons' k-nearest estimate's bias, where few (k = 8)
     hold a window: +6% with 3 bands, +9% with 6."""
-    from caustics.jobs.live import preview_settings
+    from bl_ext.user_default.caustics.jobs.live import preview_settings
     engine = addon.caustic_addon
     gem = engine.shapes.cone(0.4, 0.55, (0.0, 0.0, 0.45), segments=10)
     scene = engine.Scene(objects=[engine.Object("Floor", engine.shapes.plane(4.0), engine.Diffuse(albedo=0.6)),

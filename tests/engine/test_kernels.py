@@ -73,6 +73,28 @@ def test_a_cache_made_in_another_folder_seeds_this_one(tmp_path):
     assert Path(seeded["folder"]).is_relative_to(tmp_path / "user")
 
 
+def test_a_seed_copied_where_another_process_has_just_put_its_own_is_dropped(tmp_path):
+    """Two Blenders started together on one user folder both seed it: the
+    second copy found the first's in place and failed the add-on's
+    register (FileExistsError). Now each copy lands whole, in one rename,
+    and the later is dropped."""
+    shipped, root = tmp_path / "shipped", tmp_path / "user"
+    (shipped / "kernel.nbi").parent.mkdir(parents=True)
+    (shipped / "kernel.nbi").write_bytes(b"shipped")
+    placed = root / "engine" / "digest"
+    previous = jit.cache_folder().parents[1]
+    try:
+        jit.use_kernel_cache(root)
+        jit._copy_whole(shipped, placed)
+        assert (placed / "kernel.nbi").read_bytes() == b"shipped"
+        (placed / "kernel.nbi").write_bytes(b"first")
+        jit._copy_whole(shipped, placed)
+        assert (placed / "kernel.nbi").read_bytes() == b"first"
+        assert [path.name for path in root.iterdir()] == ["engine"]
+    finally:
+        jit.use_kernel_cache(previous)
+
+
 def test_each_name_the_engine_is_imported_under_has_a_cache_of_its_own(tmp_path):
     """A cached kernel refers to the modules of the helpers it calls by
     name: the engine imported as another package (the add-on's is
