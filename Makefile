@@ -50,10 +50,12 @@ test-engine: venv
 # run too: its kernels' cache and compiled code, the numpy API it names,
 # its command line, its messages, Embree's wheel and the heap. The suites
 # run as parts of about five to ten minutes, two at a time, each part's
-# output kept whole (a part keeps about 1.4 of the 2 cores busy), the
-# longest first, so that both cores stay busy to the end: each Blender's
-# add-on suite, and the newest's engine suite in two halves of its files.
-PARTS := 4.2-addon $(NEWEST)-addon 4.5-addon $(NEWEST)-engine-a $(NEWEST)-engine-b 4.2-engine-versions 4.5-numpy
+# output kept whole (a part keeps about 1.4 of the 2 cores busy): the first
+# half of the newest's engine suite beside the packaging (its first test
+# compiles every kernel, in one process), then the longest first, so that
+# both cores stay busy to the end: each Blender's add-on suite, which needs
+# the zips and their kernels, and the rest of the engine's.
+PARTS := $(NEWEST)-engine-a $(NEWEST)-addon 4.2-addon 4.5-addon 4.2-engine-versions $(NEWEST)-engine-b 4.5-numpy
 ENGINE_A := $(sort $(wildcard tests/engine/test_[a-k]*.py))
 ENGINE_B := $(filter-out $(ENGINE_A),$(sort $(wildcard tests/engine/test_*.py)))
 ENGINE_VERSIONS := $(addprefix tests/engine/,test_kernels.py test_shipped_numpy_api.py test_cli.py \
