@@ -54,7 +54,9 @@ test-engine: venv
 # half of the newest's engine suite beside the packaging (its first test
 # compiles every kernel, in one process), then the longest first, so that
 # both cores stay busy to the end: each Blender's add-on suite, which needs
-# the zips and their kernels, and the rest of the engine's.
+# the zips and their kernels, and the rest of the engine's. Those wait for
+# the packaging too: make starts a part whose prerequisites are ready
+# before an earlier one's, which left an add-on suite alone at the end.
 PARTS := $(NEWEST)-engine-a $(NEWEST)-addon 4.2-addon 4.5-addon 4.2-engine-versions $(NEWEST)-engine-b 4.5-numpy
 ENGINE_A := $(sort $(wildcard tests/engine/test_[a-k]*.py))
 ENGINE_B := $(filter-out $(ENGINE_A),$(sort $(wildcard tests/engine/test_*.py)))
@@ -83,15 +85,15 @@ $(call versions_of,engine-a): test-%-engine-a: venv
 	@echo "== Blender $*: the engine, $(notdir $(firstword $(ENGINE_A))) to $(notdir $(lastword $(ENGINE_A))) =="
 	$(call pytest_of,$*) $(ENGINE_A)
 
-$(call versions_of,engine-b): test-%-engine-b: venv
+$(call versions_of,engine-b): test-%-engine-b: venv package
 	@echo "== Blender $*: the engine, $(notdir $(firstword $(ENGINE_B))) to $(notdir $(lastword $(ENGINE_B))) =="
 	$(call pytest_of,$*) $(ENGINE_B)
 
-$(call versions_of,engine-versions): test-%-engine-versions: venv
+$(call versions_of,engine-versions): test-%-engine-versions: venv package
 	@echo "== Blender $*: the engine on what differs between Pythons and numpy versions =="
 	$(call pytest_of,$*) $(ENGINE_VERSIONS)
 
-$(call versions_of,numpy): test-%-numpy: venv
+$(call versions_of,numpy): test-%-numpy: venv package
 	@echo "== Blender $*: the engine on the numpy it ships =="
 	$(call pytest_of,$*) tests/engine/test_shipped_numpy_api.py
 
