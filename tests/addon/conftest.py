@@ -14,17 +14,13 @@ for folder in (HERE, str(REPO / "packaging")):
     if folder not in sys.path:
         sys.path.insert(0, folder)
 
-from source_tree import PACKAGE, blender_user_folders, import_addon  # noqa: E402
+# load_addon(): the add-on from the source tree, as Blender imports it installed
+from source_tree import blender_user_folders, import_addon as load_addon  # noqa: E402
 
 blender_user_folders()
 
 import bpy  # noqa: E402
 import pytest  # noqa: E402
-
-
-def load_addon():
-    """The add-on from the source tree, as module PACKAGE."""
-    return import_addon()
 
 
 def registered_addon():
