@@ -1,7 +1,11 @@
 """Live caustics while a user drags the caster: the gallery's scenes
-(benchmarks/gallery.py) built in Blender, Live on, and the caster (the
+(benchmarks/gallery.py) built in Blender, each with its world (the dim
+grey one Blender gives every new scene), Live on, and the caster (the
 water: its height field moved sideways) dragged through 60 positions along
-an arc, as a mouse moves it, one position every 1/30 s.
+an arc, as a mouse moves it, one position every 1/30 s; the ball lens
+lit by the gallery's sunny sky alone, a 2048 x 1024 HDRI in an Environment
+Texture, as product shots are; and the ball lens in a black world, which
+lights nothing and costs nothing.
 
     .venv/bin/python benchmarks/live.py [--positions 60]
 
@@ -39,7 +43,9 @@ import argparse
 import math
 import os
 import sys
+import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -51,12 +57,16 @@ sys.path.insert(0, str(REPO / "tests" / "addon"))
 import bpy  # noqa: E402
 from mathutils import Vector  # noqa: E402
 
+import blender_scenes  # noqa: E402
 import conftest  # noqa: E402
 from benchmarks import gallery, record  # noqa: E402
-from caustic_addon import Dielectric, Diffuse, PointLight, Reflector, SunLight  # noqa: E402
+from caustic_addon import Dielectric, Diffuse, PointLight, Reflector, SunLight, World  # noqa: E402
 
 SCENES = {"ball lens": gallery.ball_lens, "mirror ring": gallery.mirror_ring, "gem": gallery.dispersive_gem,
-          "wavy pool": gallery.wavy_water}
+          "wavy pool": gallery.wavy_water, "ball lens under an HDRI": gallery.sunny_sky,
+          "ball lens in a black world": lambda: replace(gallery.ball_lens(), world=World())}
+# The HDRI's size: the add-on bakes a world 2048 pixels wide.
+HDRI_WIDTH = 2048
 STEP_S = 1 / 30
 FPS = 24
 ARC_M = 0.3
@@ -123,13 +133,37 @@ def add_light(light):
     bpy.context.scene.collection.objects.link(ob)
 
 
-def build(make) -> object:
-    """The gallery scene `make()` in a fresh file; returns its caster."""
+def add_world(world: World, folder: Path) -> None:
+    """`world` as the scene's: its colour in the Background node, or its
+    environment saved to an EXR in `folder`, in an Environment Texture."""
+    _, tree, background = blender_scenes.world_nodes()
+    if world.environment is None:
+        background.inputs['Color'].default_value = (*world.color.tolist(), 1.0)
+        return
+    h, w = world.environment.shape[:2]
+    image = bpy.data.images.new("Sky", w, h, float_buffer=True)
+    rgba = np.ones((h, w, 4), dtype=np.float32)
+    rgba[..., :3] = world.environment[::-1] * world.color
+    image.pixels.foreach_set(rgba.ravel())
+    image.filepath_raw, image.file_format = str(folder / "sky.exr"), 'OPEN_EXR'
+    image.save()
+    texture = tree.nodes.new('ShaderNodeTexEnvironment')
+    texture.image = bpy.data.images.load(str(folder / "sky.exr"))
+    tree.links.new(texture.outputs['Color'], background.inputs['Color'])
+
+
+def build(make, folder: Path) -> object:
+    """The gallery scene `make()` in a fresh file, a sky's image HDRI_WIDTH
+    wide (saved in `folder`); returns its caster."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = make()
     objects = [add_object(obj) for obj in scene.objects]
     for light in scene.lights:
         add_light(light)
+    world = scene.world
+    if world.environment is not None:
+        world = World(world.color, gallery.sky_with_sun(HDRI_WIDTH))
+    add_world(world, folder)
     return next(ob for ob, obj in zip(objects, scene.objects) if not isinstance(obj.material, Diffuse))
 
 
@@ -191,7 +225,8 @@ def drag(session_module, caster, positions: int) -> dict:
             time.sleep(0.002)
         resident.append(resident_mb())
     dragged = time.perf_counter() - start
-    while session.schedule.job is not None or session.schedule.pending:
+    # the last preview shown (a refine may start meanwhile: a slow preview outlasts the quiet it waits for)
+    while session.schedule.pending or (session.schedule.job is not None and session.schedule.kind == "preview"):
         step(session_module)
         time.sleep(0.002)
     previews = [u for u in session.updates if u.kind == "preview"]
@@ -256,11 +291,13 @@ def main() -> None:
     args = parser.parse_args()
     addon = conftest.registered_addon()
     figures = {}
-    for name, make in SCENES.items():
-        figures[name] = drag(addon.live.session, build(make), args.positions)
-        print(name, {k: round(v, 4) if isinstance(v, float) else v for k, v in figures[name].items()}, flush=True)
-    played = {kind: playback(addon.live.session, build(SCENES["ball lens"]), 48, kind == "moving")
-              for kind in ("moving", "still")}
+    with tempfile.TemporaryDirectory(prefix="caustic-live-") as folder:
+        for name, make in SCENES.items():
+            figures[name] = drag(addon.live.session, build(make, Path(folder)), args.positions)
+            print(name, {k: round(v, 4) if isinstance(v, float) else v for k, v in figures[name].items()},
+                  flush=True)
+        played = {kind: playback(addon.live.session, build(SCENES["ball lens"], Path(folder)), 48,
+                                 kind == "moving") for kind in ("moving", "still")}
     print("playback", played, flush=True)
     record.write("live", dict(positions=args.positions, step_s=STEP_S, scenes=figures, fps=FPS, playback=played))
     addon.unregister()

@@ -150,7 +150,7 @@ def spread_beams(replicas: int):
         return out
 
     def band_beams(*args):
-        local.keys = ((args[0][0].grid - 1) * (1 << args[8]) + 1) ** 2
+        local.keys = ((args[0].grid - 1) * (1 << args[8]) + 1) ** 2
         return original[1](*args)
 
     def scattered(self, paths, hits, surface, depth):

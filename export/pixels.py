@@ -1,6 +1,11 @@
 """Pixels of Blender images as numpy arrays, row 0 at the TOP (Blender
 stores rows bottom to top)."""
 
+import os
+from collections import OrderedDict
+from typing import Optional
+
+import bpy
 import numpy as np
 
 from ..caustic_addon import textures
@@ -23,10 +28,47 @@ def is_srgb_encoded(image) -> bool:
     return not image.is_float and image.colorspace_settings.name not in LINEAR_SPACES
 
 
+# Images whose linear RGB is kept (`linear_rgb`): an HDRI's is 50 MB at 2048 x 1024.
+KEPT_IMAGES = 2
+_kept: OrderedDict = OrderedDict()
+
+
 def linear_rgb(image) -> np.ndarray:
-    """(h, w, 3) float64 linear RGB of `image`, decoded from sRGB if it is encoded."""
+    """(h, w, 3) float64 linear RGB of `image`, decoded from sRGB if it is
+    encoded: the very array of the last read while the image is unchanged
+    (`_identity`), which the engine then keeps its world's sun, sky and
+    sampling tables for (caustic_addon/emission/kept_worlds.py); Live's
+    updates read no pixels again. Callers must not write into it."""
+    identity = _identity(image)
+    if identity is not None and identity in _kept:
+        _kept.move_to_end(identity)
+        return _kept[identity]
     rgb = image_pixels(image)[..., :3].astype(np.float64)
-    return textures.srgb_to_linear(rgb) if is_srgb_encoded(image) else rgb
+    rgb = textures.srgb_to_linear(rgb) if is_srgb_encoded(image) else rgb
+    if identity is not None:
+        _kept[identity] = rgb
+        while len(_kept) > KEPT_IMAGES:
+            _kept.popitem(last=False)
+    return rgb
+
+
+def _identity(image) -> Optional[tuple]:
+    """What the pixels of `image` come from: its name, its file and the
+    file's time, its packed data's size, what generates it, its size and
+    colour space; None for an image changed in Blender and not saved
+    (painted, or its pixels set), whose pixels may change unseen."""
+    if image.is_dirty:
+        return None
+    path = bpy.path.abspath(image.filepath_raw, library=image.library)
+    try:
+        stamp = os.stat(path).st_mtime_ns
+    except OSError:
+        stamp = None
+    packed = image.packed_file.size if image.packed_file is not None else None
+    generated = ((image.generated_type, tuple(image.generated_color), image.use_generated_float)
+                 if image.source == 'GENERATED' else None)
+    return (image.name_full, path, stamp, packed, image.source, generated, tuple(image.size),
+            image.colorspace_settings.name, image.is_float)
 
 
 def can_read(image) -> bool:

@@ -288,8 +288,8 @@ def aims(light: Light, targets: list[Sphere], scene_sphere: Sphere) -> list[Aim]
     out = []
     for sphere in visible_targets(light, targets):
         if isinstance(light, SunLight):
-            widen = 1.0 / max(math.cos(0.5 * light.angle), _SUN_WIDEN_COS)
-            out.append(Aim(light, light.direction, center=sphere.center, radius=sphere.radius * widen,
+            out.append(Aim(light, light.direction, center=sphere.center,
+                           radius=sphere.radius * float(sun_widening(light.angle)),
                            start_distance=upstream_distance(scene_sphere)))
             continue
         axis, cos_max = target_cone(light.position, Sphere(sphere.center, sphere.radius + reach(light)))
@@ -299,6 +299,13 @@ def aims(light: Light, targets: list[Sphere], scene_sphere: Sphere) -> list[Aim]
         else:
             out.append(Aim(light, axis, cos_max=cos_max, target_distance=distance))
     return out
+
+
+def sun_widening(angle):
+    """How many times wider than its target a sun's disc aim is, for a sun
+    of `angle` radians (or an array of them): 1 / cos of its half angle, so
+    that its tilted rays still cover the target, at most 1 / _SUN_WIDEN_COS."""
+    return 1.0 / np.maximum(np.cos(0.5 * np.asarray(angle)), _SUN_WIDEN_COS)
 
 
 def overlapping(aims: list[Aim]) -> list[np.ndarray]:

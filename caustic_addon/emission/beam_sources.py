@@ -47,60 +47,118 @@ class BeamSource:
         """Solid angle (sr) or area (m^2) of one grid cell."""
         return self.aim.measure / (self.grid - 1) ** 2
 
-    def rays_at(self, rc: np.ndarray):
-        """Rays at continuous grid positions `rc (n,2)` (row, col) in [0,
-        grid - 1]: (origins (n,3), dirs (n,3), weight (n,3) intensity (W/sr)
-        or irradiance (W/m^2) times the ray's share of its cell, 1 where no
-        other aim holds it)."""
-        disc = concentric_disc(rc / (self.grid - 1))
-        if self.roll:
-            c, s = math.cos(self.roll), math.sin(self.roll)
-            disc = disc @ np.array([[c, s], [-s, c]])
-        origins, dirs = self.aim.rays(disc)
+    def balance(self, origins: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+        """(n,) what the weight of the source's rays `origins, dirs (n,3)`
+        is multiplied by: 1 / (cell measure x the summed sample density of
+        the aims that hold each ray), 1 where no other aim holds it; 0 for
+        a ray that meets a `rough` sphere and no `smooth` one."""
         others, density = zip(*self.overlap)
-        weight = self.aim.emitted(self.energy, dirs)
-        weight *= ((1.0 / self.cell_measure) / balance_density(others, np.array(density), origins, dirs))[:, None]
+        factor = (1.0 / self.cell_measure) / balance_density(others, np.array(density), origins, dirs)
         if self.rough:
-            weight[meets_any(list(self.rough), origins, dirs) & ~meets_any(list(self.smooth), origins, dirs)] = 0.0
+            factor[meets_any(list(self.rough), origins, dirs) & ~meets_any(list(self.smooth), origins, dirs)] = 0.0
+        return factor
+
+
+class SourceBatch:
+    """Grids of one size traced as one batch, `sources (k,)`: the rays of
+    the rows of all of them at once, from arrays of the sources' aims,
+    where a pass per source would cost its numpy calls again for each (a
+    sky is up to 256 suns, each traced once per wavelength band). A sun's
+    disc is done in the arrays; a cone's rays, and the balance of rays that
+    several aims or a rough caster hold, source by source, for the rows of
+    the sources that have them."""
+
+    def __init__(self, sources: list[BeamSource]):
+        self.sources, self.grid = sources, sources[0].grid
+        aims = [source.aim for source in sources]
+        self.disc = np.array([aim.is_disc for aim in aims], dtype=bool)
+        self.axis = np.array([aim.axis for aim in aims]).reshape(-1, 3)
+        self.center = np.array([aim.center if aim.is_disc else np.zeros(3) for aim in aims]).reshape(-1, 3)
+        self.radius = np.array([aim.radius for aim in aims])
+        self.tangent = np.array([aim.tangent for aim in aims]).reshape(-1, 3)
+        self.bitangent = np.array([aim.bitangent for aim in aims]).reshape(-1, 3)
+        self.start = np.array([aim.start_distance for aim in aims])
+        # a disc's divisor is never read (np.where)
+        self.target = np.array([1.0 if aim.is_disc else aim.target_distance for aim in aims])
+        self.emitted = np.array([source.aim.emitted(source.energy, source.aim.axis[None])[0] if source.aim.is_disc
+                                 else np.zeros(3) for source in sources]).reshape(-1, 3)
+        roll = np.array([source.roll for source in sources])
+        self.rolled, self.cos_roll, self.sin_roll = roll != 0.0, np.cos(roll), np.sin(roll)
+        self.balanced = np.flatnonzero([len(source.overlap) > 1 or bool(source.rough) for source in sources])
+        self.spreading = any(source.cell is not None for source in sources)
+        self.cell_axes, self.cell_corners = cell_frames(np.array([np.zeros((4, 3)) if source.cell is None
+                                                                  else source.cell for source in sources]))
+
+    def rays(self, which: np.ndarray, rc: np.ndarray):
+        """Rays of sources `which (n,)` (ascending) at continuous grid
+        positions `rc (n,2)` (row, col) in [0, grid - 1]: (origins (n,3),
+        dirs (n,3), weight (n,3) intensity (W/sr) or irradiance (W/m^2)
+        times the ray's share of its cell, 1 where no other aim holds it).
+        The grid's point of the unit disc, turned by its source's roll, is
+        mapped through the aim (Aim.rays): a disc's ray crosses center +
+        radius (x t + y b) along the sun's direction, from start_distance
+        upstream."""
+        disc = concentric_disc(rc / (self.grid - 1))
+        turned = np.flatnonzero(self.rolled[which])
+        if len(turned):
+            c, s = self.cos_roll[which[turned]], self.sin_roll[which[turned]]
+            x, y = disc[turned, 0].copy(), disc[turned, 1].copy()
+            disc[turned, 0], disc[turned, 1] = x * c - y * s, x * s + y * c
+        origins, dirs, weight = np.empty((len(which), 3)), np.empty((len(which), 3)), np.empty((len(which), 3))
+        suns = np.flatnonzero(self.disc[which])
+        k = which[suns]
+        dirs[suns] = self.axis[k]
+        origins[suns] = (self.center[k] + self.radius[k, None] * (disc[suns, :1] * self.tangent[k]
+                                                                   + disc[suns, 1:] * self.bitangent[k])
+                         - self.start[k, None] * dirs[suns])
+        weight[suns] = self.emitted[k]
+        first = np.searchsorted(which, np.arange(len(self.sources) + 1))
+        for k in np.unique(which[~self.disc[which]]):
+            rows = slice(first[k], first[k + 1])
+            aim = self.sources[k].aim
+            origins[rows], dirs[rows] = aim.rays(disc[rows])
+            weight[rows] = aim.emitted(self.sources[k].energy, dirs[rows])
+        for k in self.balanced:
+            rows = slice(first[k], first[k + 1])
+            weight[rows] *= self.sources[k].balance(origins[rows], dirs[rows])[:, None]
         return origins, dirs, weight
 
-    def cell_frame(self) -> tuple[np.ndarray, np.ndarray]:
-        """(axes (2,3), corners (4,2)): two orthonormal axes in the plane of
-        the lamp's `cell` (along its first edges), and its corners in them;
-        zeros for a lamp of size 0."""
-        if self.cell is None:
-            return np.zeros((2, 3)), np.zeros((4, 2))
-        c = self.cell
-        along = c[1] - c[0] + c[2] - c[3]
-        across = c[3] - c[0] + c[2] - c[1]
-        t = along / np.linalg.norm(along)
-        b = across - t * (t @ across)
-        axes = np.stack([t, b / np.linalg.norm(b)])
-        return axes, c @ axes.T
-
-    def differentials(self, dirs: np.ndarray, first_hit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(d_origins (n,2,3), d_dirs (n,2,3)): how rays along `dirs (n,3)`
-        change per metre (a sun's: per radian) along each of the lamp's
-        `cell_frame` axes (ray differentials, Igehy 1999;
-        passes/differentials.py carries them through the bounces). From a
-        point of a lamp moved by e, the ray through the point at the
-        target's distance s along it turns by -(e - d (d.e)) / s. A sun's
-        direction turns by e, the ray pivoting where it first meets the
-        scene, `first_hit (n,)` m along it (where it meets nothing, at the
-        aim's disc): every direction of the sun's cell lights that point
-        of a caster alike, while a pivot on the disc, which crosses a
-        large flat caster far from where the ray meets it, would move a
-        landing by that whole lever arm. Zero for a lamp of size 0."""
-        n = len(dirs)
-        if self.cell is None:
-            return np.zeros((n, 2, 3)), np.zeros((n, 2, 3))
-        edges = np.broadcast_to(self.cell_frame()[0], (n, 2, 3))
+    def differentials(self, which: np.ndarray, dirs: np.ndarray, first_hit: np.ndarray):
+        """(d_origins (n,2,3), d_dirs (n,2,3)): how the rays of sources
+        `which (n,)` along `dirs (n,3)` change per metre (a sun's: per
+        radian) along each of their lamp's `cell_frames` axes (ray
+        differentials, Igehy 1999; passes/differentials.py carries them
+        through the bounces). From a point of a lamp moved by e, the ray
+        through the point at the target's distance s along it turns by
+        -(e - d (d.e)) / s. A sun's direction turns by e, the ray pivoting
+        where it first meets the scene, `first_hit (n,)` m along it (where it
+        meets nothing, at the aim's disc): every direction of the sun's cell
+        lights that point of a caster alike, while a pivot on the disc,
+        which crosses a large flat caster far from where the ray meets it,
+        would move a landing by that whole lever arm. Zero for a lamp of
+        size 0 (its axes are)."""
+        edges = self.cell_axes[which]
         across = edges - dirs[:, None, :] * np.einsum("nkc,nc->nk", edges, dirs)[:, :, None]
-        if self.aim.is_disc:
-            met = np.isfinite(first_hit) & (first_hit > 0)
-            pivot = np.where(met, first_hit, self.aim.start_distance)
-            return -pivot[:, None, None] * across, across
-        return edges.copy(), -across / self.aim.target_distance
+        sun = self.disc[which][:, None, None]
+        met = np.isfinite(first_hit) & (first_hit > 0)
+        pivot = np.where(met, first_hit, self.start[which])[:, None, None]
+        return (np.where(sun, -pivot * across, edges),
+                np.where(sun, across, -across / self.target[which][:, None, None]))
+
+
+def cell_frames(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(axes (k,2,3), corners (k,4,2)) of lamp cells `cells (k,4,3)`: two
+    orthonormal axes in the plane of each cell (along its first edges), and
+    its corners in them; zeros for a cell of zeros (a lamp of size 0)."""
+    along = cells[:, 1] - cells[:, 0] + cells[:, 2] - cells[:, 3]
+    across = cells[:, 3] - cells[:, 0] + cells[:, 2] - cells[:, 1]
+    sized = np.linalg.norm(along, axis=1) > 0
+    t = np.zeros_like(along)
+    t[sized] = along[sized] / np.linalg.norm(along[sized], axis=1)[:, None]
+    b = across - t * np.einsum("kc,kc->k", t, across)[:, None]
+    b[sized] /= np.linalg.norm(b[sized], axis=1)[:, None]
+    axes = np.stack([t, b], axis=1)
+    return axes, np.einsum("kic,kjc->kij", cells, axes)
 
 
 def disc_shares(rc: np.ndarray, grid: int) -> np.ndarray:

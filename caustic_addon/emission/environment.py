@@ -28,6 +28,7 @@ from ..util.image_lookup import lookup
 from ..util.jit import inline, kernel
 from ..util.rows import contiguous
 from ..util.vectors import DIVISION_FLOOR, row, set_row
+from .kept_worlds import per_world
 
 
 @inline
@@ -214,3 +215,9 @@ class Environment:
         out = np.empty(len(dirs))
         _densities(contiguous(dirs, np.float64), self.row_pdf, self.col_pdf, out)
         return out
+
+
+@per_world
+def environment_of(world: World) -> Environment:
+    """Environment(world), kept while the same world comes back (kept_worlds.py)."""
+    return Environment(world)

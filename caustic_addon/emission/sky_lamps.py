@@ -18,7 +18,7 @@ d_i) bring to a plane facing c. A flat receiver lit through lossless
 glass then gets n . c S = n . sum_i L_i Omega_i d_i, the region's own
 irradiance, wherever the region's colour is even (the centroid weighs
 luminance). Its `cell` is the flat quadrilateral of the region's corner
-directions, grown to the region's solid angle (`region_cell`), over whose
+directions, grown to the region's solid angle (`region_cells`), over whose
 image its beams spread (lamp_points.py, beam.py), so that the regions'
 caustics, each sharp, sum to the sky's soft one; photons leave a cone of
 the region's solid angle around c instead.
@@ -37,12 +37,13 @@ from typing import Optional
 
 import numpy as np
 
-from ..sampling.warps import concentric_disc
+from ..sampling.warps import concentric_disc, frames
 from ..scene import Scene, SunLight, World
 from ..tracing.accelerator import Accelerator
 from ..tracing.hits import MISS
-from .aims import Sphere, aims, casters_and_bounds
+from .aims import Sphere, casters_and_bounds, sun_widening, upstream_distance
 from .environment import luminance, uv_to_directions
+from .kept_worlds import per_world
 
 # The regions the sky is cut into: each one sun, and one beam grid.
 SKY_REGIONS = 256
@@ -71,9 +72,11 @@ def lighting_casters(scene: Scene, sky: World, accel: Accelerator) -> list[SkyRe
     return reaching(sky_lamps(sky), accel, casters, targets, scene_sphere)
 
 
-def sky_lamps(sky: World, count: int = SKY_REGIONS) -> list[SkyRegion]:
-    """The sky `sky` as at most `count` suns, one per region of its light
-    (`median_cut`); none for a black sky."""
+@per_world
+def sky_lamps(sky: World) -> list[SkyRegion]:
+    """The sky `sky` as at most SKY_REGIONS suns, one per region of its
+    light (`median_cut`); none for a black sky. Kept while the same sky
+    comes back (kept_worlds.py)."""
     image = sky.environment if sky.environment is not None else np.ones((*UNIFORM_SIZE, 3))
     rgb = image * sky.color
     h, w = rgb.shape[:2]
@@ -84,7 +87,7 @@ def sky_lamps(sky: World, count: int = SKY_REGIONS) -> list[SkyRegion]:
     weight = np.maximum(luminance(power), 0.0)
     if not weight.sum() > 0:
         return []
-    boxes = median_cut(weight, count, theta)
+    boxes = median_cut(weight, SKY_REGIONS, theta)
     # each pixel's box, len(boxes) for those of none (they hold no light)
     label = np.full((h, w), len(boxes), dtype=np.int64)
     for k, (r0, r1, c0, c1) in enumerate(boxes):
@@ -100,27 +103,29 @@ def sky_lamps(sky: World, count: int = SKY_REGIONS) -> list[SkyRegion]:
     centre = toward / np.maximum(np.linalg.norm(toward, axis=1), 1e-300)[:, None]
     facing = sum(np.take(centre[:, k], label).reshape(h, w) * axes[k] for k in range(3))
     strength = np.stack([np.bincount(label, (power[..., c] * facing).ravel(), bins) for c in range(3)], axis=1)
-    lamps = []
-    for k in np.flatnonzero(lit & (strength.max(axis=1) > 0)):
-        r0, r1, c0, c1 = boxes[k]
-        corners = uv_to_directions(np.array([[c0 / w, r0 / h], [c1 / w, r0 / h], [c1 / w, r1 / h], [c0 / w, r1 / h]]))
-        peak = float(strength[k].max())
-        lamps.append(SkyRegion(-centre[k], peak, strength[k] / peak, name="the sky",
-                               angle=2.0 * math.acos(max(-1.0, 1.0 - solid[k] / (2.0 * math.pi))),
-                               of_world=True, cell=region_cell(centre[k], corners, solid[k])))
-    return lamps
+    kept = np.flatnonzero(lit & (strength.max(axis=1) > 0))
+    r0, r1, c0, c1 = np.array(boxes, dtype=np.float64).reshape(-1, 4)[kept].T
+    uv = np.stack([np.stack([c0, r0], 1), np.stack([c1, r0], 1), np.stack([c1, r1], 1), np.stack([c0, r1], 1)], 1)
+    corners = uv_to_directions((uv / np.array([w, h])).reshape(-1, 2)).reshape(-1, 4, 3)
+    cells = region_cells(centre[kept], corners, solid[kept])
+    peaks = strength[kept].max(axis=1)
+    return [SkyRegion(-centre[k], float(peak), strength[k] / peak, name="the sky",
+                      angle=2.0 * math.acos(max(-1.0, 1.0 - solid[k] / (2.0 * math.pi))), of_world=True, cell=cell)
+            for k, peak, cell in zip(kept, peaks, cells)]
 
 
-def region_cell(centre: np.ndarray, corners: np.ndarray, solid_angle: float) -> np.ndarray:
-    """(4,3) a region's cell: the directions its corners' light travels
-    along less its centre's, c - corners for unit `centre` c and `corners
-    (4,3)`, grown about c until the flat quadrilateral they span has the
-    region's `solid_angle`: the chords between the corners of a region
-    at the pole cut off a third of it, and its light would gather."""
-    cell = centre - corners
-    a, b, c, d = corners
-    flat = 0.5 * (np.linalg.norm(np.cross(b - a, c - a)) + np.linalg.norm(np.cross(c - a, d - a)))
-    return cell * math.sqrt(solid_angle / flat) if flat > 0 else cell
+def region_cells(centres: np.ndarray, corners: np.ndarray, solid_angles: np.ndarray) -> np.ndarray:
+    """(k,4,3) regions' cells: the directions their corners' light travels
+    along less their centre's, c - corners for unit `centres` c (k,3) and
+    `corners (k,4,3)`, grown about c until the flat quadrilateral they
+    span has the region's solid angle, `solid_angles (k,)`: the chords
+    between the corners of a region at the pole cut off a third of it, and
+    its light would gather."""
+    cells = centres[:, None, :] - corners
+    a, b, c, d = (corners[:, i] for i in range(4))
+    flat = 0.5 * (np.linalg.norm(np.cross(b - a, c - a), axis=1) + np.linalg.norm(np.cross(c - a, d - a), axis=1))
+    grow = np.sqrt(np.divide(solid_angles, flat, out=np.ones_like(flat), where=flat > 0))
+    return cells * grow[:, None, None]
 
 
 def median_cut(weight: np.ndarray, count: int, theta: np.ndarray) -> list[tuple[int, int, int, int]]:
@@ -171,20 +176,30 @@ def reaching(regions: list[SkyRegion], accel: Accelerator, casters: np.ndarray, 
              scene_sphere: Sphere) -> list[SkyRegion]:
     """The `regions` whose light reaches a caster (`casters (m,)` bool by
     object) before anything else, as PROBES x PROBES rays across each of
-    their aims along their centre's and each corner's direction find: a
-    region none of whose probes meets a caster first is left out."""
+    their aims (aims.aims: a disc over each target, widened by the region's
+    angle) along their centre's and each corner's direction find: a region
+    none of whose probes meets a caster first is left out. All regions'
+    probes are one batch."""
+    if not regions or not targets:
+        return []
     disc = concentric_disc((np.stack(np.meshgrid(np.arange(PROBES), np.arange(PROBES)), axis=-1).reshape(-1, 2)
                             + 0.5) / PROBES)
-    origins, dirs, owner = [], [], []
-    for k, region in enumerate(regions):
-        toward = region.direction + np.vstack([np.zeros(3), region.cell])
-        toward /= np.linalg.norm(toward, axis=1)[:, None]
-        for aim in aims(region, targets, scene_sphere):
-            origins.append((aim.crossing(disc)[None, :, :] - aim.start_distance * toward[:, None, :]).reshape(-1, 3))
-            dirs.append(np.repeat(toward, len(disc), axis=0))
-            owner.append(np.full(len(toward) * len(disc), k))
-    if not origins:
-        return []
-    hits = accel.intersect(np.concatenate(origins), np.concatenate(dirs))
-    met = (hits.obj != MISS) & np.take(casters, np.maximum(hits.obj, 0))
-    return [regions[k] for k in np.unique(np.concatenate(owner)[met])]
+    axis = np.array([region.direction for region in regions])
+    tangent, bitangent = frames(axis)
+    toward = axis[:, None, :] + np.concatenate([np.zeros((len(regions), 1, 3)),
+                                                np.array([region.cell for region in regions])], axis=1)
+    toward /= np.linalg.norm(toward, axis=2)[:, :, None]
+    widen = sun_widening(np.array([region.angle for region in regions]))
+    start = upstream_distance(scene_sphere)
+    origins = []
+    for sphere in targets:
+        # (k, probes, 3): Aim.crossing of each region's disc over the sphere
+        crossing = sphere.center + (sphere.radius * widen)[:, None, None] * (
+            disc[None, :, :1] * tangent[:, None, :] + disc[None, :, 1:] * bitangent[:, None, :])
+        origins.append(crossing[:, None, :, :] - start * toward[:, :, None, :])
+    shape = (len(regions), toward.shape[1], len(disc), 3)
+    dirs = np.broadcast_to(toward[:, :, None, :], shape)
+    hits = accel.intersect(np.concatenate([o.reshape(-1, 3) for o in origins]),
+                           np.concatenate([dirs.reshape(-1, 3)] * len(targets)))
+    met = ((hits.obj != MISS) & np.take(casters, np.maximum(hits.obj, 0))).reshape(len(targets), len(regions), -1)
+    return [region for region, lit in zip(regions, met.any(axis=(0, 2))) if lit]

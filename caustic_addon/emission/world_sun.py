@@ -18,6 +18,7 @@ import numpy as np
 
 from ..scene import SunLight, World
 from .environment import luminance, row_solid_angles, uv_to_directions
+from .kept_worlds import per_world
 
 # A sun pixel is at least this share of the brightest pixel's luminance...
 SUN_THRESHOLD = 0.01
@@ -28,8 +29,10 @@ SUN_RADIUS = math.radians(5.0)
 SUN_SHARE = 0.2
 
 
+@per_world
 def extract_sun(world: World) -> tuple[Optional[SunLight], World]:
-    """(the sun lamp of the world's sun or None, the world without it)."""
+    """(the sun lamp of the world's sun or None, the world without it),
+    kept while the same world comes back (kept_worlds.py)."""
     image = world.environment
     if image is None:
         return None, world

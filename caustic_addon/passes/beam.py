@@ -23,7 +23,7 @@ density estimate.
 
 A lamp with a size is points of it, each standing for a cell of the lamp
 (lamp_points.py). Their paths carry ray differentials across the cell,
-toward the same point of the aim (BeamSource.differentials, carried through
+toward the same point of the aim (SourceBatch.differentials, carried through
 the bounces by differentials.py), and each beam of theirs is spread over
 where its cell's light lands, the landing's image of the cell
 (`_spread_beams`): the points' caustics, each sharp, then sum to the soft
@@ -50,7 +50,7 @@ from typing import Optional
 import numpy as np
 
 from ..emission.aims import Sphere, casters_and_bounds, smooth_and_rough, visible_targets
-from ..emission.beam_sources import BeamSource, beam_sources, disc_shares
+from ..emission.beam_sources import BeamSource, SourceBatch, beam_sources, disc_shares
 from ..emission.lamp_points import beam_lamps
 from ..emission.photons import Emitter, make_emitters
 from ..emission.sky_lamps import SkyRegion
@@ -233,46 +233,38 @@ def trace_paths(accel: Accelerator, materials: Materials, maps: dict[int, Illumi
     return Landings.concat(tracer.landed)
 
 
-def band_beams(sources: list[BeamSource], first_row: int, end_row: int, accel: Accelerator, materials: Materials,
+def band_beams(batch: SourceBatch, first_row: int, end_row: int, accel: Accelerator, materials: Materials,
                maps: dict[int, IlluminationMap], max_depth: int, start_media: tuple[int, int], levels: int,
                bands: np.ndarray, seed: int) -> JobResult:
-    """Trace grid rows [first_row, end_row) of `sources`, grids of one size
-    traced as one batch (the points of a lamp with a size, say, and each
-    point's grid once per wavelength band), `sources[k]` in wavelength band
+    """Trace grid rows [first_row, end_row) of the sources of `batch`, grids
+    of one size traced as one batch (the points of a lamp with a size, say,
+    and each point's grid once per wavelength band), source k in wavelength band
     `bands[k]`, whose paths start inside the objects `start_media`,
     splitting cells where their paths diverge (`levels` times at most), and
     turn the landed paths into beams (coherent triangles) and fallback
     photons. The lamp rays are the grid points (the last row is the next
     row band's first, and counts there) and those refinement added."""
-    grid = sources[0].grid
+    sources, grid = batch.sources, batch.grid
     scale = 1 << levels
     width = (grid - 1) * scale + 1
     keys = width * width
 
-    spreading = any(source.cell is not None for source in sources)
-    cell_corners = np.stack([source.cell_frame()[1] for source in sources]) if spreading else None
-
     def trace_vertices(vertex: np.ndarray) -> Landings:
-        which, local = np.divmod(vertex, keys)
-        rays = [source.rays_at(np.stack([local[which == k] // width, local[which == k] % width], axis=1) / scale)
-                for k, source in enumerate(sources)]
-        origins, dirs, weight = (np.concatenate(parts) for parts in zip(*rays))
-        order = np.argsort(which, kind="stable")
-        band = bands[which[order]]
+        order = np.argsort(vertex // keys, kind="stable")
+        which, local = np.divmod(vertex[order], keys)
+        origins, dirs, weight = batch.rays(which, np.stack([local // width, local % width], axis=1) / scale)
+        band = bands[which]
         weight *= materials.band_weights[band]
         differentials = None
-        if spreading:
+        if batch.spreading:
             # where the rays first meet the scene, a sun's pivot
-            first = (accel.intersect(origins, dirs).t if any(source.aim.is_disc for source in sources)
-                     else np.full(len(dirs), np.inf))
-            ends = np.cumsum([len(d) for _, d, _ in rays])[:-1]
-            differentials = tuple(np.concatenate(parts) for parts in zip(*(
-                source.differentials(d, t) for source, (_, d, _), t in zip(sources, rays, np.split(first, ends)))))
+            first = accel.intersect(origins, dirs).t if batch.disc.any() else np.full(len(dirs), np.inf)
+            differentials = batch.differentials(which, dirs, first)
         landed = trace_paths(accel, materials, maps, origins, dirs, weight, vertex[order], band, max_depth,
                              start_media, seed, differentials)
-        if spreading and landed.d_xy is not None:
+        if batch.spreading and landed.d_xy is not None:
             # per unit along the cell's axes, to each of its corners
-            landed.d_xy = np.einsum("nkj,njc->nkc", np.take(cell_corners, landed.vertex // keys, axis=0),
+            landed.d_xy = np.einsum("nkj,njc->nkc", np.take(batch.cell_corners, landed.vertex // keys, axis=0),
                                     landed.d_xy)
         return landed
 
@@ -680,6 +672,8 @@ def _photon_emitters(lights: list[Light], whole: list[Light], apart: list[Light]
     casters, leaving the rays that meet a `smooth` one's sphere to the
     beams, each with the share of the lamp rays that the flux it sends
     there has of the flux all the `lights` send toward the casters."""
+    if not whole and not apart:
+        return []
     every = make_emitters(lights, targets, scene_sphere, "targeted", settings.energy, settings.lamp_rays,
                           settings.seed)
     emitters = [e for e in every if any(e.source is light for light in whole)]
@@ -735,7 +729,8 @@ def beam_pass(scene: Scene, lights: list[Light], settings: RenderSettings, accel
         # 3,162 lamp rays 42, 61 and 52 ms in 2, 4 and 1), and grids of one
         # size are traced together
         rows = max(1, min(settings.chunk_size // (BAND_SHARE * grid * len(stack)), -(-(grid - 1) // GRID_BANDS)))
-        jobs += [partial(band_beams, stack, first, min(first + rows + 1, grid), accel, materials, maps,
+        batch = SourceBatch(stack)
+        jobs += [partial(band_beams, batch, first, min(first + rows + 1, grid), accel, materials, maps,
                          settings.max_depth, media, settings.beam_refinement, bands, settings.seed)
                  for first in range(0, grid - 1, rows)]
     # bands of rows spread over the grids, both ends first, in any first part

@@ -44,7 +44,7 @@ from functools import partial
 
 import numpy as np
 
-from ..emission.environment import Environment
+from ..emission.environment import Environment, environment_of
 from ..emission.radiometry import is_delta
 from ..maps.charts import PlaneChart
 from ..maps.illumination_map import IlluminationMap
@@ -400,10 +400,10 @@ def eye_pass(scene: Scene, settings: RenderSettings, accel: Accelerator, materia
     pixels = cam.pixx * cam.pixy
     camera_media = tuple(int(m[0]) for m in accel.media_at(cam.position[None]))
     seen = camera_radiance_scale(materials, camera_media[0])
-    environment = Environment(scene.world)
+    environment = environment_of(scene.world)
     sky_paths = None
     if materials.specular_surface.any() and not sky.is_black and materials.stacks:
-        sky_paths = WorldThroughCasters(accel, materials, Environment(sky), settings.max_depth, settings.seed)
+        sky_paths = WorldThroughCasters(accel, materials, environment_of(sky), settings.max_depth, settings.seed)
     holdout = np.array([o.visibility.holdout for o in scene.objects], dtype=bool)
     edges = settings.edge_samples > settings.spp
     main_share = (1.0 - start) * (0.8 if edges else 1.0)

@@ -200,7 +200,10 @@ class World:
     world shader gives, W/(m^2 sr): `color (3,)` everywhere, or times an
     `environment (h, w, 3)` lat-long image in Cycles' equirectangular
     mapping (row 0 at the top, +Z; column u = 0.5 - atan2(y, x) / (2 pi),
-    +X at the middle)."""
+    +X at the middle). A render keeps what it derives from the world while
+    the same environment array comes back (emission/kept_worlds.py), so an
+    environment once rendered is not written into: a changed one is a new
+    array."""
 
     color: RGB = field(default_factory=lambda: np.zeros(3))
     environment: Optional[np.ndarray] = None

@@ -398,6 +398,37 @@ def test_the_world_colour_and_an_environment_image(addon):
     assert any("world 'Sky': the Environment Texture" in w for w in result.warnings)
 
 
+def test_an_unchanged_environment_image_comes_back_as_the_same_array_and_a_changed_one_afresh(addon, tmp_path):
+    """The engine keeps a world's sun, sky and sampling tables while the
+    same environment array comes back: an HDRI read again, unchanged, is
+    that array; painted, or its file saved anew and reloaded, it is read
+    again."""
+    lamp_scene()
+    world, _, background = scenes.world_nodes("Sky")
+    image = bpy.data.images.new("Sky", 8, 4, float_buffer=True)
+    image.pixels.foreach_set(np.ones(8 * 4 * 4, dtype=np.float32))
+    image.filepath_raw, image.file_format = str(tmp_path / "sky.exr"), 'OPEN_EXR'
+    image.save()
+    sky = bpy.data.images.load(str(tmp_path / "sky.exr"))
+    texture = world.node_tree.nodes.new('ShaderNodeTexEnvironment')
+    texture.image = sky
+    world.node_tree.links.new(texture.outputs['Color'], background.inputs['Color'])
+    first = read(addon).scene.world.environment
+    assert read(addon).scene.world.environment is first
+    painted = np.full(8 * 4 * 4, 2.0, dtype=np.float32)
+    sky.pixels.foreach_set(painted)
+    assert sky.is_dirty
+    changed = read(addon).scene.world.environment
+    assert changed is not first and np.all(changed == 2.0)
+    # saved to its file and read back: unchanged since, it comes back as one array again
+    sky.save()
+    sky.reload()
+    saved = read(addon).scene.world.environment
+    # (an EXR keeps half floats)
+    assert saved is not first and np.allclose(saved, 2.0, rtol=1e-3)
+    assert read(addon).scene.world.environment is saved
+
+
 @pytest.mark.skipif("temperature" not in bpy.types.Light.bl_rna.properties, reason="lamp temperature is Blender 4.5+")
 def test_lamp_temperature_tints_the_colour(addon):
     lamp_scene()

@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 
 from caustic_addon import Dielectric, Diffuse, Object, RenderSettings, Scene, World, render, shapes
+from caustic_addon.emission.environment import environment_of
 from caustic_addon.emission.sky_lamps import SKY_REGIONS, median_cut, sky_lamps
+from caustic_addon.emission.world_sun import extract_sun
 from caustic_addon.maps.charts import PlaneChart
 from caustic_addon.maps.receivers import facing_casters
 from caustic_addon.passes.beam import SKY_SPREAD_PARTS, _spread_beams
@@ -79,6 +81,26 @@ def test_a_black_sky_has_no_suns():
     assert sky_lamps(World()) == []
     assert sky_lamps(World(1.0, np.zeros((8, 16, 3)))) == []
 
+
+
+def test_a_world_that_comes_back_is_cut_once_and_a_changed_one_afresh():
+    """Live and an animation read the world again for every update: the
+    same environment array in a new World is cut into sun and sky regions
+    once (emission/kept_worlds.py); a new array, or another colour, is
+    another world."""
+    image = np.full((64, 128, 3), 0.5)
+    image[20, 30] = 5000.0
+    sun, sky = extract_sun(World(1.0, image))
+    again, sky_again = extract_sun(World(1.0, image))
+    assert again is sun and sky_lamps(sky_again) is sky_lamps(sky)
+    assert environment_of(World(1.0, image)) is environment_of(World(1.0, image))
+    # the window a quarter turn further round the sky: its sun turns with it
+    turned, _ = extract_sun(World(1.0, np.roll(image, 32, axis=1)))
+    assert math.degrees(math.acos(np.clip(turned.direction @ sun.direction, -1, 1))) > 45.0
+    brighter, brighter_sky = extract_sun(World(2.0, image))
+    assert brighter.strength == pytest.approx(2.0 * sun.strength)
+    assert sum(s.strength for s in sky_lamps(brighter_sky)) == pytest.approx(2.0 * sum(s.strength for s in
+                                                                                       sky_lamps(sky)))
 
 def test_a_flat_receiver_holds_the_light_on_its_casters_side():
     floor = shapes.plane(4.0)
