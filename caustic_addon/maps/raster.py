@@ -97,16 +97,22 @@ class Coverage:
     def add_jobs(self, corners: np.ndarray, values: np.ndarray, origin=(0.0, 0.0), cell: float = 1.0,
                  share: np.ndarray | None = None, bands: int = 1) -> list[Callable[[], None]]:
         """`add`, as jobs that each write one of `bands` bands of the
-        grid's rows, to run on threads of their own: each cell gets the
-        same pieces in the same order whatever the bands, so the sums are
-        `add`'s to the bit."""
+        grid's rows, to run on threads of their own, each over the
+        triangles whose rows reach its band; the bands hold about equal
+        numbers of triangle rows (`band_edges`), as a caustic crowds into a
+        few rows. Each cell gets the same pieces in the same order whatever
+        the bands, so the sums are `add`'s to the bit."""
         h, w = self.shape
         corners = np.ascontiguousarray(corners, dtype=np.float64)
         values = np.ascontiguousarray(values, dtype=np.float64)
         share = np.ones(len(corners)) if share is None else np.ascontiguousarray(share, dtype=np.float64)
         origin = np.asarray(origin, dtype=np.float64)
-        edges = np.linspace(0, h, max(1, min(bands, h)) + 1).astype(np.int64)
-        return [partial(_accumulate, self.acc, h, w, corners, values, origin, float(cell), share, int(first), int(end))
+        low, high = np.empty(len(corners)), np.empty(len(corners))
+        _row_spans(corners, float(origin[1]), float(cell), low, high)
+        drawn = (share != 0.0) & (high >= 0) & (low < h)
+        edges = band_edges(low[drawn], high[drawn], h, bands)
+        return [partial(_accumulate, self.acc, h, w, corners, values, origin, float(cell), share,
+                        np.flatnonzero(drawn & (high >= first) & (low < end)), int(first), int(end))
                 for first, end in zip(edges[:-1], edges[1:])]
 
     def widen(self, channels: int) -> None:
@@ -120,20 +126,45 @@ class Coverage:
         return np.cumsum(self.acc.reshape(-1, h, w + 2), axis=2)[:, :, 1:w + 1]
 
 
-@kernel("void(f8[:, ::1], i8, i8, f8[:, :, ::1], f8[:, ::1], f8[::1], f8, f8[::1], i8, i8)")
-def _accumulate(acc, h, w, corners, values, origin, cell, share, first_row, end_row):
-    """Add every edge piece of triangles `corners (m,3,2)`, or convex
-    polygons (m,k,2), (in units of `cell` from `origin (2,)`) of `values
-    (m,c)` times `share (m,)` to the
+@kernel("void(f8[:, :, ::1], f8, f8, f8[::1], f8[::1])")
+def _row_spans(corners, origin_y, cell, low, high):
+    """The first and last rows `low, high (m,)` that each of triangles (or
+    polygons) `corners (m,k,2)` reaches, on a grid of `cell` from y =
+    `origin_y`, as _accumulate places their corners."""
+    for t in range(len(corners)):
+        low[t], high[t] = np.inf, -np.inf
+        for k in range(corners.shape[1]):
+            row = np.floor((corners[t, k, 1] - origin_y) / cell)
+            low[t], high[t] = min(low[t], row), max(high[t], row)
+
+
+def band_edges(low: np.ndarray, high: np.ndarray, h: int, bands: int) -> np.ndarray:
+    """(b+1,) ascending row edges from 0 to `h` of at most `bands` bands of
+    rows, each holding about as many rows of triangles as the others, for
+    triangles that reach rows `low` to `high (m,)` (each row a triangle
+    crosses costs it about alike); every row counts one more, so that rows
+    no triangle reaches are shared out too."""
+    first = np.clip(low, 0, h - 1).astype(np.int64)
+    last = np.clip(high, 0, h - 1).astype(np.int64)
+    crossing = np.cumsum(np.bincount(first, minlength=h + 1) - np.bincount(last + 1, minlength=h + 1))[:h]
+    work = np.concatenate([[0], np.cumsum(crossing + 1)])
+    cuts = np.searchsorted(work, np.linspace(0, work[-1], max(1, min(bands, h)) + 1)[1:-1])
+    return np.unique(np.concatenate([[0], np.clip(cuts, 1, h - 1), [h]]))
+
+
+@kernel("void(f8[:, ::1], i8, i8, f8[:, :, ::1], f8[:, ::1], f8[::1], f8, f8[::1], i8[::1], i8, i8)")
+def _accumulate(acc, h, w, corners, values, origin, cell, share, chosen, first_row, end_row):
+    """Add every edge piece of the triangles `chosen (j,)` (ascending) of
+    `corners (m,3,2)`, or convex polygons (m,k,2), (in units of `cell` from
+    `origin (2,)`) of `values (m,c)` times `share (m,)` to the
     accumulation buffer `acc (c, h (w+2))`: each sloped edge is cut at the
     lines y = k into rows first_row..end_row-1 of 0..h-1, and each row
     piece at the lines x = k into columns -1..w-1 (everything left of the
     grid joins column -1; pieces right of it are dropped)."""
     channels, count = acc.shape[0], corners.shape[1]
     local = np.empty((1, count, 2))
-    for t in range(corners.shape[0]):
-        if share[t] == 0.0:
-            continue
+    for i in range(len(chosen)):
+        t = chosen[i]
         for k in range(count):
             local[0, k, 0] = (corners[t, k, 0] - origin[0]) / cell
             local[0, k, 1] = (corners[t, k, 1] - origin[1]) / cell

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from caustic_addon.maps.raster import rasterise_triangles
+from caustic_addon.maps.raster import Coverage, rasterise_triangles
 
 
 def clipped_area(triangle: np.ndarray, x0: float, x1: float, y0: float, y1: float) -> float:
@@ -63,3 +63,22 @@ def test_triangles_off_the_grid_leave_nothing():
     above = left + [12.0, 20.0]
     grid = rasterise_triangles((8, 8), np.concatenate([left, above]), np.ones((2, 3)))
     assert np.abs(grid).max() < 1e-12
+
+
+def test_bands_of_rows_add_the_whole_to_the_bit_and_share_out_a_crowded_caustic():
+    """A caustic crowds into a few rows: 2,000 small triangles in rows 40
+    to 45 of 100, and 200 anywhere. Up to eight bands of rows, in any order,
+    sum to the whole to the bit, and none of them holds most of the
+    triangles (bands of equal rows would give one band all the crowd)."""
+    rng = np.random.default_rng(7)
+    crowd = np.array([50.0, 42.5]) + rng.uniform([-50.0, -2.5], [50.0, 2.5], (2000, 1, 2))
+    spread = rng.uniform(0.0, 100.0, (200, 1, 2))
+    corners = np.concatenate([crowd, spread]) + rng.uniform(-0.6, 0.6, (2200, 3, 2))
+    values = rng.uniform(0.5, 2.0, (2200, 1))
+    whole, banded = Coverage((100, 100), 1), Coverage((100, 100), 1)
+    whole.add(corners, values)
+    jobs = banded.add_jobs(corners, values, bands=8)
+    for job in reversed(jobs):
+        job()
+    assert np.array_equal(whole.planes(), banded.planes())
+    assert max(len(job.args[8]) for job in jobs) < 0.4 * len(corners)
