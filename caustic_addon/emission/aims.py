@@ -209,8 +209,8 @@ class Aim:
 
     def crossing(self, disc: np.ndarray) -> np.ndarray:
         """(n,3) where a sun's rays cross its disc at points `disc (n,2)` of
-        the unit disc: center + radius (x t + y b)."""
-        return self.center + self.radius * (disc[:, :1] * self.tangent + disc[:, 1:] * self.bitangent)
+        the unit disc (`disc_points`)."""
+        return disc_points(self.center, self.radius, self.tangent, self.bitangent, disc)
 
     def rays(self, disc: np.ndarray, lamp: Optional[np.ndarray] = None) -> tuple[np.ndarray, np.ndarray]:
         """(origins (n,3), dirs (n,3)) at points `disc (n,2)` of the unit
@@ -244,6 +244,14 @@ class Aim:
         solid_angle = 2.0 * math.pi * (1.0 - math.cos(0.5 * light.angle))
         tilt = np.maximum(dirs @ self.axis, 0.0)
         return (radiometry.sun_radiance(light, energy) * solid_angle)[None, :] * tilt[:, None]
+
+
+def disc_points(center, radius, tangent, bitangent, disc: np.ndarray) -> np.ndarray:
+    """center + radius (x t + y b) at points `disc (..., 2)` of the unit
+    disc: where a sun's rays cross its aim's disc of `center`, `radius` and
+    frame `tangent`, `bitangent` (3-vectors, or arrays that broadcast
+    against the points: many aims' at once)."""
+    return center + radius * (disc[..., :1] * tangent + disc[..., 1:] * bitangent)
 
 
 def emitting_points(light: Light, dirs: np.ndarray, lamp: np.ndarray) -> np.ndarray:

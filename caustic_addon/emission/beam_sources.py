@@ -12,7 +12,7 @@ import numpy as np
 
 from ..sampling.warps import concentric_disc
 from ..scene import Light
-from .aims import Aim, Sphere, aims, balance_density, meets_any, overlapping, share
+from .aims import Aim, Sphere, aims, balance_density, disc_points, meets_any, overlapping, share
 
 
 @dataclass
@@ -95,8 +95,8 @@ class SourceBatch:
         dirs (n,3), weight (n,3) intensity (W/sr) or irradiance (W/m^2)
         times the ray's share of its cell, 1 where no other aim holds it).
         The grid's point of the unit disc, turned by its source's roll, is
-        mapped through the aim (Aim.rays): a disc's ray crosses center +
-        radius (x t + y b) along the sun's direction, from start_distance
+        mapped through the aim (Aim.rays): a disc's ray crosses it at
+        `disc_points` along the sun's direction, from start_distance
         upstream."""
         disc = concentric_disc(rc / (self.grid - 1))
         turned = np.flatnonzero(self.rolled[which])
@@ -108,9 +108,8 @@ class SourceBatch:
         suns = np.flatnonzero(self.disc[which])
         k = which[suns]
         dirs[suns] = self.axis[k]
-        origins[suns] = (self.center[k] + self.radius[k, None] * (disc[suns, :1] * self.tangent[k]
-                                                                   + disc[suns, 1:] * self.bitangent[k])
-                         - self.start[k, None] * dirs[suns])
+        origins[suns] = (disc_points(self.center[k], self.radius[k, None], self.tangent[k], self.bitangent[k],
+                                     disc[suns]) - self.start[k, None] * dirs[suns])
         weight[suns] = self.emitted[k]
         first = np.searchsorted(which, np.arange(len(self.sources) + 1))
         for k in np.unique(which[~self.disc[which]]):

@@ -41,7 +41,7 @@ from ..sampling.warps import concentric_disc, frames
 from ..scene import Scene, SunLight, World
 from ..tracing.accelerator import Accelerator
 from ..tracing.hits import MISS
-from .aims import Sphere, casters_and_bounds, sun_widening, upstream_distance
+from .aims import Sphere, casters_and_bounds, disc_points, sun_widening, upstream_distance
 from .environment import luminance, uv_to_directions
 from .kept_worlds import per_world
 
@@ -194,8 +194,8 @@ def reaching(regions: list[SkyRegion], accel: Accelerator, casters: np.ndarray, 
     origins = []
     for sphere in targets:
         # (k, probes, 3): Aim.crossing of each region's disc over the sphere
-        crossing = sphere.center + (sphere.radius * widen)[:, None, None] * (
-            disc[None, :, :1] * tangent[:, None, :] + disc[None, :, 1:] * bitangent[:, None, :])
+        crossing = disc_points(sphere.center, (sphere.radius * widen)[:, None, None], tangent[:, None, :],
+                               bitangent[:, None, :], disc[None])
         origins.append(crossing[:, None, :, :] - start * toward[:, :, None, :])
     shape = (len(regions), toward.shape[1], len(disc), 3)
     dirs = np.broadcast_to(toward[:, :, None, :], shape)
