@@ -11,7 +11,7 @@ import numpy as np
 
 from ..util.jit import kernel
 from ..util.rows import take_rows
-from .grid import add_within, channel_tables, rect_means
+from .grid import add_cell_means, add_within, channel_tables, rect_means
 from .illumination_map import IlluminationMap
 from .raster import Coverage, signed_areas
 from .screen_layer import ImageView, ScreenLayer
@@ -38,6 +38,13 @@ class _Layer:
         """out (n,3) += W/m^2 at chart points `xy (n,2)`, bilinear between
         cell centres; nothing off the layer."""
         add_within(self.values, self.origin, self.cell, xy, out)
+
+    def add_cell_means(self, grid_origin: np.ndarray, step: float, rows: range, columns: int,
+                       out: np.ndarray) -> None:
+        """out (n,3) += `mean_over` each cell of edge `step` from chart point
+        `grid_origin (2,)`, of rows `rows` and columns 0..columns-1, row by
+        row (grid.add_cell_means)."""
+        add_cell_means(self.tables, self.origin, self.cell, grid_origin, step, rows, columns, out)
 
     def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """(n,c) mean W/m^2 over chart rectangles [lo, hi] ((n,2) each),
@@ -358,15 +365,15 @@ class BeamMap(IlluminationMap):
             layer.add_at(xy, beams)
         return super().irradiance_at(xy) + beams
 
-    def _cell_irradiance(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    def _cell_irradiance(self, rows: range) -> np.ndarray:
         """The fallback photons' estimate at each cell's centre plus the
         beams' exact mean over it, so that a bake keeps each beam's flux in
         the cells it covers (a point sample of the finer layers would alias
         the caustic's sharp lines)."""
-        lo = self.chart.origin + self.cell * np.stack([cols, rows], axis=1)
+        lo = self.chart.origin + self.cell * self._indices(rows)
         band = IlluminationMap.irradiance_at(self, lo + 0.5 * self.cell)
         for layer in self._layers:
-            band += layer.mean_over(lo, lo + self.cell)
+            layer.add_cell_means(self.chart.origin, self.cell, rows, self.shape[1], band)
         return band
 
     def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

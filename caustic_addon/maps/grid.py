@@ -111,22 +111,76 @@ def _rect_means(tables, origin_rc, cell, lo, hi):
     out = np.empty((len(lo), len(tables)))
     rows, cols = np.empty(4, dtype=np.int64), np.empty(4, dtype=np.int64)
     row_weights, col_weights = np.empty(4), np.empty(4)
+    origin_y, origin_x = origin_rc[0], origin_rc[1]
     for n in range(len(lo)):
-        cx, cy = 0.5 * (lo[n, 0] + hi[n, 0]), 0.5 * (lo[n, 1] + hi[n, 1])
-        half_x, half_y = max(0.5 * (hi[n, 0] - lo[n, 0]), 1e-3 * cell), max(0.5 * (hi[n, 1] - lo[n, 1]), 1e-3 * cell)
-        x0, x1, y0, y1 = cx - half_x, cx + half_x, cy - half_y, cy + half_y
-        _taps(min(max((y0 - origin_rc[0]) / cell, 0.0), h), min(max((y1 - origin_rc[0]) / cell, 0.0), h), h,
-              rows, row_weights)
-        _taps(min(max((x0 - origin_rc[1]) / cell, 0.0), w), min(max((x1 - origin_rc[1]) / cell, 0.0), w), w,
-              cols, col_weights)
-        scale = cell * cell / ((x1 - x0) * (y1 - y0))
+        scale = _rect_taps1(h, w, origin_y, origin_x, cell, lo[n, 0], lo[n, 1], hi[n, 0], hi[n, 1], rows, cols,
+                            row_weights, col_weights)
         for c in range(len(tables)):
-            total = 0.0
-            for a in range(4):
-                for b in range(4):
-                    total += row_weights[a] * col_weights[b] * tables[c, rows[a], cols[b]]
-            out[n, c] = max(total, 0.0) * scale
+            out[n, c] = _tapped1(tables, c, rows, cols, row_weights, col_weights) * scale
     return out
+
+
+def add_cell_means(tables: np.ndarray, origin: np.ndarray, cell: float, grid_origin: np.ndarray, step: float,
+                   rows: range, columns: int, out: np.ndarray) -> None:
+    """out (n,3) += the mean over each cell of another grid, row by row
+    (n = len(rows) * columns): cells of edge `step` from chart point
+    `grid_origin (2,)` (x, y), rows `rows` and columns 0..columns-1, of
+    the cell-constant grid of edge `cell` from chart corner `origin (2,)`
+    (x, y) whose summed-area tables are `tables (c, h+1, w+1)` (c = 1: the
+    same in each channel), each cell widened to at least one of the
+    grid's: what rect_means gives for the same rectangles, bit for bit,
+    without their arrays. Cells off the grid get nothing."""
+    _add_cell_means(np.ascontiguousarray(tables, dtype=np.float64), np.ascontiguousarray(origin, dtype=np.float64),
+                    float(cell), np.ascontiguousarray(grid_origin, dtype=np.float64), float(step), rows.start,
+                    rows.stop, columns, out)
+
+
+@kernel("void(f8[:, :, ::1], f8[::1], f8, f8[::1], f8, i8, i8, i8, f8[:, ::1])")
+def _add_cell_means(tables, origin, cell, grid_origin, step, first_row, end_row, columns, out):
+    h, w = tables.shape[1] - 1, tables.shape[2] - 1
+    origin_x, origin_y = origin[0], origin[1]
+    end_x, end_y = origin_x + cell * w, origin_y + cell * h
+    rows, cols = np.empty(4, dtype=np.int64), np.empty(4, dtype=np.int64)
+    row_weights, col_weights = np.empty(4), np.empty(4)
+    for r in range(first_row, end_row):
+        for q in range(columns):
+            n = (r - first_row) * columns + q
+            lo_x, lo_y = grid_origin[0] + step * q, grid_origin[1] + step * r
+            hi_x, hi_y = lo_x + step, lo_y + step
+            cx, cy = 0.5 * (lo_x + hi_x), 0.5 * (lo_y + hi_y)
+            half_x, half_y = max(0.5 * (hi_x - lo_x), 0.5 * cell), max(0.5 * (hi_y - lo_y), 0.5 * cell)
+            x0, y0, x1, y1 = cx - half_x, cy - half_y, cx + half_x, cy + half_y
+            if x1 > origin_x and y1 > origin_y and x0 < end_x and y0 < end_y:
+                scale = _rect_taps1(h, w, origin_y, origin_x, cell, x0, y0, x1, y1, rows, cols, row_weights,
+                                    col_weights)
+                for c in range(len(tables)):
+                    mean = _tapped1(tables, c, rows, cols, row_weights, col_weights) * scale
+                    for k in range(c, c + 1 if len(tables) > 1 else out.shape[1]):
+                        out[n, k] += mean
+
+
+@inline
+def _rect_taps1(h, w, origin_y, origin_x, cell, lo_x, lo_y, hi_x, hi_y, rows, cols, row_weights, col_weights):
+    """Into `rows, cols (4,)` and `row_weights, col_weights (4,)`, the taps
+    (`_taps`) of the rectangle [lo, hi] on the grid of h x w cells from
+    chart corner (origin_x, origin_y) (rect_means); returns the scale from
+    their sum to its mean."""
+    cx, cy = 0.5 * (lo_x + hi_x), 0.5 * (lo_y + hi_y)
+    half_x, half_y = max(0.5 * (hi_x - lo_x), 1e-3 * cell), max(0.5 * (hi_y - lo_y), 1e-3 * cell)
+    x0, x1, y0, y1 = cx - half_x, cx + half_x, cy - half_y, cy + half_y
+    _taps(min(max((y0 - origin_y) / cell, 0.0), h), min(max((y1 - origin_y) / cell, 0.0), h), h, rows, row_weights)
+    _taps(min(max((x0 - origin_x) / cell, 0.0), w), min(max((x1 - origin_x) / cell, 0.0), w), w, cols, col_weights)
+    return cell * cell / ((x1 - x0) * (y1 - y0))
+
+
+@inline
+def _tapped1(tables, c, rows, cols, row_weights, col_weights):
+    """The sum of the taps (`_rect_taps1`) of table `c` of `tables`, at least 0."""
+    total = 0.0
+    for a in range(4):
+        for b in range(4):
+            total += row_weights[a] * col_weights[b] * tables[c, rows[a], cols[b]]
+    return max(total, 0.0)
 
 
 @inline

@@ -143,20 +143,24 @@ class IlluminationMap:
         h, w = self.shape
         self.prepare()
         out = np.empty((h, w, 3))
-        step = max(1, _BAKE_CELLS // w)
+        step = max(1, min(_BAKE_CELLS // w, -(-h // max(1, threads))))
 
         def fill(first: int) -> None:
-            rows, cols = np.meshgrid(np.arange(first, min(first + step, h)), np.arange(w), indexing="ij")
-            out[first:first + len(rows)] = self._cell_irradiance(rows.ravel(), cols.ravel()).reshape(-1, w, 3)
+            rows = range(first, min(first + step, h))
+            out[rows.start:rows.stop] = self._cell_irradiance(rows).reshape(-1, w, 3)
 
         with ThreadPoolExecutor(max(1, threads)) as pool:
             list(pool.map(fill, range(0, h, step)))
         return out
 
-    def _cell_irradiance(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        """(n,3) W/m^2 of the cells `rows, cols (n,)`: at their centres."""
-        xy = np.stack([(cols + 0.5) * self.cell, (rows + 0.5) * self.cell], axis=1)
-        return self.irradiance_at(xy + self.chart.origin)
+    def _cell_irradiance(self, rows: range) -> np.ndarray:
+        """(n,3) W/m^2 of the cells of `rows`, row by row: at their centres."""
+        return self.irradiance_at((self._indices(rows) + 0.5) * self.cell + self.chart.origin)
+
+    def _indices(self, rows: range) -> np.ndarray:
+        """(n,2) (column, row) of the cells of `rows`, row by row."""
+        cols, rows = np.meshgrid(np.arange(self.shape[1]), np.arange(rows.start, rows.stop))
+        return np.stack([cols.ravel(), rows.ravel()], axis=1)
 
     def mean_over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """Mean caustic irradiance (n,3) W/m^2 over chart rectangles [lo, hi]

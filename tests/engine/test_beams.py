@@ -198,7 +198,7 @@ def test_a_beam_map_keeps_every_beams_flux_in_its_layers():
     """Over the whole floor the map holds every beam's flux (irradiance x
     area), with beams in all three layers; inside the wide beam, away from
     the others, it reads that beam's irradiance exactly; two threads
-    rasterise the same map as one."""
+    rasterise the same map as one, and read the same bake from it."""
     imap, corners, irradiance = layered_beam_map(threads=2)
     flux = (irradiance * np.abs(signed_areas(corners))[:, None]).sum(axis=0)
     lo, hi = imap.chart.origin, imap.chart.origin + imap.chart.size
@@ -211,6 +211,8 @@ def test_a_beam_map_keeps_every_beams_flux_in_its_layers():
     boxes_lo = imap.chart.origin + rng.uniform(0.0, 3.5, (300, 2))
     boxes_hi = boxes_lo + rng.uniform(0.01, 0.5, (300, 2))
     np.testing.assert_array_equal(imap.mean_over(boxes_lo, boxes_hi), one_thread.mean_over(boxes_lo, boxes_hi))
+    np.testing.assert_array_equal(imap.irradiance(2), one_thread.irradiance(1))
+    np.testing.assert_allclose(imap.irradiance(2).sum(axis=(0, 1)) * imap.cell ** 2, flux, rtol=1e-9)
 
 
 def wavy_sheet_scene():

@@ -9,7 +9,7 @@ import pytest
 from caustic_addon import Camera, SpotLight
 from caustic_addon.emission.radiometry import spot_attenuation
 from caustic_addon.maps.charts import PlaneChart
-from caustic_addon.maps.grid import as_rgb, bilinear_splat, channel_tables, rect_means
+from caustic_addon.maps.grid import add_cell_means, as_rgb, bilinear_splat, channel_tables, rect_means
 from caustic_addon.maps.illumination_map import IlluminationMap, MapEstimate
 from caustic_addon.passes.camera_rays import eye_rays, ray_differentials
 
@@ -154,6 +154,32 @@ def test_rectangle_means_of_a_grid_are_exact(channels):
     covered = (inside[1] - inside[0]).prod(axis=1) / (hi - lo).prod(axis=1)
     np.testing.assert_allclose(ours, exact_rect_means(grid, lo, hi), rtol=1e-9, atol=1e-12)
     assert covered.min() < 0.5  # some rectangles reach off the grid
+
+
+@pytest.mark.parametrize("channels", [3, 1])
+@pytest.mark.parametrize("step", [0.3, 1.0, 2.5])
+def test_a_grids_cell_means_over_another_grids_cells_are_its_rectangle_means(channels, step):
+    """The means over each cell of a finer, equal or coarser grid laid
+    across the grid's edge (a bake's map cells over a beam layer), each
+    widened to at least one of the grid's cells, are rect_means' for those
+    rectangles bit for bit, and nothing off the grid; one table's mean
+    goes to all three channels."""
+    rng = np.random.default_rng(4)
+    grid = rng.random((channels, 7, 9))
+    tables = channel_tables(grid)
+    origin, grid_origin = np.array([0.25, -0.5]), np.array([-1.1, -0.7])
+    rows, columns = range(2, 9), 8
+    cells = np.stack(np.meshgrid(np.arange(columns), np.arange(rows.start, rows.stop)), axis=-1).reshape(-1, 2)
+    lo = grid_origin + step * cells
+    hi = lo + step
+    centre, half = 0.5 * (lo + hi), np.maximum(0.5 * (hi - lo), 0.5)
+    expected = np.zeros((len(cells), 3))
+    meets = ((centre + half > origin) & (centre - half < origin + [9.0, 7.0])).all(axis=1)
+    expected[meets] += rect_means(tables, origin[::-1], 1.0, (centre - half)[meets], (centre + half)[meets])
+    ours = np.zeros((len(cells), 3))
+    add_cell_means(tables, origin, 1.0, grid_origin, step, rows, columns, ours)
+    assert not meets.all() and (ours[~meets] == 0.0).all()
+    np.testing.assert_array_equal(ours, expected)
 
 
 @pytest.mark.parametrize("photons", [10, 100_000])
