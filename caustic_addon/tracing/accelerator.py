@@ -216,11 +216,30 @@ class Accelerator:
 
     def _warn_if_thin(self, body: int) -> None:
         """Warn when closed body `body` has a wall thinner than epsilon: a ray
-        offset off one side would start beyond the other. Probes from up to
-        _THICKNESS_PROBES face centres, evenly spread over the body's glass,
-        half an epsilon inside, along the inward normal; on a larger mesh a
-        thin wall of only a few faces can go unprobed."""
+        offset off one side would start beyond the other (`_thin`). A body
+        of one placed mesh asks its prototype first: a glass dragged in Live
+        is probed once for each rotation and scale, and each epsilon."""
         glass = np.flatnonzero(self.closed & (self.body == body))
+        placed = int(glass[0]) if len(glass) == 1 and self.objects[glass[0]].copies == 1 else None
+        prototype = self._prototypes.get(placed)
+        key = None if prototype is None else (
+            self.objects[placed].instances.transforms[0, :3, :3].tobytes(), self.epsilon)
+        thin = None if prototype is None else prototype.thin.get(key)
+        if thin is None:
+            thin = self._thin(body, glass)
+            if prototype is not None:
+                prototype.thin[key] = thin
+        if thin:
+            self.warnings.append(
+                f"'{self.objects[body].body_name}' is thinner than the tracing epsilon ({self.epsilon:.2g} m) in "
+                "places: light crosses such a wall as if it were one surface")
+
+    def _thin(self, body: int, glass: np.ndarray) -> bool:
+        """Whether body `body`, of glass objects `glass (k,)`, has a wall
+        thinner than epsilon, as probes from up to _THICKNESS_PROBES face
+        centres, evenly spread over its glass, half an epsilon inside, along
+        the inward normal, find; on a larger mesh a thin wall of only a few
+        faces can go unprobed."""
         ends = np.cumsum(np.diff(self.prim_offset)[glass])
         spread = np.unique(np.linspace(0, ends[-1] - 1, min(ends[-1], _THICKNESS_PROBES)).astype(np.int64))
         which = np.searchsorted(ends, spread, side="right")
@@ -231,10 +250,7 @@ class Accelerator:
         obj, prim, inward = obj[keep], prim[keep], inward[keep]
         hits = self._closest(self.corner_points(obj, prim).mean(axis=1) + 0.5 * self.epsilon * inward, inward)
         mine = hits.hit & (np.take(self.body, np.maximum(hits.obj, 0)) == body)
-        if np.any(mine & (hits.t < 0.5 * self.epsilon)):
-            self.warnings.append(
-                f"'{self.objects[body].body_name}' is thinner than the tracing epsilon ({self.epsilon:.2g} m) in "
-                "places: light crosses such a wall as if it were one surface")
+        return bool(np.any(mine & (hits.t < 0.5 * self.epsilon)))
 
     def close(self) -> None:
         if self._pool is not None:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import hashlib
 import threading
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -35,11 +35,16 @@ class Prototype:
     scene    the mesh's committed Embree scene, to be instanced
     holes    (k,2) the vertex pairs of its open edges (topology.open_edges)
     inward   its winding faces in: its signed volume is negative
+    thin     whether a glass of it alone has a wall thinner than the
+             tracing epsilon, by its placement's linear part (3,3) as
+             bytes and the epsilon: a glass that only moves is as thin
+             wherever it goes (Accelerator._warn_if_thin)
     """
 
     scene: embree.Scene
     holes: np.ndarray
     inward: bool
+    thin: dict = field(default_factory=dict)
 
 
 class Prototypes:

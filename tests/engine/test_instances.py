@@ -10,6 +10,7 @@ from caustic_addon import Dielectric, Diffuse, Mesh, Object, PointLight, Scene, 
 from caustic_addon.tracing.accelerator import Accelerator
 from caustic_addon.tracing.prototypes import PROTOTYPES, Prototypes
 from scenes import quick, top_camera
+from test_stress import box
 
 
 def transforms(count: int, seed: int = 3) -> np.ndarray:
@@ -151,3 +152,23 @@ def test_the_kept_prototypes_stay_within_their_triangles():
     assert kept.of(small, "medium") is first and kept.of(small, "high") is not first
     kept.of(large, "medium")
     assert kept.of(small, "medium") is not first and kept.built == 4
+
+
+def test_a_thin_glass_that_only_moves_is_named_at_every_render_and_probed_once():
+    """A slab thinner than the tracing epsilon, placed as an instance, is
+    named wherever it moves; its prototype keeps the probes' answer by the
+    placement's rotation and scale and the epsilon, so that moving it
+    probes nothing again and turning it probes afresh; a slab thicker
+    than the epsilon is named nowhere."""
+    floor = Object("Floor", shapes.plane(10.0), Diffuse(0.8))
+    epsilon = Accelerator([floor], 15.0).epsilon
+    for thickness, named in ((0.5 * epsilon, True), (3.0 * epsilon, False)):
+        PROTOTYPES.clear()
+        slab = box((-1.0, -1.0, 1.0), (1.0, 1.0, 1.0 + thickness))
+        turned = moved(0.0)
+        turned[0, :3, :3] = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+        for placement in (moved(0.0), moved(0.5), moved(1.0), turned):
+            accel = Accelerator([floor, Object.instanced("Slab", slab, placement, Dielectric(1.5))], 15.0)
+            assert any("'Slab' is thinner than the tracing epsilon" in w for w in accel.warnings) == named
+            assert accel.epsilon == epsilon
+        assert len(PROTOTYPES.of(slab, accel.quality).thin) == 2
