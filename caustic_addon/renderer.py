@@ -110,7 +110,7 @@ def render(scene: Scene, settings: Optional[RenderSettings] = None, progress: Op
                 lamp_stats = LampPassStats()
                 if run_lamps:
                     lamp_pass = beam_pass if settings.density == "beam" else photon_pass
-                    lamps += lighting_casters(scene, sky, accel)
+                    lamps += lighting_casters(scene, sky, accel, lamps, settings.lamp_rays / materials.band_count)
                     lamp_stats = lamp_pass(scene, lamps, settings, accel, materials, maps, monitor, share)
                 if cache is not None:
                     cache.put(key, (maps, lamp_stats, list(warnings)))

@@ -17,11 +17,11 @@ from typing import Optional
 import numpy as np
 
 from ..sampling.warps import cone_directions, cone_of_disc, orthonormal_basis
-from ..scene import AreaLight, Light, Mesh, Object, Scene, SpotLight, SunLight
+from ..scene import AreaLight, Light, Mesh, MeshLight, Object, Scene, SpotLight, SunLight
 from ..util.jit import kernel
 from ..util.rows import contiguous
 from ..util.vectors import row, set_row
-from . import radiometry
+from . import mesh_lights, radiometry
 from .lamp_samples import area_point1, facing_disc_point1
 
 # Rays at an aim's edge count as inside it: cos(theta) this far below the
@@ -31,6 +31,8 @@ _EDGE_TOLERANCE = 1e-12
 # sun of 180 degrees (a hemisphere) would widen it without end. Directions past acos(0.1), 84 degrees
 # off its axis, carry 1% of a hemisphere's light (cos^2), and they still reach part of the target.
 _SUN_WIDEN_COS = 0.1
+# Pieces a mesh light's flux toward the casters is estimated from.
+FLUX_PIECES = 16
 
 
 @dataclass
@@ -307,6 +309,14 @@ def aims(light: Light, targets: list[Sphere], scene_sphere: Sphere) -> list[Aim]
         else:
             out.append(Aim(light, axis, cos_max=cos_max, target_distance=distance))
     return out
+
+
+def flux_toward(light: Light, targets: list[Sphere], scene_sphere: Sphere) -> float:
+    """W (at energy 1) that `light`'s aims hold: a mesh light's from FLUX_PIECES of its pieces."""
+    if isinstance(light, MeshLight):
+        parts = mesh_lights.point_lamps(light, FLUX_PIECES, mesh_lights.lift_off(light))[0]
+        return sum(flux_toward(part, targets, scene_sphere) for part in parts)
+    return sum(aim.flux(1.0) for aim in aims(light, targets, scene_sphere))
 
 
 def sun_widening(angle):

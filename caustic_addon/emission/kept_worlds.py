@@ -21,28 +21,29 @@ from ..scene import World
 
 T = TypeVar("T")
 
-# Entries kept, over every function: four a world (its sun and sky, the
-# sky's regions, the sampling tables of the world and of the sky), for two worlds.
-KEPT = 8
+# Entries kept, over every function: six a world (its sun and sky, the
+# sky's regions cut for two or three counts of them, the sampling tables
+# of the world and of the sky), for two worlds.
+KEPT = 12
 
 _kept: OrderedDict = OrderedDict()
 _lock = threading.Lock()
 
 
-def per_world(derive: Callable[[World], T]) -> Callable[[World], T]:
-    """`derive(world)`, computed once for each world that comes back (the
-    last KEPT results of all such functions are kept). What it returns is
-    shared: its callers must not change it."""
+def per_world(derive: Callable[..., T]) -> Callable[..., T]:
+    """`derive(world, *args)`, computed once for each world that comes back
+    with the same `args` (the last KEPT results of all such functions are
+    kept). What it returns is shared: its callers must not change it."""
 
     @functools.wraps(derive)
-    def kept(world: World) -> T:
+    def kept(world: World, *args) -> T:
         environment = world.environment
-        key = (derive.__qualname__, world.color.tobytes(), None if environment is None else id(environment))
+        key = (derive.__qualname__, world.color.tobytes(), None if environment is None else id(environment), args)
         with _lock:
             if key in _kept:
                 _kept.move_to_end(key)
                 return _kept[key][1]
-        value = derive(world)
+        value = derive(world, *args)
         with _lock:
             _kept[key] = (environment, value)
             while len(_kept) > KEPT:

@@ -33,7 +33,7 @@ from ..sampling.warps import cone_directions
 from ..scene import AreaLight, Light, MeshLight, SunLight
 from ..util.vectors import DIVISION_FLOOR
 from . import mesh_lights
-from .aims import Sphere, aims, emitting_points, reach
+from .aims import Sphere, aims, emitting_points, flux_toward, reach
 from .sky_lamps import SkyRegion
 
 # Map cells between the caustics of neighbouring points of a lamp.
@@ -42,8 +42,6 @@ BEAM_SHIFT = 2.0
 MAX_PER_AXIS = 16
 # Lamp rays each point's beam grid keeps, at least.
 MIN_GRID_POINTS = 200
-# Pieces a mesh light's flux toward the casters is estimated from.
-FLUX_PIECES = 16
 
 
 def penumbra(light: Light, targets: list[Sphere], receivers: tuple[np.ndarray, np.ndarray]) -> float:
@@ -155,14 +153,6 @@ def grid_phases(count: int) -> np.ndarray:
     if count == 1:
         return np.zeros((1, 2))
     return r2_sequence(np.arange(count), np.zeros(2))
-
-
-def flux_toward(light: Light, targets: list[Sphere], scene_sphere: Sphere) -> float:
-    """W (at energy 1) that `light`'s aims hold: a mesh light's from FLUX_PIECES of its pieces."""
-    if isinstance(light, MeshLight):
-        parts = mesh_lights.point_lamps(light, FLUX_PIECES, mesh_lights.lift_off(light))[0]
-        return sum(flux_toward(part, targets, scene_sphere) for part in parts)
-    return sum(aim.flux(1.0) for aim in aims(light, targets, scene_sphere))
 
 
 def beam_lamps(lights: list[Light], targets: list[Sphere], scene_sphere: Sphere, receivers, cell: float,

@@ -3,12 +3,14 @@ from the lamps, so that its light through the casters lands in the
 illumination maps as a lamp's does: beams without noise, which a bake and
 Live carry to the receivers' materials.
 
-The lat-long image is cut into SKY_REGIONS regions of equal light, the
+The lat-long image is cut into regions of equal light, the
 median cut of Debevec ("A Median Cut Algorithm for Light Probe Sampling",
 SIGGRAPH 2005 poster): the region that holds the most light is halved,
 by its luminance times solid angle, across its longer side in angle, and
 a region wider than a quarter turn across its longitude, so that none
-spans half the sky. Each region is one sun (`SkyRegion`), toward the
+spans half the sky. How many regions follows the sky's share of the lamp
+rays (`region_count`): from MIN_REGIONS to SKY_REGIONS, each a grid of
+about REGION_RAYS rays or more. Each region is one sun (`SkyRegion`), toward the
 centroid c of its light, of strength
 
     S = sum_i L_i Omega_i (d_i . c)
@@ -38,15 +40,19 @@ from typing import Optional
 import numpy as np
 
 from ..sampling.warps import concentric_disc, frames
-from ..scene import Scene, SunLight, World
+from ..scene import Light, Scene, SunLight, World
 from ..tracing.accelerator import Accelerator
 from ..tracing.hits import MISS
-from .aims import Sphere, casters_and_bounds, disc_points, sun_widening, upstream_distance
+from .aims import Sphere, casters_and_bounds, disc_points, flux_toward, sun_widening, upstream_distance
 from .environment import luminance, uv_to_directions
 from .kept_worlds import per_world
 
-# The regions the sky is cut into: each one sun, and one beam grid.
+# The regions the sky is cut into, at most and at the least: each one sun, and one beam grid.
 SKY_REGIONS = 256
+MIN_REGIONS = 64
+# Lamp rays a wavelength band's grid of a region gets, about, where the sky's
+# share of them calls for fewer regions than SKY_REGIONS.
+REGION_RAYS = 32
 # Rows and columns of the image that stands for a world of one colour.
 UNIFORM_SIZE = (64, 128)
 # A region is cut across its longitude while it spans more than this share of a turn.
@@ -65,18 +71,42 @@ class SkyRegion(SunLight):
     cell: Optional[np.ndarray] = field(default=None, repr=False)
 
 
-def lighting_casters(scene: Scene, sky: World, accel: Accelerator) -> list[SkyRegion]:
-    """The suns of the regions of `sky` whose light reaches the casters of `scene`."""
+def lighting_casters(scene: Scene, sky: World, accel: Accelerator, lamps: list[Light],
+                     rays: float) -> list[SkyRegion]:
+    """The suns of the regions of `sky` whose light reaches the casters of
+    `scene`, as many regions as its share of `rays` lamp rays a wavelength
+    band, beside the `lamps`, calls for (`region_count`)."""
     targets, scene_sphere = casters_and_bounds(scene)
     casters = np.array([o.is_caster for o in scene.objects], dtype=bool)
-    return reaching(sky_lamps(sky), accel, casters, targets, scene_sphere)
+    count = region_count(sky, lamps, targets, scene_sphere, rays)
+    return reaching(sky_lamps(sky, count), accel, casters, targets, scene_sphere)
+
+
+def region_count(sky: World, lamps: list[Light], targets: list[Sphere], scene_sphere: Sphere, rays: float) -> int:
+    """How many regions `sky` is cut into beside `lamps`: the power of two
+    that gives each region about REGION_RAYS of the sky's share of `rays`,
+    by its flux toward the `targets` (a sun's is its strength times the
+    area of its disc, aims.Aim.flux), between MIN_REGIONS and SKY_REGIONS.
+    A dim world beside a lamp had SKY_REGIONS grids of 3 x 3 at a Live
+    preview's rays, the least a grid has, which took as long to trace as
+    the lamp's and, cut by the caster's edges, went to photons. A power of
+    two keeps the count, and the cut kept for it, while a caster moves."""
+    regions = sky_lamps(sky, SKY_REGIONS)
+    if not regions or not targets:
+        return SKY_REGIONS
+    widen = sun_widening(np.array([region.angle for region in regions]))
+    sky_flux = math.pi * sum(s.radius ** 2 for s in targets) * float(
+        np.array([region.strength for region in regions]) @ widen ** 2)
+    lamp_flux = sum(flux_toward(lamp, targets, scene_sphere) for lamp in lamps)
+    wanted = rays * sky_flux / (sky_flux + lamp_flux) / REGION_RAYS
+    return int(np.clip(2 ** math.floor(math.log2(max(wanted, 1.0))), MIN_REGIONS, SKY_REGIONS))
 
 
 @per_world
-def sky_lamps(sky: World) -> list[SkyRegion]:
-    """The sky `sky` as at most SKY_REGIONS suns, one per region of its
-    light (`median_cut`); none for a black sky. Kept while the same sky
-    comes back (kept_worlds.py)."""
+def sky_lamps(sky: World, count: int) -> list[SkyRegion]:
+    """The sky `sky` as at most `count` suns, one per region of its light
+    (`median_cut`); none for a black sky. Kept while the same sky comes
+    back with the same count (kept_worlds.py)."""
     image = sky.environment if sky.environment is not None else np.ones((*UNIFORM_SIZE, 3))
     rgb = image * sky.color
     h, w = rgb.shape[:2]
@@ -87,7 +117,7 @@ def sky_lamps(sky: World) -> list[SkyRegion]:
     weight = np.maximum(luminance(power), 0.0)
     if not weight.sum() > 0:
         return []
-    boxes = median_cut(weight, SKY_REGIONS, theta)
+    boxes = median_cut(weight, count, theta)
     # each pixel's box, len(boxes) for those of none (they hold no light)
     label = np.full((h, w), len(boxes), dtype=np.int64)
     for k, (r0, r1, c0, c1) in enumerate(boxes):
@@ -129,13 +159,13 @@ def region_cells(centres: np.ndarray, corners: np.ndarray, solid_angles: np.ndar
 
 
 def median_cut(weight: np.ndarray, count: int, theta: np.ndarray) -> list[tuple[int, int, int, int]]:
-    """At most `count` boxes (row0, row1, col0, col1), half-open, that tile
-    the lat-long `weight (h,w)` (rows at polar angles `theta (h,)`): the
-    heaviest box is cut in two of equal weight, across its longer side in
-    angle (its width at its widest row), or across its columns while it
-    spans more than MAX_TURN of a turn, until there are `count` or none can
-    be cut; each box shrunk to the rows and columns that hold its weight.
-    `weight` holds some."""
+    """Boxes (row0, row1, col0, col1), half-open, that tile the lat-long
+    `weight (h,w)` (rows at polar angles `theta (h,)`): the heaviest box is
+    cut in two of equal weight, across its longer side in angle (its width
+    at its widest row), or across its columns while it spans more than
+    MAX_TURN of a turn, until there are `count` or none can be cut, and
+    then each box wider than MAX_TURN still is; each box shrunk to the rows
+    and columns that hold its weight. `weight` holds some."""
     h, w = weight.shape
     table = np.zeros((h + 1, w + 1))
     table[1:, 1:] = weight.cumsum(axis=0).cumsum(axis=1)
@@ -149,10 +179,20 @@ def median_cut(weight: np.ndarray, count: int, theta: np.ndarray) -> list[tuple[
         cols = np.flatnonzero(np.diff(table[r1, c0:c1 + 1] - table[r0, c0:c1 + 1]) > 0)
         return r0 + rows[0], r0 + rows[-1] + 1, c0 + cols[0], c0 + cols[-1] + 1
 
+    def wide(box: tuple[int, int, int, int]) -> bool:
+        return box[3] - box[2] > MAX_TURN * w
+
     heap = [(-total(0, h, 0, w), 0, tight(0, h, 0, w))]
     done, order = [], 1
-    while heap and len(heap) + len(done) < count:
-        _, _, (r0, r1, c0, c1) = heapq.heappop(heap)
+    while heap:
+        if len(heap) + len(done) < count:
+            _, _, (r0, r1, c0, c1) = heapq.heappop(heap)
+        else:
+            spans = [k for k, (_, _, box) in enumerate(heap) if wide(box)]
+            if not spans:
+                break
+            _, _, (r0, r1, c0, c1) = heap.pop(spans[0])
+            heapq.heapify(heap)
         turn = (c1 - c0) / w
         width = turn * 2.0 * math.pi * float(np.sin(theta[r0:r1]).max())
         across_columns = c1 - c0 > 1 and (turn > MAX_TURN or width >= (r1 - r0) / h * math.pi or r1 - r0 == 1)
