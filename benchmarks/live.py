@@ -17,6 +17,9 @@ timer runs, and the depsgraph updates again. Recorded per scene:
 - updates a second: previews shown over the drag's length;
 - the main thread's milliseconds per update: the scene read and the
   images' write;
+- the engine's milliseconds per preview (its render: the BVH, the pass
+  from the lamps and the maps), which the machine's load moves less than
+  the updates a second;
 - the engine's milliseconds per preview for the BVH and the bodies'
   analysis (a caster that only moved keeps both: tracing/prototypes.py),
   over the previews that traced (one whose maps were kept builds none);
@@ -242,6 +245,7 @@ def drag(session_module, caster, positions: int) -> dict:
         drag_s=dragged, previews=len(previews), updates_per_s=len(previews) / dragged,
         latency_median_s=float(np.median(latency)), latency_p95_s=float(np.percentile(latency, 95)),
         main_thread_ms_median=float(np.median([u.main_thread for u in previews]) * 1000),
+        engine_ms_median=float(np.median([sum(u.stages.values()) for u in previews if "bvh" in u.stages]) * 1000),
         bvh_ms_median=float(np.median([u.stages["bvh"] for u in previews if "bvh" in u.stages]) * 1000),
         refine_main_thread_ms=refine.main_thread * 1000, refined_after_s=refined_after,
         preview_error=preview_error(preview, floor_map(receiver)),

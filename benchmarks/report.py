@@ -242,16 +242,18 @@ def farm(d: dict) -> Table:
 def live(d: dict) -> Table:
     rows = [[f"drag the {name}", f"{f['triangles']:,}", number(f["updates_per_s"], 2), seconds(f["latency_median_s"]),
              seconds(f["latency_p95_s"]), f"{f['main_thread_ms_median']:.0f} ms", f"{f['refine_main_thread_ms']:.0f} ms",
+             f"{f['engine_ms_median']:.0f} ms" if "engine_ms_median" in f else NONE,
              f"{f['bvh_ms_median']:.0f} ms" if "bvh_ms_median" in f else NONE,
              seconds(f["refined_after_s"]) if "refined_after_s" in f else NONE,
              percent(f["preview_error"]), f"{f['resident_growth_mb']:.0f} MB"] for name, f in d["scenes"].items()]
     for kind, played in d.get("playback", {}).items():
         for loop, f in enumerate(played["loops"]):
             rows.append([f"play {f['frames']} frames at {d['fps']} fps, the ball {kind}, loop {loop + 1}", NONE,
-                         number(f["shown_per_s"], 2), NONE, NONE, NONE, NONE, NONE, NONE, NONE,
+                         number(f["shown_per_s"], 2), NONE, NONE, NONE, NONE, NONE, NONE, NONE, NONE,
                          f"maps kept {f['maps_kept']} of {f['shown']} times"])
     return ["run", "triangles", "updates a second", "latency, median", "p95", "main thread, a preview",
-            "main thread, the refine", "BVH and bodies, a preview", "full quality after the last change",
+            "main thread, the refine", "engine, a preview", "BVH and bodies, a preview",
+            "full quality after the last change",
             "preview's error", "memory growth"], rows
 
 
