@@ -98,6 +98,8 @@ def region_count(sky: World, lamps: list[Light], targets: list[Sphere], scene_sp
     sky_flux = math.pi * sum(s.radius ** 2 for s in targets) * float(
         np.array([region.strength for region in regions]) @ widen ** 2)
     lamp_flux = sum(flux_toward(lamp, targets, scene_sphere) for lamp in lamps)
+    if not sky_flux > 0.0:
+        return SKY_REGIONS
     wanted = rays * sky_flux / (sky_flux + lamp_flux) / REGION_RAYS
     return int(np.clip(2 ** math.floor(math.log2(max(wanted, 1.0))), MIN_REGIONS, SKY_REGIONS))
 

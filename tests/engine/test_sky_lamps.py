@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from caustic_addon import Dielectric, Diffuse, Object, PointLight, RenderSettings, Scene, World, render, shapes
+from caustic_addon import Dielectric, Diffuse, Mesh, Object, PointLight, RenderSettings, Scene, World, render, shapes
 from caustic_addon.emission.aims import casters_and_bounds, flux_toward, sun_widening
 from caustic_addon.emission.environment import environment_of
 from caustic_addon.emission.sky_lamps import (MIN_REGIONS, REGION_RAYS, SKY_REGIONS, median_cut, region_count,
@@ -232,3 +232,14 @@ def test_a_skys_fewest_regions_bring_its_caustic_the_light_of_the_most():
         return float(imap.irradiance()[..., 0].sum() * imap.cell ** 2)
 
     assert flux(4000) == pytest.approx(flux(80_000), rel=0.06)
+
+
+def test_a_glass_of_no_area_under_a_sky_is_named_and_renders():
+    """A glass whose faces are all one point has a target of no size: the
+    sky's share of the rays toward it is none, and the render says why the
+    glass casts nothing rather than failing."""
+    point = Mesh(np.full((3, 3), [0.0, 0.0, 1.0]), np.array([[0, 1, 2]]))
+    scene = Scene([Object("Floor", shapes.plane(4.0), Diffuse()), Object("Dot", point, Dielectric(1.5))], [],
+                  top_camera(0.5, 4), world=World(0.05))
+    result = render(scene, RenderSettings(lamp_rays=5000, spp=1, world_samples=1))
+    assert any("'Dot' has no area" in w for w in result.warnings)
