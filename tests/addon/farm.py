@@ -140,10 +140,26 @@ class Farm:
                 "settings": settings, "metadata": {}}
 
     def submit(self, settings: dict, name: str = "caustics") -> str:
+        """Submit the job once every running Worker asks for work
+        (`awake`): one that has not yet signed on would leave its share of
+        the chunks to the others."""
+        self.awake()
         status, answer = self.request("POST", "/api/v3/jobs", self.job(settings, name))
         if status != 200:
             raise AssertionError(f"the Manager refused the job: {status} {answer}")
         return answer["id"]
+
+    def awake(self, timeout: float = 60) -> None:
+        """Wait until the Manager lists each running Worker as awake."""
+        running = {name for name in self.processes if name != "manager"}
+        deadline = time.monotonic() + timeout
+        while True:
+            workers = self.get("/api/v3/worker-mgt/workers")["workers"]
+            if running <= {worker["name"] for worker in workers if worker["status"] == "awake"}:
+                return
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"Workers {sorted(running)} not all awake after {timeout} s: {workers}")
+            time.sleep(0.2)
 
     def check(self, settings: dict):
         """(status, message) of POST /jobs/check: 204 when the job compiles."""
