@@ -92,14 +92,12 @@ def region_count(sky: World, lamps: list[Light], targets: list[Sphere], scene_sp
     the lamp's and, cut by the caster's edges, went to photons. A power of
     two keeps the count, and the cut kept for it, while a caster moves."""
     regions = sky_lamps(sky, SKY_REGIONS)
-    if not regions or not targets:
-        return SKY_REGIONS
     widen = sun_widening(np.array([region.angle for region in regions]))
     sky_flux = math.pi * sum(s.radius ** 2 for s in targets) * float(
         np.array([region.strength for region in regions]) @ widen ** 2)
-    lamp_flux = sum(flux_toward(lamp, targets, scene_sphere) for lamp in lamps)
     if not sky_flux > 0.0:
         return SKY_REGIONS
+    lamp_flux = sum(flux_toward(lamp, targets, scene_sphere) for lamp in lamps)
     wanted = rays * sky_flux / (sky_flux + lamp_flux) / REGION_RAYS
     return int(np.clip(2 ** math.floor(math.log2(max(wanted, 1.0))), MIN_REGIONS, SKY_REGIONS))
 
